@@ -1,0 +1,144 @@
+/* -----------------------------------------------------------------------------
+ * CEODE: conditionally explicit integrators for second-order ODEs and index-3
+ * constrained multibody DAEs, as a SUNDIALS-style module.
+ *
+ *   M(x,t) x'' + G(x)^T lambda = f(t, x, x'),   Phi(x, t) = 0
+ *
+ * The C API follows CVODE/ARKODE/IDA: opaque memory, Create/Init/Set/Get/
+ * Evolve/Free, integer return flags. See docs/api.md for every function.
+ * ---------------------------------------------------------------------------*/
+#ifndef CEODE_CEODE_H_
+#define CEODE_CEODE_H_
+
+#include <stdio.h>
+#include <sundials/sundials_context.h>
+#include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_matrix.h>
+#include <sundials/sundials_nonlinearsolver.h>
+#include <sundials/sundials_nvector.h>
+#include <sundials/sundials_types.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CEODE_VERSION_MAJOR 0
+#define CEODE_VERSION_MINOR 1
+#define CEODE_VERSION_PATCH 0
+
+/* itask values of CEodeEvolve */
+#define CE_NORMAL 1
+#define CE_ONE_STEP 2
+
+/* Return flags */
+#define CE_SUCCESS 0
+#define CE_TSTOP_RETURN 1
+#define CE_WARNING 99
+
+#define CE_MEM_NULL -1
+#define CE_ILL_INPUT -2
+#define CE_NO_MALLOC -3
+#define CE_MEM_FAIL -4
+#define CE_RHSFUNC_FAIL -5
+#define CE_FIRST_RHSFUNC_ERR -6
+#define CE_CONV_FAILURE -7
+#define CE_LSETUP_FAIL -8
+#define CE_LSOLVE_FAIL -9
+#define CE_LINIT_FAIL -10
+#define CE_NLS_INIT_FAIL -11
+#define CE_NLS_FAIL -12
+#define CE_CONSTR_FAIL -13
+#define CE_MASSFUNC_FAIL -14
+#define CE_JACFUNC_FAIL -15
+#define CE_UNSTABLE -16
+#define CE_TOO_MUCH_WORK -17
+#define CE_BAD_T -18
+#define CE_VECTOROP_ERR -19
+
+/* Stability guard modes (CEodeSetStabilityGuard) */
+#define CE_GUARD_OFF 0
+#define CE_GUARD_WARN 1
+#define CE_GUARD_REFUSE 2
+
+/* Problem callbacks: return 0 on success, > 0 recoverable, < 0 unrecoverable. */
+typedef int (*CEodeRhsFn)(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* user_data);
+typedef int (*CEodeMassFn)(sunrealtype t, N_Vector x, SUNMatrix M, void* user_data, N_Vector tmp1,
+                           N_Vector tmp2, N_Vector tmp3);
+typedef int (*CEodeVelJacFn)(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, SUNMatrix J,
+                             void* user_data, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+typedef int (*CEodeConstrFn)(sunrealtype t, N_Vector x, N_Vector phi, void* user_data);
+typedef int (*CEodeConstrJacFn)(sunrealtype t, N_Vector x, SUNMatrix G, void* user_data);
+typedef void (*CEodeErrHandlerFn)(int error_code, const char* module, const char* function,
+                                  char* msg, void* eh_data);
+
+/* Creation, initialisation, integration, destruction (ceode.cpp) */
+SUNDIALS_EXPORT void* CEodeCreate(SUNContext sunctx);
+SUNDIALS_EXPORT int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0);
+SUNDIALS_EXPORT int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0);
+SUNDIALS_EXPORT int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout,
+                                sunrealtype* tret, int itask);
+SUNDIALS_EXPORT int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky);
+SUNDIALS_EXPORT void CEodeFree(void** mem);
+
+/* Method selection (ceode_io.cpp). params holds degree-1 values: alpha, beta, gamma, zeta, ... */
+SUNDIALS_EXPORT int CEodeSetMethod(void* mem, int degree, const sunrealtype* params);
+SUNDIALS_EXPORT int CEodeSetMethodByName(void* mem, const char* name);
+SUNDIALS_EXPORT int CEodeGetMethodParams(const char* name, int* degree, sunrealtype* params,
+                                         int max_params);
+SUNDIALS_EXPORT int CEodeGetNumMethods(void);
+SUNDIALS_EXPORT const char* CEodeGetMethodName(int index);
+SUNDIALS_EXPORT int CEodeSetZeroStart(void* mem, sunbooleantype zero_start);
+SUNDIALS_EXPORT int CEodeSetCompensatedSummation(void* mem, sunbooleantype on);
+
+/* Optional inputs (ceode_io.cpp) */
+SUNDIALS_EXPORT int CEodeSetFixedStep(void* mem, sunrealtype h);
+SUNDIALS_EXPORT int CEodeSetVelocityDependence(void* mem, sunbooleantype depends);
+SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
+SUNDIALS_EXPORT int CEodeSetStopTime(void* mem, sunrealtype tstop);
+SUNDIALS_EXPORT int CEodeClearStopTime(void* mem);
+SUNDIALS_EXPORT int CEodeSetMaxNumSteps(void* mem, long int mxsteps);
+SUNDIALS_EXPORT int CEodeSetMaxNonlinIters(void* mem, int maxcor);
+SUNDIALS_EXPORT int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol);
+SUNDIALS_EXPORT int CEodeSetJacEvalFrequency(void* mem, long int msbj);
+SUNDIALS_EXPORT int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data);
+SUNDIALS_EXPORT int CEodeSetErrFile(void* mem, FILE* errfp);
+SUNDIALS_EXPORT int CEodeSetStabilityGuard(void* mem, int mode, long int every);
+SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
+
+/* Mass matrix, linear and nonlinear solvers (ceode_ls.cpp, ceode_nls.cpp) */
+SUNDIALS_EXPORT int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M,
+                                   sunbooleantype constant);
+SUNDIALS_EXPORT int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A);
+SUNDIALS_EXPORT int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS);
+SUNDIALS_EXPORT int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac);
+
+/* Constraints (ceode_constraints.cpp) */
+SUNDIALS_EXPORT int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi,
+                                        CEodeConstrJacFn G);
+SUNDIALS_EXPORT int CEodeGetMultipliers(void* mem, N_Vector lambda);
+
+/* Optional outputs (ceode_io.cpp) */
+SUNDIALS_EXPORT int CEodeGetAccel(void* mem, N_Vector a);
+SUNDIALS_EXPORT int CEodeGetCurrentTime(void* mem, sunrealtype* tcur);
+SUNDIALS_EXPORT int CEodeGetCurrentStep(void* mem, sunrealtype* hcur);
+SUNDIALS_EXPORT int CEodeGetNumSteps(void* mem, long int* nsteps);
+SUNDIALS_EXPORT int CEodeGetNumRhsEvals(void* mem, long int* nfevals);
+SUNDIALS_EXPORT int CEodeGetNumStartRhsEvals(void* mem, long int* nfevals);
+SUNDIALS_EXPORT int CEodeGetNumNonlinSolvIters(void* mem, long int* nniters);
+SUNDIALS_EXPORT int CEodeGetNumNonlinSolvConvFails(void* mem, long int* nnfails);
+SUNDIALS_EXPORT int CEodeGetNumLinSolvSetups(void* mem, long int* nlinsetups);
+SUNDIALS_EXPORT int CEodeGetNumLinSolves(void* mem, long int* nlinsolves);
+SUNDIALS_EXPORT int CEodeGetNumJacEvals(void* mem, long int* njevals);
+SUNDIALS_EXPORT int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* nfevalsLS);
+SUNDIALS_EXPORT int CEodeGetNumMassEvals(void* mem, long int* nmevals);
+SUNDIALS_EXPORT int CEodeGetNumConstrEvals(void* mem, long int* ncevals);
+SUNDIALS_EXPORT int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max);
+SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
+SUNDIALS_EXPORT int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt);
+SUNDIALS_EXPORT char* CEodeGetReturnFlagName(long int flag);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CEODE_CEODE_H_ */

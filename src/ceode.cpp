@@ -1,0 +1,285 @@
+// Creation, initialisation, time integration and destruction of CEODE memory,
+// and the single error path. The step itself lives in ceode_step.cpp.
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <new>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, ...) {
+  char msg[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  std::vsnprintf(msg, sizeof(msg), fmt, ap);
+  va_end(ap);
+  if (ce == nullptr) {
+    std::fprintf(stderr, "\n[CEODE ERROR]  %s (%s)\n  %s\n\n", func, FlagName(flag),
+                 msg);
+    return flag;
+  }
+  ce->last_msg = msg;
+  if (ce->ehfun != nullptr) {
+    ce->ehfun(flag, "CEODE", func, msg, ce->eh_data);
+  } else if (ce->errfp != nullptr) {
+    std::fprintf(ce->errfp, "\n[CEODE %s]  %s (%s)\n  %s\n\n",
+                 flag == CE_WARNING ? "WARNING" : "ERROR", func, FlagName(flag),
+                 msg);
+  }
+  return flag;
+}
+
+int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
+  if (mem == nullptr) {
+    *ce = nullptr;
+    return ProcessError(nullptr, CE_MEM_NULL, func,
+                        "The CEODE memory is NULL: create it with CEodeCreate first.");
+  }
+  *ce = static_cast<CEodeMemRec*>(mem);
+  if (need_init && !(*ce)->initialized) {
+    return ProcessError(*ce, CE_NO_MALLOC, func,
+                        "The CEODE memory is not initialised: call CEodeInit first.");
+  }
+  return CE_SUCCESS;
+}
+
+bool IsFinite(N_Vector v) { return std::isfinite(N_VL1Norm(v)); }
+
+namespace {
+
+int CheckInitialData(CEodeMemRec* ce, const char* func, N_Vector x0, N_Vector v0) {
+  if (x0 == nullptr || v0 == nullptr) {
+    return ProcessError(ce, CE_ILL_INPUT, func, "x0 = NULL or v0 = NULL: pass both initial vectors.");
+  }
+  if (N_VGetLength(x0) != N_VGetLength(v0)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "x0 has %ld entries but v0 has %ld: they must have the same length.",
+                        static_cast<long>(N_VGetLength(x0)), static_cast<long>(N_VGetLength(v0)));
+  }
+  if (!IsFinite(x0) || !IsFinite(v0)) {
+    return ProcessError(ce, CE_ILL_INPUT, func, "x0 or v0 contains NaN or Inf.");
+  }
+  return CE_SUCCESS;
+}
+
+int CheckOutputVector(CEodeMemRec* ce, const char* func, N_Vector y, const char* name) {
+  if (y == nullptr) {
+    return ProcessError(ce, CE_ILL_INPUT, func, "%s = NULL: pass a vector cloned from x0.", name);
+  }
+  if (N_VGetLength(y) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "%s has %ld entries but the problem has %ld: clone it from x0.", name,
+                        static_cast<long>(N_VGetLength(y)), static_cast<long>(ce->n));
+  }
+  return CE_SUCCESS;
+}
+
+// Builds whatever the configuration needs (linear, nonlinear, constraint solvers)
+// and the starting history; runs once per configuration change.
+int Prepare(CEodeMemRec* ce, const char* func) {
+  if (ce->h <= 0) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
+  }
+  if (ce->started) return CE_SUCCESS;
+  int flag = LsInitialize(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  flag = NlsInitialize(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  flag = ConstrInitialize(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  flag = StartMethod(ce);
+  if (flag != CE_SUCCESS) return flag;
+  return GuardCheck(ce, func);
+}
+
+}  // namespace
+}  // namespace ceode
+
+extern "C" {
+
+void* CEodeCreate(SUNContext sunctx) {
+  if (sunctx == nullptr) {
+    ceode::ProcessError(nullptr, CE_ILL_INPUT, "CEodeCreate",
+                        "sunctx = NULL: create a SUNContext with SUNContext_Create first.");
+    return nullptr;
+  }
+  auto* ce = new (std::nothrow) CEodeMemRec;
+  if (ce == nullptr) {
+    ceode::ProcessError(nullptr, CE_MEM_FAIL, "CEodeCreate", "Out of memory.");
+    return nullptr;
+  }
+  ce->sunctx = sunctx;
+  ce->errfp = stderr;
+  return ce;
+}
+
+int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (f == nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "f = NULL: pass the right-hand side function f(t, x, v, f, data).");
+  }
+  if (!std::isfinite(t0)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
+  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->initialized) {
+    // A second Init replaces the problem: drop every size-dependent object.
+    ceode::NlsFree(ce);
+    ceode::ConstrFree(ce);
+    ceode::FreeVectors(ce);
+  }
+  flag = ceode::AllocVectors(ce, x0);
+  if (flag != CE_SUCCESS) return ceode::ProcessError(ce, flag, __func__, "Out of memory.");
+  ce->n = N_VGetLength(x0);
+  ce->f = f;
+  ce->initialized = true;
+  return CEodeReInit(mem, t0, x0, v0);
+}
+
+int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (N_VGetLength(x0) != ce->n) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "x0 has %ld entries, CEodeInit had %ld: use CEodeInit to resize.",
+                               static_cast<long>(N_VGetLength(x0)), static_cast<long>(ce->n));
+  }
+  N_VScale(1.0, x0, ce->xcur);
+  N_VScale(1.0, v0, ce->D[1]);
+  N_VConst(0.0, ce->xcomp);
+  ce->t0 = t0;
+  ce->tcur = t0;
+  ce->tretlast = t0;
+  ce->started = false;
+  ce->mass_evaluated = false;
+  ce->mass_dirty = true;
+  ce->a_holds = 0;
+  ce->jac_current = false;
+  ce->nst_lastsetup = -1;
+  ce->guard_warned = false;
+  ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
+  ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = 0;
+  return CE_SUCCESS;
+}
+
+int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
+                int itask) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if ((flag = ceode::CheckOutputVector(ce, __func__, xout, "xout")) != CE_SUCCESS) return flag;
+  if ((flag = ceode::CheckOutputVector(ce, __func__, vout, "vout")) != CE_SUCCESS) return flag;
+  if (tret == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tret = NULL.");
+  if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
+  }
+  if (!std::isfinite(tout)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
+  flag = ceode::Prepare(ce, __func__);
+  if (flag < 0) {
+    *tret = ce->tcur;
+    return flag;
+  }
+
+  const sunrealtype h = ce->h;
+  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + h);
+  if (itask == CE_NORMAL && tout < ce->tcur - troundoff) {
+    return ceode::ProcessError(ce, CE_BAD_T, __func__,
+                               "tout = %.17g is behind the current time %.17g: CEODE integrates "
+                               "forward only; call CEodeReInit to go back.",
+                               static_cast<double>(tout), static_cast<double>(ce->tcur));
+  }
+  sunrealtype target = (itask == CE_NORMAL) ? tout : ce->tcur + h;
+  bool hit_tstop = false;
+  if (ce->tstop_set) {
+    if (ce->tstop < ce->tcur - troundoff) {
+      return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                                 "The stop time %.17g is behind the current time %.17g.",
+                                 static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
+    }
+    if (target >= ce->tstop - troundoff) {
+      target = ce->tstop;
+      hit_tstop = true;
+    }
+  }
+
+  // Step while the target lies beyond the current interval [tcur, tcur + h].
+  long int nsteps = 0;
+  while (target - ce->tcur > h * (1 - 1e-8)) {
+    if (nsteps >= ce->mxstep) {
+      flag = ceode::ProcessError(ce, CE_TOO_MUCH_WORK, __func__,
+                                 "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
+                                 "the limit with CEodeSetMaxNumSteps or use a larger h.",
+                                 nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
+      break;
+    }
+    flag = ceode::TakeStep(ce);
+    if (flag != CE_SUCCESS) break;
+    ++nsteps;
+  }
+  if (flag != CE_SUCCESS) {
+    // The last good state is returned; the memory stays usable.
+    N_VScale(1.0, ce->xcur, xout);
+    N_VScale(1.0, ce->D[1], vout);
+    *tret = ce->tcur;
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  if (std::fabs(target - ce->tcur) <= 1e-8 * h) target = ce->tcur;
+  ceode::Interpolate(ce, target - ce->tcur, 0, xout);
+  ceode::Interpolate(ce, target - ce->tcur, 1, vout);
+  *tret = target;
+  ce->tretlast = target;
+  if (hit_tstop) {
+    ce->tstop_set = false;
+    return CE_TSTOP_RETURN;
+  }
+  return CE_SUCCESS;
+}
+
+int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if ((flag = ceode::CheckOutputVector(ce, __func__, dky, "dky")) != CE_SUCCESS) return flag;
+  if (!ce->started) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "No step has been taken yet: call CEodeEvolve first.");
+  }
+  if (k < 0 || k > ce->degree) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "k = %d: the interpolant of degree %d has derivatives 0..%d.", k,
+                               ce->degree, ce->degree);
+  }
+  const sunrealtype s = t - ce->tcur;
+  const sunrealtype tol = 1e-8 * ce->h;
+  if (s < -tol || s > ce->h + tol) {
+    return ceode::ProcessError(ce, CE_BAD_T, __func__,
+                               "t = %.17g is outside the current interval [%.17g, %.17g].",
+                               static_cast<double>(t), static_cast<double>(ce->tcur),
+                               static_cast<double>(ce->tcur + ce->h));
+  }
+  ceode::Interpolate(ce, s, k, dky);
+  return CE_SUCCESS;
+}
+
+void CEodeFree(void** mem) {
+  if (mem == nullptr || *mem == nullptr) return;
+  auto* ce = static_cast<CEodeMemRec*>(*mem);
+  ceode::NlsFree(ce);
+  ceode::LsFree(ce);
+  ceode::ConstrFree(ce);
+  ceode::FreeVectors(ce);
+  delete ce;
+  *mem = nullptr;
+}
+
+}  // extern "C"

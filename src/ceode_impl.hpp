@@ -1,0 +1,225 @@
+// Private memory structure and internal interfaces of CEODE. Not installed.
+#ifndef CEODE_SRC_CEODE_IMPL_HPP_
+#define CEODE_SRC_CEODE_IMPL_HPP_
+
+#include <ceode/ceode.h>
+
+#include <array>
+#include <string>
+
+namespace ceode {
+
+// Degree d carries D_0 .. D_{d-1}; d = 3 .. kMaxDegree.
+constexpr int kMaxDegree = 8;
+constexpr int kMinDegree = 3;
+
+// One named parameter set of method.md section 5 (table in ceode_step.cpp).
+struct MethodSet {
+  const char* name;
+  int degree;
+  std::array<sunrealtype, kMaxDegree - 1> params;
+  const char* summary;
+};
+const MethodSet* FindMethodSet(const char* name);
+int NumMethodSets();
+const MethodSet& MethodSetAt(int index);
+
+// Coefficients of one step of size h, derived from (degree, params, h) only.
+// History H_j = D_j(t-h), j = 1..d-1; unknown top derivative z = D_{d-1}(t).
+//   D_k(t) = sum_j T[k][j] H_j + c[k] z          (k = 1 .. d-2)
+//   z      = (a - B_2) / c[2],   B_2 = sum_j T[2][j] H_j  (d = 3: z = a)
+//   x(t+h) - x(t) = sum_{i=1}^{d-2} w[i] D_i(t) + wz_old H_{d-1} + wz_new z
+//   v(a)   = sum_j V0[j] H_j + kappa a              (velocity as a function of a)
+//   x(t+h) = X0 + mu (a - B_2)                      (used by the constraint solve)
+struct StepCoeffs {
+  sunrealtype h = 0;
+  sunrealtype T[kMaxDegree][kMaxDegree] = {};
+  sunrealtype c[kMaxDegree] = {};
+  sunrealtype w[kMaxDegree] = {};
+  sunrealtype wz_old = 0;
+  sunrealtype wz_new = 0;
+  sunrealtype V0[kMaxDegree] = {};
+  sunrealtype kappa = 0;
+  sunrealtype mu = 0;
+};
+void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
+
+}  // namespace ceode
+
+// The solver memory. Named like SUNDIALS' CVodeMemRec so users reading a
+// debugger recognise it.
+struct CEodeMemRec {
+  SUNContext sunctx = nullptr;
+
+  // Problem
+  CEodeRhsFn f = nullptr;
+  void* user_data = nullptr;
+  bool initialized = false;
+  sunindextype n = 0;  // global length of x
+
+  // Method
+  int degree = 3;
+  sunrealtype params[ceode::kMaxDegree] = {1.0, 0.5};
+  std::string method_name = "G3_CD";
+  bool zero_start = false;
+  bool compensated = false;
+  sunrealtype h = 0;  // 0 until CEodeSetFixedStep
+  ceode::StepCoeffs co;
+
+  // State: derivatives D_1..D_{d-1} at tcur, x at tcur and at tcur + h.
+  sunrealtype t0 = 0;
+  sunrealtype tcur = 0;
+  sunrealtype tretlast = 0;
+  sunrealtype t_start_h = 0;  // time of the last (re)start; tcur = t_start_h + nsteps_h * h
+  long int nsteps_h = 0;
+  bool started = false;  // history built for the current method and h
+  N_Vector xcur = nullptr;
+  N_Vector xnext = nullptr;
+  N_Vector xnew = nullptr;
+  N_Vector xcomp = nullptr;  // Kahan compensation of xnext (compensated summation)
+  N_Vector xcomp_new = nullptr;
+  N_Vector D[ceode::kMaxDegree] = {};
+  N_Vector Dnew[ceode::kMaxDegree] = {};
+  N_Vector x0_saved = nullptr;  // ReInit keeps initial data here until the first step
+  N_Vector v0_saved = nullptr;
+
+  // Work vectors
+  N_Vector ftmp = nullptr;
+  N_Vector vtmp = nullptr;
+  N_Vector atmp = nullptr;
+  N_Vector tmp1 = nullptr;
+  N_Vector tmp2 = nullptr;
+  N_Vector tmp3 = nullptr;
+  N_Vector V0 = nullptr;   // velocity offset of the implicit system
+  N_Vector apred = nullptr;
+  N_Vector ycor = nullptr;
+  N_Vector ewt = nullptr;
+  N_Vector zero = nullptr;
+
+  // Options
+  sunrealtype tstop = 0;
+  bool tstop_set = false;
+  long int mxstep = 500000000L;
+  int maxcor = 4;
+  sunrealtype nls_reltol = 1e-12;
+  sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
+  long int msbj = 20;
+
+  // Velocity dependence, nonlinear solver
+  bool vel_dependent = false;
+  SUNNonlinearSolver NLS = nullptr;
+  bool own_nls = false;
+  bool nls_attached_by_user = false;
+  sunrealtype crate = 1;
+  sunrealtype delp = 0;
+  sunrealtype kappa_setup = 0;  // kappa of the last Newton matrix setup
+  long int nst_lastsetup = -1;
+  bool jac_current = false;
+  sunrealtype t_eval = 0;     // time of the current implicit system
+  N_Vector x_eval = nullptr;  // position of the current implicit system (not owned)
+  int cb_flag = 0;            // CE_* flag of a callback failure inside the NLS
+
+  // Mass matrix, linear solver, velocity Jacobian
+  CEodeMassFn mfn = nullptr;
+  SUNMatrix M = nullptr;
+  bool mass_constant = true;
+  bool mass_evaluated = false;  // M holds M(x, t) at least once
+  bool mass_dirty = true;       // M changed since A was last factored from it
+  int a_holds = 0;              // what the factored A is: 0 nothing, 1 M, 2 Newton matrix
+  N_Vector lstmp = nullptr;     // solution vector of linear solves
+  SUNLinearSolver LS = nullptr;
+  SUNMatrix A = nullptr;
+  SUNMatrix Jsave = nullptr;
+  CEodeVelJacFn jac = nullptr;
+  bool ls_matrix_free = false;
+
+  // Constraints (ceode_constraints.cpp)
+  CEodeConstrFn phifn = nullptr;
+  CEodeConstrJacFn Gfn = nullptr;
+  sunindextype nc = 0;
+  N_Vector lambda = nullptr;
+  N_Vector phi = nullptr;
+  void* con = nullptr;  // private saddle-point workspace (ceode_constraints.cpp)
+
+  // Stability guard
+  int guard_mode = CE_GUARD_WARN;
+  long int guard_every = 0;  // 0: at start only
+  sunrealtype omega_user = 0;
+  sunrealtype omega_est = 0;
+  sunrealtype omega_limit = 0;  // Omega_max of the method, computed lazily
+  bool guard_warned = false;
+
+  // Counters
+  long int nst = 0;
+  long int nfe = 0;
+  long int nfe_start = 0;
+  long int nni = 0;
+  long int nnf = 0;
+  long int nsetups = 0;
+  long int nls_solves = 0;
+  long int nje = 0;
+  long int nfeDQ = 0;
+  long int nme = 0;
+  long int nce = 0;
+
+  // Error reporting
+  CEodeErrHandlerFn ehfun = nullptr;
+  void* eh_data = nullptr;
+  FILE* errfp = nullptr;
+  std::string last_msg;
+};
+
+namespace ceode {
+
+// The single error path: formats the message, hands it to the handler, returns flag.
+int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+// The access guard every exported function starts with.
+int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
+
+// ceode_step.cpp
+int TakeStep(CEodeMemRec* ce);
+int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+              const char* func);  // a = M^{-1} f(t, x, v)
+void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
+int AllocVectors(CEodeMemRec* ce, N_Vector tmpl);
+void FreeVectors(CEodeMemRec* ce);
+
+// ceode_ls.cpp
+int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func);
+int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func);  // b <- M^{-1} b
+int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
+                sunrealtype kappa, const char* func);
+int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
+int LsInitialize(CEodeMemRec* ce, const char* func);
+void LsFree(CEodeMemRec* ce);
+
+// ceode_nls.cpp
+int NlsInitialize(CEodeMemRec* ce, const char* func);
+int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+void NlsFree(CEodeMemRec* ce);
+
+// ceode_constraints.cpp
+bool HasConstraints(const CEodeMemRec* ce);
+int ConstrInitialize(CEodeMemRec* ce, const char* func);
+int ConstrStart(CEodeMemRec* ce, const char* func);  // a0, lambda0 at t0, constrained x(t0+h)
+int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+void ConstrFree(CEodeMemRec* ce);
+
+// ceode_stability.cpp
+int GuardCheck(CEodeMemRec* ce, const char* func);
+int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
+
+// Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
+const char* FlagName(long int flag);
+
+// Finiteness test that works on every N_Vector (NaN propagates through the L1 norm).
+bool IsFinite(N_Vector v);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_IMPL_HPP_

@@ -1,0 +1,418 @@
+// Optional inputs and outputs, statistics and flag names.
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "ceode_impl.hpp"
+
+using ceode::Access;
+using ceode::ProcessError;
+
+namespace {
+
+// Every setter that changes the method or the problem forces a fresh start.
+void Restart(CEodeMemRec* ce) { ce->started = false; }
+
+template <typename T>
+int GetCounter(void* mem, const char* func, T* out, T CEodeMemRec::*field) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = Access(mem, func, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (out == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The output pointer is NULL.");
+  *out = ce->*field;
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+extern "C" {
+
+int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (degree < ceode::kMinDegree || degree > ceode::kMaxDegree) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "degree = %d: supported degrees are %d..%d.",
+                        degree, ceode::kMinDegree, ceode::kMaxDegree);
+  }
+  if (params == nullptr) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "params = NULL: pass degree-1 parameters (alpha, beta, gamma, ...).");
+  }
+  for (int i = 0; i < degree - 1; ++i) {
+    if (!std::isfinite(params[i])) {
+      return ProcessError(ce, CE_ILL_INPUT, __func__, "params[%d] is not finite.", i);
+    }
+  }
+  // p_1 (and p_2 for d >= 4) divide in kappa = c_1 / c_2 and z = (a - B_2)/c_2.
+  if ((degree >= 4 && params[2] == 0) || params[1] == 0) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "beta%s must be nonzero: the velocity would not depend on the acceleration.",
+                        degree >= 4 ? " and gamma" : "");
+  }
+  ce->degree = degree;
+  for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
+  ce->method_name = "custom G" + std::to_string(degree);
+  ce->omega_limit = 0;
+  Restart(ce);
+  return CE_SUCCESS;
+}
+
+int CEodeSetMethodByName(void* mem, const char* name) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  const ceode::MethodSet* m = ceode::FindMethodSet(name);
+  if (m == nullptr) {
+    std::string known;
+    for (int i = 0; i < ceode::NumMethodSets(); ++i) {
+      known += (i ? ", " : "") + std::string(ceode::MethodSetAt(i).name);
+    }
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "Unknown method name \"%s\"; known names: %s.",
+                        name ? name : "(null)", known.c_str());
+  }
+  flag = CEodeSetMethod(mem, m->degree, m->params.data());
+  if (flag == CE_SUCCESS) ce->method_name = m->name;
+  return flag;
+}
+
+int CEodeGetMethodParams(const char* name, int* degree, sunrealtype* params, int max_params) {
+  const ceode::MethodSet* m = ceode::FindMethodSet(name);
+  if (m == nullptr || degree == nullptr) return CE_ILL_INPUT;
+  *degree = m->degree;
+  if (params != nullptr) {
+    if (max_params < m->degree - 1) return CE_ILL_INPUT;
+    for (int i = 0; i < m->degree - 1; ++i) params[i] = m->params[i];
+  }
+  return CE_SUCCESS;
+}
+
+int CEodeGetNumMethods(void) { return ceode::NumMethodSets(); }
+
+const char* CEodeGetMethodName(int index) {
+  if (index < 0 || index >= ceode::NumMethodSets()) return nullptr;
+  return ceode::MethodSetAt(index).name;
+}
+
+int CEodeSetZeroStart(void* mem, sunbooleantype zero_start) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->zero_start = zero_start != SUNFALSE;
+  Restart(ce);
+  return CE_SUCCESS;
+}
+
+int CEodeSetCompensatedSummation(void* mem, sunbooleantype on) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->compensated = on != SUNFALSE;
+  if (ce->xcomp != nullptr) N_VConst(0, ce->xcomp);
+  return CE_SUCCESS;
+}
+
+int CEodeSetFixedStep(void* mem, sunrealtype h) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(h > 0) || !std::isfinite(h)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "h = %g: the fixed step must be positive and finite.", static_cast<double>(h));
+  }
+  if (h != ce->h) Restart(ce);
+  ce->h = h;
+  return CE_SUCCESS;
+}
+
+int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->vel_dependent = depends != SUNFALSE;
+  Restart(ce);
+  return CE_SUCCESS;
+}
+
+int CEodeSetUserData(void* mem, void* user_data) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->user_data = user_data;
+  return CE_SUCCESS;
+}
+
+int CEodeSetStopTime(void* mem, sunrealtype tstop) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!std::isfinite(tstop)) return ProcessError(ce, CE_ILL_INPUT, __func__, "tstop is not finite.");
+  ce->tstop = tstop;
+  ce->tstop_set = true;
+  return CE_SUCCESS;
+}
+
+int CEodeClearStopTime(void* mem) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->tstop_set = false;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxNumSteps(void* mem, long int mxsteps) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  // As in CVODE: a non-positive value restores the default.
+  ce->mxstep = mxsteps > 0 ? mxsteps : 500000000L;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (maxcor < 1) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "maxcor = %d: need at least 1 iteration.", maxcor);
+  }
+  ce->maxcor = maxcor;
+  if (ce->NLS != nullptr) SUNNonlinSolSetMaxIters(ce->NLS, maxcor);
+  return CE_SUCCESS;
+}
+
+int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(reltol > 0) || abstol < 0) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "reltol = %g, abstol = %g: need reltol > 0 and abstol >= 0.",
+                        static_cast<double>(reltol), static_cast<double>(abstol));
+  }
+  ce->nls_reltol = reltol;
+  ce->nls_abstol = abstol;
+  return CE_SUCCESS;
+}
+
+int CEodeSetJacEvalFrequency(void* mem, long int msbj) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->msbj = msbj > 0 ? msbj : 20;
+  return CE_SUCCESS;
+}
+
+int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->ehfun = ehfun;
+  ce->eh_data = eh_data;
+  return CE_SUCCESS;
+}
+
+int CEodeSetErrFile(void* mem, FILE* errfp) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->errfp = errfp;
+  return CE_SUCCESS;
+}
+
+int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (mode != CE_GUARD_OFF && mode != CE_GUARD_WARN && mode != CE_GUARD_REFUSE) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "mode = %d: use CE_GUARD_OFF, CE_GUARD_WARN or CE_GUARD_REFUSE.", mode);
+  }
+  if (every < 0) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "every = %ld: use 0 (check at start only) or a positive step count.", every);
+  }
+  ce->guard_mode = mode;
+  ce->guard_every = every;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(omega_max >= 0) || !std::isfinite(omega_max)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "omega_max = %g: pass a non-negative frequency (0: estimate it).",
+                        static_cast<double>(omega_max));
+  }
+  ce->omega_user = omega_max;
+  return CE_SUCCESS;
+}
+
+int CEodeGetAccel(void* mem, N_Vector a) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (a == nullptr || N_VGetLength(a) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "a must be a vector cloned from x0.");
+  }
+  if (!ce->started) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "No acceleration yet: call CEodeEvolve first.");
+  }
+  // The acceleration at the last output time, from the same interpolant as x and v.
+  ceode::Interpolate(ce, ce->tretlast - ce->tcur, 2, a);
+  return CE_SUCCESS;
+}
+
+int CEodeGetCurrentTime(void* mem, sunrealtype* tcur) {
+  return GetCounter<sunrealtype>(mem, __func__, tcur, &CEodeMemRec::tcur);
+}
+int CEodeGetCurrentStep(void* mem, sunrealtype* hcur) {
+  return GetCounter<sunrealtype>(mem, __func__, hcur, &CEodeMemRec::h);
+}
+int CEodeGetNumSteps(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nst);
+}
+int CEodeGetNumRhsEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe);
+}
+int CEodeGetNumStartRhsEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_start);
+}
+int CEodeGetNumNonlinSolvIters(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nni);
+}
+int CEodeGetNumNonlinSolvConvFails(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nnf);
+}
+int CEodeGetNumLinSolvSetups(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nsetups);
+}
+int CEodeGetNumLinSolves(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nls_solves);
+}
+int CEodeGetNumJacEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nje);
+}
+int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfeDQ);
+}
+int CEodeGetNumMassEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nme);
+}
+int CEodeGetNumConstrEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nce);
+}
+int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
+  return GetCounter<sunrealtype>(mem, __func__, omega_max, &CEodeMemRec::omega_est);
+}
+
+int CEodeGetLastErrorMessage(void* mem, const char** msg) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (msg == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "msg = NULL.");
+  *msg = ce->last_msg.c_str();
+  return CE_SUCCESS;
+}
+
+int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (outfile == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "outfile = NULL.");
+  struct Row {
+    const char* name;
+    double value;
+    bool integer;
+  };
+  const Row rows[] = {
+      {"Current time", static_cast<double>(ce->tcur), false},
+      {"Steps", static_cast<double>(ce->nst), true},
+      {"Step size", static_cast<double>(ce->h), false},
+      {"RHS fn evals", static_cast<double>(ce->nfe), true},
+      {"RHS fn evals in start", static_cast<double>(ce->nfe_start), true},
+      {"NLS iters", static_cast<double>(ce->nni), true},
+      {"NLS fails", static_cast<double>(ce->nnf), true},
+      {"LS setups", static_cast<double>(ce->nsetups), true},
+      {"LS solves", static_cast<double>(ce->nls_solves), true},
+      {"Jac fn evals", static_cast<double>(ce->nje), true},
+      {"RHS fn evals for Jac DQ", static_cast<double>(ce->nfeDQ), true},
+      {"Mass fn evals", static_cast<double>(ce->nme), true},
+      {"Constraint fn evals", static_cast<double>(ce->nce), true},
+      {"Max frequency estimate", static_cast<double>(ce->omega_est), false},
+  };
+  if (fmt == SUN_OUTPUTFORMAT_TABLE) {
+    std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
+    for (const Row& r : rows) {
+      if (r.integer) {
+        std::fprintf(outfile, "%-28s = %ld\n", r.name, static_cast<long>(r.value));
+      } else {
+        std::fprintf(outfile, "%-28s = %.16g\n", r.name, r.value);
+      }
+    }
+  } else if (fmt == SUN_OUTPUTFORMAT_CSV) {
+    std::fprintf(outfile, "Method,%s", ce->method_name.c_str());
+    for (const Row& r : rows) {
+      if (r.integer) {
+        std::fprintf(outfile, ",%s,%ld", r.name, static_cast<long>(r.value));
+      } else {
+        std::fprintf(outfile, ",%s,%.16g", r.name, r.value);
+      }
+    }
+    std::fprintf(outfile, "\n");
+  } else {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "Unknown output format: use SUN_OUTPUTFORMAT_TABLE or SUN_OUTPUTFORMAT_CSV.");
+  }
+  return CE_SUCCESS;
+}
+
+}  // extern "C"
+
+const char* ceode::FlagName(long int flag) {
+  static const struct {
+    long int flag;
+    const char* name;
+  } kNames[] = {
+      {CE_SUCCESS, "CE_SUCCESS"},
+      {CE_TSTOP_RETURN, "CE_TSTOP_RETURN"},
+      {CE_WARNING, "CE_WARNING"},
+      {CE_MEM_NULL, "CE_MEM_NULL"},
+      {CE_ILL_INPUT, "CE_ILL_INPUT"},
+      {CE_NO_MALLOC, "CE_NO_MALLOC"},
+      {CE_MEM_FAIL, "CE_MEM_FAIL"},
+      {CE_RHSFUNC_FAIL, "CE_RHSFUNC_FAIL"},
+      {CE_FIRST_RHSFUNC_ERR, "CE_FIRST_RHSFUNC_ERR"},
+      {CE_CONV_FAILURE, "CE_CONV_FAILURE"},
+      {CE_LSETUP_FAIL, "CE_LSETUP_FAIL"},
+      {CE_LSOLVE_FAIL, "CE_LSOLVE_FAIL"},
+      {CE_LINIT_FAIL, "CE_LINIT_FAIL"},
+      {CE_NLS_INIT_FAIL, "CE_NLS_INIT_FAIL"},
+      {CE_NLS_FAIL, "CE_NLS_FAIL"},
+      {CE_CONSTR_FAIL, "CE_CONSTR_FAIL"},
+      {CE_MASSFUNC_FAIL, "CE_MASSFUNC_FAIL"},
+      {CE_JACFUNC_FAIL, "CE_JACFUNC_FAIL"},
+      {CE_UNSTABLE, "CE_UNSTABLE"},
+      {CE_TOO_MUCH_WORK, "CE_TOO_MUCH_WORK"},
+      {CE_BAD_T, "CE_BAD_T"},
+      {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
+  };
+  for (const auto& entry : kNames) {
+    if (entry.flag == flag) return entry.name;
+  }
+  return "NONE";
+}
+
+extern "C" {
+
+char* CEodeGetReturnFlagName(long int flag) {
+  // The caller owns the returned string, as with CVodeGetReturnFlagName.
+  const char* name = ceode::FlagName(flag);
+  char* out = static_cast<char*>(std::malloc(std::strlen(name) + 1));
+  if (out != nullptr) std::strcpy(out, name);
+  return out;
+}
+
+}  // extern "C"

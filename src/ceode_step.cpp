@@ -1,0 +1,371 @@
+// The degree-generic conditionally explicit step (method.md section 2), its
+// coefficients, the start of the method and the dense output. One code path
+// serves every degree: the parameter sets are data in kMethodSets.
+#include <cmath>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+namespace {
+
+// Named parameter sets (method.md section 5): alpha, beta, gamma, zeta.
+const MethodSet kMethodSets[] = {
+    {"G3_CD", 3, {1.0, 0.5}, "central differences (velocity Verlet), order 2, Omega_max = 2"},
+    {"G3_A43", 3, {4.0 / 3.0, 0.5}, "order 2, smaller error constant"},
+    {"G3_A2", 3, {2.0, 0.5}, "order 2, most accurate G3 on the pendulum"},
+    {"G4_A54", 4, {5.0 / 4.0, 1.0 / 3.0, 0.5}, "very accurate, weakly unstable for every h"},
+    {"G4_A14", 4, {1.0 / 4.0, 1.0 / 3.0, 0.5}, "order 3"},
+    {"G4_A34", 4, {3.0 / 4.0, 1.0 / 3.0, 0.5}, "order 3, largest G4 stability region"},
+    {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}, "order 3"},
+    {"G5_TOP", 5, {1.62, 1.03522, 1.0291293, 1.016}, "used for the spinning top"},
+    {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}, "used for the DAE pendulum"},
+};
+
+sunrealtype Factorial(int n) {
+  sunrealtype r = 1;
+  for (int i = 2; i <= n; ++i) r *= i;
+  return r;
+}
+
+// Weights of the derivative of order q on the nodes x[0..m-1] at 0 (Fornberg 1988).
+void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
+  sunrealtype C[2 * kMaxDegree + 1][kMaxDegree] = {};
+  C[0][0] = 1;
+  sunrealtype c1 = 1;
+  for (int i = 1; i < m; ++i) {
+    sunrealtype c2 = 1;
+    const int mn = std::min(i, q);
+    for (int j = 0; j < i; ++j) {
+      const sunrealtype c3 = x[i] - x[j];
+      c2 *= c3;
+      for (int k = mn; k >= 0; --k) {
+        if (j == i - 1) {
+          C[i][k] = c1 / c2 * ((k > 0 ? k * C[i - 1][k - 1] : 0) - x[i - 1] * C[i - 1][k]);
+        }
+      }
+      for (int k = mn; k >= 0; --k) {
+        C[j][k] = (x[i] * C[j][k] - (k > 0 ? k * C[j][k - 1] : 0)) / c3;
+      }
+    }
+    c1 = c2;
+  }
+  for (int i = 0; i < m; ++i) w[i] = C[i][q];
+}
+
+// z = (1/c) * sum coef_i X_i over the nonzero coefficients; used for every
+// linear combination of the step so that zero terms cost no memory pass.
+void Combine(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
+  int m = 0;
+  for (int i = 0; i < nvec; ++i) {
+    if (c[i] != 0) {
+      c[m] = c[i];
+      X[m] = X[i];
+      ++m;
+    }
+  }
+  if (m == 0) {
+    N_VConst(0, z);
+  } else if (m == 1) {
+    N_VScale(c[0], X[0], z);
+  } else if (m == 2) {
+    N_VLinearSum(c[0], X[0], c[1], X[1], z);
+  } else {
+    N_VLinearCombination(m, c, X, z);
+  }
+}
+
+// x_new = x + dx, optionally with Kahan compensation carried in comp -> comp_new.
+void AddIncrement(CEodeMemRec* ce, N_Vector x, N_Vector dx, N_Vector xnew) {
+  if (!ce->compensated) {
+    N_VLinearSum(1, x, 1, dx, xnew);
+    return;
+  }
+  // y = dx - comp; xnew = x + y; comp_new = (xnew - x) - y
+  N_VLinearSum(1, dx, -1, ce->xcomp, dx);
+  N_VLinearSum(1, x, 1, dx, xnew);
+  N_VLinearSum(1, xnew, -1, x, ce->xcomp_new);
+  N_VLinearSum(1, ce->xcomp_new, -1, dx, ce->xcomp_new);
+}
+
+}  // namespace
+
+const MethodSet* FindMethodSet(const char* name) {
+  if (name == nullptr) return nullptr;
+  for (const MethodSet& m : kMethodSets) {
+    if (std::string(m.name) == name) return &m;
+  }
+  return nullptr;
+}
+
+int NumMethodSets() { return static_cast<int>(sizeof(kMethodSets) / sizeof(kMethodSets[0])); }
+
+const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
+
+void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co) {
+  *co = StepCoeffs{};
+  co->h = h;
+  // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
+  for (int k = 1; k <= d - 2; ++k) {
+    for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = std::pow(h, i) / Factorial(i);
+    const sunrealtype top = std::pow(h, d - 1 - k) / Factorial(d - 1 - k);
+    co->T[k][d - 1] += top * (1 - p[k]);
+    co->c[k] = top * p[k];
+  }
+  if (d == 3) co->c[2] = 1;  // D_2 is the top derivative itself
+  co->c[d - 1] = 1;
+  co->kappa = co->c[1] / co->c[2];
+  for (int j = 1; j < d; ++j) co->V0[j] = co->T[1][j] - co->kappa * co->T[2][j];
+  // Position: Taylor from t with the top term blended by p_0.
+  for (int i = 1; i <= d - 2; ++i) co->w[i] = std::pow(h, i) / Factorial(i);
+  const sunrealtype top = std::pow(h, d - 1) / Factorial(d - 1);
+  co->wz_old = top * (1 - p[0]);
+  co->wz_new = top * p[0];
+  sunrealtype cx = co->wz_new;
+  for (int i = 1; i <= d - 2; ++i) cx += co->w[i] * co->c[i];
+  co->mu = cx / co->c[2];
+}
+
+int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->xcomp, &ce->xcomp_new,
+                     &ce->ftmp, &ce->vtmp,  &ce->atmp, &ce->tmp1,  &ce->tmp2,
+                     &ce->tmp3, &ce->V0,    &ce->apred, &ce->ycor, &ce->ewt,
+                     &ce->zero, &ce->lstmp, &ce->D[1],  &ce->D[2],  &ce->Dnew[1], &ce->Dnew[2]};
+  for (N_Vector* v : all) {
+    *v = N_VClone(tmpl);
+    if (*v == nullptr) return CE_MEM_FAIL;
+  }
+  N_VConst(0, ce->zero);
+  return CE_SUCCESS;
+}
+
+void FreeVectors(CEodeMemRec* ce) {
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew,  &ce->xcomp, &ce->xcomp_new, &ce->ftmp,
+                     &ce->vtmp, &ce->atmp,  &ce->tmp1,  &ce->tmp2,  &ce->tmp3,      &ce->V0,
+                     &ce->apred, &ce->ycor, &ce->ewt,   &ce->zero, &ce->lstmp};
+  for (N_Vector* v : all) {
+    if (*v != nullptr) N_VDestroy(*v);
+    *v = nullptr;
+  }
+  for (int k = 0; k < kMaxDegree; ++k) {
+    if (ce->D[k] != nullptr) N_VDestroy(ce->D[k]);
+    if (ce->Dnew[k] != nullptr) N_VDestroy(ce->Dnew[k]);
+    ce->D[k] = ce->Dnew[k] = nullptr;
+  }
+  ce->initialized = false;
+}
+
+int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+              const char* func) {
+  int flag = MassUpdate(ce, t, x, func);
+  if (flag != CE_SUCCESS) return flag;
+  const int rv = ce->f(t, x, v, a, ce->user_data);
+  ++ce->nfe;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The right-hand side function failed (returned %d) at t = %.17g. A fixed "
+                        "step cannot retry with a smaller h: fix f or reduce h.",
+                        rv, static_cast<double>(t));
+  }
+  return MassSolve(ce, a, func);
+}
+
+int StartMethod(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  for (int k = 1; k < d; ++k) {
+    if (ce->D[k] == nullptr) ce->D[k] = N_VClone(ce->xcur);
+    if (ce->Dnew[k] == nullptr) ce->Dnew[k] = N_VClone(ce->xcur);
+    if (ce->D[k] == nullptr || ce->Dnew[k] == nullptr) {
+      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+    }
+  }
+  ComputeStepCoeffs(d, ce->params, h, &ce->co);
+  ce->t_start_h = ce->tcur;
+  ce->nsteps_h = 0;
+  N_VConst(0, ce->xcomp);
+  if (HasConstraints(ce)) {
+    const long int nfe0 = ce->nfe;
+    const int flag = ConstrStart(ce, func);
+    ce->nfe_start += ce->nfe - nfe0;
+    if (flag == CE_SUCCESS) ce->started = true;
+    return flag;
+  }
+  const long int nfe0 = ce->nfe;
+  const sunrealtype t = ce->tcur;
+  int flag = EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
+  if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
+    flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
+                        "The initial acceleration is NaN or Inf: f (or the mass solve) returned "
+                        "non-finite values at t0 = %.17g.",
+                        static_cast<double>(t));
+  }
+  // Higher derivatives D_{m+1}, m = 2..d-2: central differences of the
+  // acceleration along the Taylor curve of the derivatives already known.
+  // The stencil is symmetric, so the curve's own O(s^m) error cancels exactly.
+  for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {
+    N_Vector out = ce->D[m + 1];
+    if (ce->zero_start) {
+      N_VConst(0, out);
+      continue;
+    }
+    const int q = m - 1;
+    const int r = (q + 1) / 2;
+    const int npts = 2 * r + 1;
+    sunrealtype nodes[2 * kMaxDegree + 1];
+    sunrealtype wts[2 * kMaxDegree + 1];
+    for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
+    FornbergWeights(q, npts, nodes, wts);
+    N_VScale(wts[r], ce->D[2], out);
+    for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
+      if (j == r || wts[j] == 0) continue;
+      const sunrealtype s = nodes[j];
+      sunrealtype cx[kMaxDegree + 1];
+      N_Vector vx[kMaxDegree + 1];
+      vx[0] = ce->xcur;
+      cx[0] = 1;
+      for (int i = 1; i <= m; ++i) {
+        cx[i] = std::pow(s, i) / Factorial(i);
+        vx[i] = ce->D[i];
+      }
+      N_VLinearCombination(m + 1, cx, vx, ce->xnew);
+      for (int i = 0; i < m; ++i) {
+        cx[i] = std::pow(s, i) / Factorial(i);
+        vx[i] = ce->D[i + 1];
+      }
+      N_VLinearCombination(m, cx, vx, ce->vtmp);
+      flag = EvalAccel(ce, t + s, ce->xnew, ce->vtmp, ce->atmp, func);
+      if (flag == CE_SUCCESS) N_VLinearSum(1, out, wts[j], ce->atmp, out);
+    }
+  }
+  ce->nfe_start += ce->nfe - nfe0;
+  if (flag != CE_SUCCESS) return flag;
+  // First position step: the Taylor polynomial of every derivative known at t0.
+  sunrealtype cw[kMaxDegree];
+  N_Vector vw[kMaxDegree];
+  for (int i = 1; i < d; ++i) {
+    cw[i - 1] = std::pow(h, i) / Factorial(i);
+    vw[i - 1] = ce->D[i];
+  }
+  N_VLinearCombination(d - 1, cw, vw, ce->tmp1);
+  N_VLinearSum(1, ce->xcur, 1, ce->tmp1, ce->xnext);
+  ce->started = true;
+  return CE_SUCCESS;
+}
+
+int TakeStep(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + 1) * ce->h;
+  N_Vector* D = ce->D;
+  N_Vector* Dn = ce->Dnew;
+  N_Vector a = Dn[2];
+
+  // The only solve of the step: the acceleration at t (and multipliers).
+  int flag;
+  if (HasConstraints(ce)) {
+    flag = ConstrSolveStep(ce, t, ce->xnext, a, func);
+  } else if (ce->vel_dependent) {
+    flag = SolveImplicit(ce, t, ce->xnext, a, func);
+  } else {
+    // No velocity dependence declared: f sees the last velocity, D_1(t - h).
+    flag = EvalAccel(ce, t, ce->xnext, D[1], a, func);
+  }
+  if (flag != CE_SUCCESS) return flag;
+
+  sunrealtype c[kMaxDegree + 1];
+  N_Vector X[kMaxDegree + 1];
+  N_Vector z = Dn[d - 1];
+  if (d > 3) {  // z = (a - B_2) / c_2; for d = 3, z is a itself
+    int m = 0;
+    c[m] = 1 / co.c[2];
+    X[m++] = a;
+    for (int j = 2; j < d; ++j) {
+      c[m] = -co.T[2][j] / co.c[2];
+      X[m++] = D[j];
+    }
+    Combine(m, c, X, z);
+  }
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k == 2) continue;  // D_2(t) = a exactly
+    int m = 0;
+    for (int j = k; j < d; ++j) {
+      c[m] = co.T[k][j];
+      X[m++] = D[j];
+    }
+    c[m] = co.c[k];
+    X[m++] = z;
+    Combine(m, c, X, Dn[k]);
+  }
+  // Position increment first, then one addition: keeps x's rounding at one ulp.
+  int m = 0;
+  for (int i = 1; i <= d - 2; ++i) {
+    c[m] = co.w[i];
+    X[m++] = Dn[i];
+  }
+  c[m] = co.wz_old;
+  X[m++] = D[d - 1];
+  c[m] = co.wz_new;
+  X[m++] = z;
+  Combine(m, c, X, ce->tmp1);
+  AddIncrement(ce, ce->xnext, ce->tmp1, ce->xnew);
+
+  if (!IsFinite(ce->xnew)) {
+    const sunrealtype xn = N_VMaxNorm(ce->xnext);
+    if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {
+      return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                          "The acceleration became NaN or Inf at t = %.17g (step %ld) while the "
+                          "state was finite (max |x| = %g): f returned non-finite values.",
+                          static_cast<double>(t), ce->nst + 1, static_cast<double>(xn));
+    }
+    return ProcessError(ce, CE_UNSTABLE, func,
+                        "The state stopped being finite at t = %.17g (step %ld, max |x| was %g): "
+                        "h = %g is most likely beyond the stability limit of %s (h * omega_max "
+                        "must stay below Omega_max); reduce h.",
+                        static_cast<double>(t), ce->nst + 1, static_cast<double>(xn),
+                        static_cast<double>(ce->h), ce->method_name.c_str());
+  }
+
+  // Commit: the new derivatives become the history.
+  for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
+  N_Vector old = ce->xcur;
+  ce->xcur = ce->xnext;
+  ce->xnext = ce->xnew;
+  ce->xnew = old;
+  if (ce->compensated) std::swap(ce->xcomp, ce->xcomp_new);
+  ce->tcur = t;
+  ++ce->nsteps_h;
+  ++ce->nst;
+  if (ce->guard_every > 0 && ce->nst % ce->guard_every == 0) return GuardCheck(ce, func);
+  return CE_SUCCESS;
+}
+
+void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  if (s == 0 && k < d) {  // exactly the method's own values at tcur
+    N_VScale(1, k == 0 ? ce->xcur : ce->D[k], out);
+    return;
+  }
+  // p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h).
+  const sunrealtype e = Factorial(d) / Factorial(d - k) * std::pow(s, d - k) / std::pow(h, d);
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  int m = 0;
+  for (int i = 1; i < d; ++i) {
+    c[m] = (i >= k ? std::pow(s, i - k) / Factorial(i - k) : 0) - e * std::pow(h, i) / Factorial(i);
+    X[m++] = ce->D[i];
+  }
+  N_VLinearSum(1, ce->xnext, -1, ce->xcur, ce->tmp3);
+  c[m] = e;
+  X[m++] = ce->tmp3;
+  if (k == 0) {
+    c[m] = 1;
+    X[m++] = ce->xcur;
+  }
+  Combine(m, c, X, out);
+}
+
+}  // namespace ceode
