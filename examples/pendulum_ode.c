@@ -16,7 +16,7 @@
  * Mathematics 2024, 12, 2862), restated in method.md section 7. The program
  * exits 0 only if every figure above 1e-10 at h = 1e-3 and 1e-4 matches within 5 %.
  *
- * Usage: pendulum_ode [--csv FILE] [--hmin H]
+ * Usage: pendulum_ode [--csv FILE] [--hmin H] [--compensated] [--only METHOD]
  * ---------------------------------------------------------------------------*/
 #include <ceode/ceode.h>
 #include <math.h>
@@ -69,8 +69,8 @@ static double now(void) {
 }
 
 /* Runs one configuration; returns 0 on success and fills error/steps/time. */
-static int run(SUNContext ctx, const char* method, double h, double* err, long* steps,
-               long* nfe, double* secs) {
+static int run(SUNContext ctx, const char* method, double h, int compensated, double* err,
+               long* steps, long* nfe, double* secs) {
   N_Vector x = N_VNew_Serial(1, ctx), v = N_VNew_Serial(1, ctx);
   void* mem = NULL;
   int fail = 0;
@@ -85,6 +85,7 @@ static int run(SUNContext ctx, const char* method, double h, double* err, long* 
   fail |= check_flag(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep");
   fail |= check_flag(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard");
   fail |= check_flag(CEodeSetStopTime(mem, 10.0), "CEodeSetStopTime");
+  fail |= check_flag(CEodeSetCompensatedSummation(mem, compensated), "CEodeSetCompensated");
   t0 = now();
   while (!fail && t < 10.0 - 0.5 * h) {
     int flag = CEodeEvolve(mem, 10.0, x, v, &t, CE_ONE_STEP);
@@ -107,7 +108,8 @@ int main(int argc, char** argv) {
   SUNContext ctx;
   FILE* csv = NULL;
   double hmin = 1e-6;
-  int i, k, nbad = 0, nchecked = 0;
+  const char* only = NULL;
+  int i, k, nbad = 0, nchecked = 0, compensated = 0;
   for (i = 1; i < argc; ++i) {
     if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
       csv = fopen(argv[++i], "w");
@@ -115,6 +117,10 @@ int main(int argc, char** argv) {
       fprintf(csv, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
     } else if (strcmp(argv[i], "--hmin") == 0 && i + 1 < argc) {
       hmin = atof(argv[++i]);
+    } else if (strcmp(argv[i], "--compensated") == 0) {
+      compensated = 1;
+    } else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+      only = argv[++i];
     }
   }
   if (SUNContext_Create(NULL, &ctx)) return 1;
@@ -125,11 +131,12 @@ int main(int argc, char** argv) {
     const char* method = CEodeGetMethodName(k);
     double h;
     if (strcmp(method, "G5_TOP") == 0 || strcmp(method, "G5_ONES") == 0) continue;
+    if (only != NULL && strcmp(method, only) != 0) continue;
     for (h = 1e-2; h >= hmin * 0.999; h /= 10) {
       double err = 0, secs = 0, ref = 0;
       long steps = 0, nfe = 0;
       size_t r;
-      if (run(ctx, method, h, &err, &steps, &nfe, &secs)) {
+      if (run(ctx, method, h, compensated, &err, &steps, &nfe, &secs)) {
         fprintf(stderr, "run %s h=%g failed\n", method, h);
         ++nbad;
         continue;
@@ -155,8 +162,8 @@ int main(int argc, char** argv) {
       }
       printf("\n");
       if (csv) {
-        fprintf(csv, "pendulum_ode,CEODE,%s,%.3g,%.6e,0,%ld,%ld,%.6e\n", method, h, err, steps,
-                nfe, secs);
+        fprintf(csv, "pendulum_ode,CEODE,%s%s,%.3g,%.6e,0,%ld,%ld,%.6e\n", method,
+                compensated ? "+kahan" : "", h, err, steps, nfe, secs);
       }
     }
   }

@@ -154,7 +154,6 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   }
   N_VScale(1.0, x0, ce->xcur);
   N_VScale(1.0, v0, ce->D[1]);
-  N_VConst(0.0, ce->xcomp);
   ce->t0 = t0;
   ce->tcur = t0;
   ce->tretlast = t0;

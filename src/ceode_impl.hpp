@@ -76,8 +76,10 @@ struct CEodeMemRec {
   N_Vector xcur = nullptr;
   N_Vector xnext = nullptr;
   N_Vector xnew = nullptr;
-  N_Vector xcomp = nullptr;  // Kahan compensation of xnext (compensated summation)
-  N_Vector xcomp_new = nullptr;
+  // Kahan compensation of the accumulated quantities (compensated summation):
+  // index 0 is x(tcur + h), index k the derivative D_k; double-buffered like D.
+  N_Vector comp[ceode::kMaxDegree] = {};
+  N_Vector compnew[ceode::kMaxDegree] = {};
   N_Vector D[ceode::kMaxDegree] = {};
   N_Vector Dnew[ceode::kMaxDegree] = {};
   N_Vector x0_saved = nullptr;  // ReInit keeps initial data here until the first step

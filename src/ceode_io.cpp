@@ -108,7 +108,7 @@ int CEodeSetCompensatedSummation(void* mem, sunbooleantype on) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->compensated = on != SUNFALSE;
-  if (ce->xcomp != nullptr) N_VConst(0, ce->xcomp);
+  Restart(ce);  // the compensation vectors start from zero with the history
   return CE_SUCCESS;
 }
 

@@ -75,17 +75,26 @@ void Combine(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
   }
 }
 
-// x_new = x + dx, optionally with Kahan compensation carried in comp -> comp_new.
-void AddIncrement(CEodeMemRec* ce, N_Vector x, N_Vector dx, N_Vector xnew) {
+// out = old + sum_i c_i X_i. The increment is summed first and the large term
+// last, so the large quantity is rounded once; with compensated summation the
+// rounding error is carried forward in comp -> comp_new (Kahan).
+void Accumulate(CEodeMemRec* ce, int level, int m, sunrealtype* c, N_Vector* X, N_Vector old,
+                N_Vector out) {
   if (!ce->compensated) {
-    N_VLinearSum(1, x, 1, dx, xnew);
+    c[m] = 1;
+    X[m++] = old;
+    Combine(m, c, X, out);
     return;
   }
-  // y = dx - comp; xnew = x + y; comp_new = (xnew - x) - y
-  N_VLinearSum(1, dx, -1, ce->xcomp, dx);
-  N_VLinearSum(1, x, 1, dx, xnew);
-  N_VLinearSum(1, xnew, -1, x, ce->xcomp_new);
-  N_VLinearSum(1, ce->xcomp_new, -1, dx, ce->xcomp_new);
+  N_Vector y = ce->tmp1;
+  N_Vector comp = ce->comp[level];
+  N_Vector comp_new = ce->compnew[level];
+  c[m] = -1;
+  X[m++] = comp;
+  Combine(m, c, X, y);  // y = increment - comp
+  N_VLinearSum(1, old, 1, y, out);
+  N_VLinearSum(1, out, -1, old, comp_new);
+  N_VLinearSum(1, comp_new, -1, y, comp_new);
 }
 
 }  // namespace
@@ -127,7 +136,7 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
 }
 
 int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
-  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->xcomp, &ce->xcomp_new,
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew,
                      &ce->ftmp, &ce->vtmp,  &ce->atmp, &ce->tmp1,  &ce->tmp2,
                      &ce->tmp3, &ce->V0,    &ce->apred, &ce->ycor, &ce->ewt,
                      &ce->zero, &ce->lstmp, &ce->D[1],  &ce->D[2],  &ce->Dnew[1], &ce->Dnew[2]};
@@ -140,7 +149,7 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 }
 
 void FreeVectors(CEodeMemRec* ce) {
-  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew,  &ce->xcomp, &ce->xcomp_new, &ce->ftmp,
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->ftmp,
                      &ce->vtmp, &ce->atmp,  &ce->tmp1,  &ce->tmp2,  &ce->tmp3,      &ce->V0,
                      &ce->apred, &ce->ycor, &ce->ewt,   &ce->zero, &ce->lstmp};
   for (N_Vector* v : all) {
@@ -150,7 +159,9 @@ void FreeVectors(CEodeMemRec* ce) {
   for (int k = 0; k < kMaxDegree; ++k) {
     if (ce->D[k] != nullptr) N_VDestroy(ce->D[k]);
     if (ce->Dnew[k] != nullptr) N_VDestroy(ce->Dnew[k]);
-    ce->D[k] = ce->Dnew[k] = nullptr;
+    if (ce->comp[k] != nullptr) N_VDestroy(ce->comp[k]);
+    if (ce->compnew[k] != nullptr) N_VDestroy(ce->compnew[k]);
+    ce->D[k] = ce->Dnew[k] = ce->comp[k] = ce->compnew[k] = nullptr;
   }
   ce->initialized = false;
 }
@@ -181,10 +192,17 @@ int StartMethod(CEodeMemRec* ce) {
       return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
     }
   }
+  for (int k = 0; ce->compensated && k <= d - 2; ++k) {
+    if (ce->comp[k] == nullptr) ce->comp[k] = N_VClone(ce->xcur);
+    if (ce->compnew[k] == nullptr) ce->compnew[k] = N_VClone(ce->xcur);
+    if (ce->comp[k] == nullptr || ce->compnew[k] == nullptr) {
+      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+    }
+    N_VConst(0, ce->comp[k]);
+  }
   ComputeStepCoeffs(d, ce->params, h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
-  N_VConst(0, ce->xcomp);
   if (HasConstraints(ce)) {
     const long int nfe0 = ce->nfe;
     const int flag = ConstrStart(ce, func);
@@ -291,15 +309,14 @@ int TakeStep(CEodeMemRec* ce) {
   for (int k = 1; k <= d - 2; ++k) {
     if (k == 2) continue;  // D_2(t) = a exactly
     int m = 0;
-    for (int j = k; j < d; ++j) {
+    for (int j = k + 1; j < d; ++j) {
       c[m] = co.T[k][j];
       X[m++] = D[j];
     }
     c[m] = co.c[k];
     X[m++] = z;
-    Combine(m, c, X, Dn[k]);
+    Accumulate(ce, k, m, c, X, D[k], Dn[k]);
   }
-  // Position increment first, then one addition: keeps x's rounding at one ulp.
   int m = 0;
   for (int i = 1; i <= d - 2; ++i) {
     c[m] = co.w[i];
@@ -309,8 +326,7 @@ int TakeStep(CEodeMemRec* ce) {
   X[m++] = D[d - 1];
   c[m] = co.wz_new;
   X[m++] = z;
-  Combine(m, c, X, ce->tmp1);
-  AddIncrement(ce, ce->xnext, ce->tmp1, ce->xnew);
+  Accumulate(ce, 0, m, c, X, ce->xnext, ce->xnew);
 
   if (!IsFinite(ce->xnew)) {
     const sunrealtype xn = N_VMaxNorm(ce->xnext);
@@ -334,7 +350,9 @@ int TakeStep(CEodeMemRec* ce) {
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
   ce->xnew = old;
-  if (ce->compensated) std::swap(ce->xcomp, ce->xcomp_new);
+  if (ce->compensated) {
+    for (int k = 0; k <= d - 2; ++k) std::swap(ce->comp[k], ce->compnew[k]);
+  }
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
