@@ -63,6 +63,7 @@ struct CEodeMemRec {
   std::string method_name = "G3_CD";
   bool zero_start = false;
   bool compensated = false;
+  bool fused = true;  // one-pass update kernel for serial vectors
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep
   ceode::StepCoeffs co;
 

@@ -112,6 +112,14 @@ int CEodeSetCompensatedSummation(void* mem, sunbooleantype on) {
   return CE_SUCCESS;
 }
 
+int CEodeSetFusedKernel(void* mem, sunbooleantype on) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->fused = on != SUNFALSE;
+  return CE_SUCCESS;
+}
+
 int CEodeSetFixedStep(void* mem, sunrealtype h) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);

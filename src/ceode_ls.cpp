@@ -27,9 +27,13 @@ int ATimes(void* data, N_Vector w, N_Vector z) {
     N_VScale(1, w, z);
   }
   if (ce->a_holds != kHoldsNewton) return 0;
-  const sunrealtype wnorm = N_VWrmsNorm(w, ce->ewt);
-  if (wnorm == 0) return 0;
-  const sunrealtype sig = 1 / wnorm * std::sqrt(SUN_UNIT_ROUNDOFF) * 1e3;
+  // The increment perturbs the velocity, so it is scaled by |v| (as the dense
+  // difference quotients are), not by the acceleration's error weights: those
+  // carry the 1e-12 Newton tolerance and would put sig*w below v's round-off.
+  const sunrealtype wmax = N_VMaxNorm(w);
+  if (wmax == 0) return 0;
+  const sunrealtype vmax = std::max(N_VMaxNorm(ce->vtmp), SUN_RCONST(1e-8));
+  const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * vmax / wmax;
   N_VLinearSum(1, ce->vtmp, sig, w, ce->tmp1);
   const int rv = ce->f(ce->t_eval, ce->x_eval, ce->tmp1, ce->tmp2, ce->user_data);
   ++ce->nfeDQ;

@@ -1,6 +1,7 @@
 // The degree-generic conditionally explicit step (method.md section 2), its
 // coefficients, the start of the method and the dense output. One code path
 // serves every degree: the parameter sets are data in kMethodSets.
+#include <algorithm>
 #include <cmath>
 
 #include "ceode_impl.hpp"
@@ -53,17 +54,34 @@ void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
   for (int i = 0; i < m; ++i) w[i] = C[i][q];
 }
 
-// z = (1/c) * sum coef_i X_i over the nonzero coefficients; used for every
-// linear combination of the step so that zero terms cost no memory pass.
-void Combine(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
-  int m = 0;
-  for (int i = 0; i < nvec; ++i) {
-    if (c[i] != 0) {
-      c[m] = c[i];
-      X[m] = X[i];
-      ++m;
+// One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
+// for a quantity that accumulates). Zero coefficients are dropped when the plan
+// is built, so they cost no memory pass.
+struct Combo {
+  int m = 0;  // only the first m entries below are set: no zeroing on the hot path
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
+  int level = 0;           // compensation slot of an accumulated quantity
+  N_Vector out = nullptr;
+
+  void Add(sunrealtype coef, N_Vector v) {
+    if (coef != 0) {
+      c[m] = coef;
+      X[m++] = v;
     }
   }
+};
+
+// The update after the solve: z, the lower derivatives, then x(t + h), in order.
+struct UpdatePlan {
+  int n = 0;
+  Combo combos[kMaxDegree];
+};
+
+// z = sum c_i X_i with exactly the rounding of N_VScale / N_VLinearSum /
+// N_VLinearCombination, so the fused kernel below can reproduce it bit for bit.
+void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
   if (m == 0) {
     N_VConst(0, z);
   } else if (m == 1) {
@@ -71,30 +89,113 @@ void Combine(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
   } else if (m == 2) {
     N_VLinearSum(c[0], X[0], c[1], X[1], z);
   } else {
-    N_VLinearCombination(m, c, X, z);
+    N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, z);
   }
 }
 
-// out = old + sum_i c_i X_i. The increment is summed first and the large term
-// last, so the large quantity is rounded once; with compensated summation the
-// rounding error is carried forward in comp -> comp_new (Kahan).
-void Accumulate(CEodeMemRec* ce, int level, int m, sunrealtype* c, N_Vector* X, N_Vector old,
-                N_Vector out) {
+// The increment is summed first and the large accumulated term last, so that
+// quantity is rounded once per step; with compensated summation its rounding
+// error is carried forward in comp -> compnew (Kahan).
+void RunCombo(CEodeMemRec* ce, const Combo& cb) {
+  if (cb.old == nullptr) {
+    Combine(cb.m, cb.c, const_cast<N_Vector*>(cb.X), cb.out);
+    return;
+  }
+  sunrealtype c[kMaxDegree + 3];
+  N_Vector X[kMaxDegree + 3];
+  std::copy(cb.c, cb.c + cb.m, c);
+  std::copy(cb.X, cb.X + cb.m, X);
+  int m = cb.m;
   if (!ce->compensated) {
     c[m] = 1;
-    X[m++] = old;
-    Combine(m, c, X, out);
+    X[m++] = cb.old;
+    Combine(m, c, X, cb.out);
     return;
   }
   N_Vector y = ce->tmp1;
-  N_Vector comp = ce->comp[level];
-  N_Vector comp_new = ce->compnew[level];
   c[m] = -1;
-  X[m++] = comp;
+  X[m++] = ce->comp[cb.level];
   Combine(m, c, X, y);  // y = increment - comp
-  N_VLinearSum(1, old, 1, y, out);
-  N_VLinearSum(1, out, -1, old, comp_new);
+  N_Vector comp_new = ce->compnew[cb.level];
+  N_VLinearSum(1, cb.old, 1, y, cb.out);
+  N_VLinearSum(1, cb.out, -1, cb.old, comp_new);
   N_VLinearSum(1, comp_new, -1, y, comp_new);
+}
+
+// Entry i of a two-term N_VLinearSum, including its a = +-b shortcuts.
+inline sunrealtype LinearSum2(sunrealtype a, sunrealtype x, sunrealtype b, sunrealtype y) {
+  if (a == 1 || b == 1 || a == -1 || b == -1) return a * x + b * y;
+  if (a == b) return a * (x + y);
+  if (a == -b) return a * (x - y);
+  return a * x + b * y;
+}
+
+inline sunrealtype CombineEntry(int m, const sunrealtype* c, sunrealtype* const* p,
+                                sunindextype i) {
+  if (m == 0) return 0;
+  if (m == 1) return c[0] * p[0][i];
+  if (m == 2) return LinearSum2(c[0], p[0][i], c[1], p[1][i]);
+  sunrealtype acc = c[0] * p[0][i];
+  for (int j = 1; j < m; ++j) acc += c[j] * p[j][i];
+  return acc;
+}
+
+// Serial vectors: the whole update in one pass over memory instead of one pass
+// per term. Same operations in the same order as RunCombo, so same numbers.
+// Returns false when the vectors are not serial (the generic path runs).
+bool FusedUpdate(CEodeMemRec* ce, const UpdatePlan& plan, sunrealtype* l1norm) {
+  if (!ce->fused || N_VGetVectorID(ce->xnext) != SUNDIALS_NVEC_SERIAL) return false;
+  // Each combination with its accumulated term (or, compensated, minus its
+  // compensation) appended, exactly as RunCombo hands it to Combine.
+  struct Terms {
+    int m;
+    sunrealtype c[kMaxDegree + 3];
+    sunrealtype* X[kMaxDegree + 3];
+    sunrealtype* old;
+    sunrealtype* compnew;
+    sunrealtype* out;
+  } terms[kMaxDegree];
+  for (int k = 0; k < plan.n; ++k) {
+    const Combo& cb = plan.combos[k];
+    Terms& tk = terms[k];
+    tk.m = cb.m;
+    for (int j = 0; j < cb.m; ++j) {
+      tk.c[j] = cb.c[j];
+      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
+    }
+    tk.old = nullptr;
+    tk.compnew = nullptr;
+    if (cb.old != nullptr && !ce->compensated) {
+      tk.c[tk.m] = 1;
+      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
+    } else if (cb.old != nullptr) {
+      tk.c[tk.m] = -1;
+      tk.X[tk.m++] = N_VGetArrayPointer(ce->comp[cb.level]);
+      tk.old = N_VGetArrayPointer(cb.old);
+      tk.compnew = N_VGetArrayPointer(ce->compnew[cb.level]);
+    }
+    tk.out = N_VGetArrayPointer(cb.out);
+  }
+  const sunindextype n = N_VGetLength(ce->xnext);
+  const Terms& xterms = terms[plan.n - 1];  // the position comes last
+  sunrealtype sum = 0;
+  for (sunindextype i = 0; i < n; ++i) {
+    for (int k = 0; k < plan.n; ++k) {
+      const Terms& tk = terms[k];
+      const sunrealtype val = CombineEntry(tk.m, tk.c, tk.X, i);
+      if (tk.old == nullptr) {
+        tk.out[i] = val;
+      } else {
+        const sunrealtype o = tk.old[i];
+        const sunrealtype nw = o + val;
+        tk.out[i] = nw;
+        tk.compnew[i] = (nw - o) - val;
+      }
+    }
+    sum += std::fabs(xterms.out[i]);
+  }
+  *l1norm = sum;
+  return true;
 }
 
 }  // namespace
@@ -293,42 +394,41 @@ int TakeStep(CEodeMemRec* ce) {
   }
   if (flag != CE_SUCCESS) return flag;
 
-  sunrealtype c[kMaxDegree + 1];
-  N_Vector X[kMaxDegree + 1];
+  // Build the update: z = (a - B_2)/c_2 (d = 3: z is a itself), the lower
+  // derivatives from the history and z, then the position increment.
+  UpdatePlan plan;
   N_Vector z = Dn[d - 1];
-  if (d > 3) {  // z = (a - B_2) / c_2; for d = 3, z is a itself
-    int m = 0;
-    c[m] = 1 / co.c[2];
-    X[m++] = a;
-    for (int j = 2; j < d; ++j) {
-      c[m] = -co.T[2][j] / co.c[2];
-      X[m++] = D[j];
-    }
-    Combine(m, c, X, z);
+  if (d > 3) {
+    Combo& cb = plan.combos[plan.n++];
+    cb.Add(1 / co.c[2], a);
+    for (int j = 2; j < d; ++j) cb.Add(-co.T[2][j] / co.c[2], D[j]);
+    cb.out = z;
   }
   for (int k = 1; k <= d - 2; ++k) {
     if (k == 2) continue;  // D_2(t) = a exactly
-    int m = 0;
-    for (int j = k + 1; j < d; ++j) {
-      c[m] = co.T[k][j];
-      X[m++] = D[j];
-    }
-    c[m] = co.c[k];
-    X[m++] = z;
-    Accumulate(ce, k, m, c, X, D[k], Dn[k]);
+    Combo& cb = plan.combos[plan.n++];
+    for (int j = k + 1; j < d; ++j) cb.Add(co.T[k][j], D[j]);
+    cb.Add(co.c[k], z);
+    cb.old = D[k];
+    cb.level = k;
+    cb.out = Dn[k];
   }
-  int m = 0;
-  for (int i = 1; i <= d - 2; ++i) {
-    c[m] = co.w[i];
-    X[m++] = Dn[i];
+  {
+    Combo& cb = plan.combos[plan.n++];
+    for (int i = 1; i <= d - 2; ++i) cb.Add(co.w[i], Dn[i]);
+    cb.Add(co.wz_old, D[d - 1]);
+    cb.Add(co.wz_new, z);
+    cb.old = ce->xnext;
+    cb.level = 0;
+    cb.out = ce->xnew;
   }
-  c[m] = co.wz_old;
-  X[m++] = D[d - 1];
-  c[m] = co.wz_new;
-  X[m++] = z;
-  Accumulate(ce, 0, m, c, X, ce->xnext, ce->xnew);
+  sunrealtype xl1 = 0;
+  if (!FusedUpdate(ce, plan, &xl1)) {
+    for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
+    xl1 = N_VL1Norm(ce->xnew);
+  }
 
-  if (!IsFinite(ce->xnew)) {
+  if (!std::isfinite(xl1)) {
     const sunrealtype xn = N_VMaxNorm(ce->xnext);
     if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {
       return ProcessError(ce, CE_RHSFUNC_FAIL, func,
