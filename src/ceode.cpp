@@ -130,6 +130,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
   if (ce->initialized) {
     // A second Init replaces the problem: drop every size-dependent object.
     ceode::NlsFree(ce);
+    ceode::LsFree(ce);
     ceode::ConstrFree(ce);
     ceode::FreeVectors(ce);
   }

@@ -83,8 +83,6 @@ struct CEodeMemRec {
   N_Vector compnew[ceode::kMaxDegree] = {};
   N_Vector D[ceode::kMaxDegree] = {};
   N_Vector Dnew[ceode::kMaxDegree] = {};
-  N_Vector x0_saved = nullptr;  // ReInit keeps initial data here until the first step
-  N_Vector v0_saved = nullptr;
 
   // Work vectors
   N_Vector ftmp = nullptr;
