@@ -32,15 +32,16 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 }
 
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
-  if (mem == nullptr) {
-    *ce = nullptr;
-    return ProcessError(nullptr, CE_MEM_NULL, func,
-                        "The CEODE memory is NULL: create it with CEodeCreate first.");
-  }
   *ce = static_cast<CEodeMemRec*>(mem);
+  if (*ce == nullptr) {
+    ProcessError(nullptr, CE_MEM_NULL, func,
+                 "The CEODE memory is NULL: create it with CEodeCreate first.");
+    return CE_MEM_NULL;
+  }
   if (need_init && !(*ce)->initialized) {
-    return ProcessError(*ce, CE_NO_MALLOC, func,
-                        "The CEODE memory is not initialised: call CEodeInit first.");
+    ProcessError(*ce, CE_NO_MALLOC, func,
+                 "The CEODE memory is not initialised: call CEodeInit first.");
+    return CE_NO_MALLOC;
   }
   return CE_SUCCESS;
 }

@@ -418,8 +418,9 @@ extern "C" {
 char* CEodeGetReturnFlagName(long int flag) {
   // The caller owns the returned string, as with CVodeGetReturnFlagName.
   const char* name = ceode::FlagName(flag);
-  char* out = static_cast<char*>(std::malloc(std::strlen(name) + 1));
-  if (out != nullptr) std::strcpy(out, name);
+  const size_t len = std::strlen(name) + 1;
+  char* out = static_cast<char*>(std::malloc(len));
+  if (out != nullptr) std::memcpy(out, name, len);
   return out;
 }
 
