@@ -186,6 +186,9 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   if (!std::isfinite(tout)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
   flag = ceode::Prepare(ce, __func__);
   if (flag < 0) {
+    // Nothing was integrated: hand back the current state, never garbage.
+    N_VScale(1.0, ce->xcur, xout);
+    N_VScale(1.0, ce->D[1], vout);
     *tret = ce->tcur;
     return flag;
   }

@@ -190,7 +190,14 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
     ce->jac_current = false;  // A no longer holds the Newton matrix
   }
   N_VConst(0, ce->lstmp);
-  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, b, SUN_RCONST(1e-3) * std::sqrt(ce->n));
+  // Direct solvers ignore the tolerance; an iterative one must solve M a = f to
+  // near round-off, unscaled, or the acceleration itself carries its residual.
+  sunrealtype tol = 0;
+  if (SUNLinSolGetType(ce->LS) != SUNLINEARSOLVER_DIRECT) {
+    SUNLinSolSetScalingVectors(ce->LS, nullptr, nullptr);
+    tol = SUN_RCONST(1e-13) * std::sqrt(N_VDotProd(b, b));
+  }
+  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, b, tol);
   ++ce->nls_solves;
   if (rv != 0) {
     return ProcessError(ce, CE_LSOLVE_FAIL, func,
@@ -215,22 +222,24 @@ int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector
     }
     ++ce->nje;
     if (rv != 0) {
-      ProcessError(ce, CE_JACFUNC_FAIL, func,
-                   "The velocity Jacobian df/dv could not be evaluated (f or the Jacobian function "
-                   "returned %d) at t = %.17g.",
-                   rv, static_cast<double>(t));
-      return rv > 0 ? 1 : -1;
+      // A fixed step cannot retry with a smaller h, so every failure is final.
+      ce->cb_flag = ProcessError(ce, CE_JACFUNC_FAIL, func,
+                                 "The velocity Jacobian df/dv could not be evaluated (f or the "
+                                 "Jacobian function returned %d) at t = %.17g.",
+                                 rv, static_cast<double>(t));
+      return -1;
     }
     rv = SUNMatCopy(ce->Jsave, ce->A);
     if (rv == 0) rv = ce->M ? SUNMatScaleAdd(-kappa, ce->A, ce->M) : SUNMatScaleAddI(-kappa, ce->A);
     if (rv != 0) {
-      ProcessError(ce, CE_LSETUP_FAIL, func,
-                   "Forming M - kappa df/dv failed (%d): M, A and the Jacobian must share a "
-                   "matrix type and size.",
-                   rv);
+      ce->cb_flag = ProcessError(ce, CE_LSETUP_FAIL, func,
+                                 "Forming M - kappa df/dv failed (%d): M, A and the Jacobian must "
+                                 "share a matrix type and size.",
+                                 rv);
       return -1;
     }
   }
+  ce->mass_dirty = false;  // A is built from the current M
   ce->a_holds = kHoldsNewton;
   const int rv = SUNLinSolSetup(ce->LS, ce->A);
   ++ce->nsetups;
@@ -238,11 +247,12 @@ int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector
   ce->jac_current = true;
   if (rv != 0) {
     ce->a_holds = kHoldsNothing;
-    ProcessError(ce, CE_LSETUP_FAIL, func,
-                 "The Newton matrix M - kappa df/dv could not be factored (linear solver setup "
-                 "returned %d) at t = %.17g.",
-                 rv, static_cast<double>(t));
-    return rv > 0 ? 1 : -1;
+    ce->cb_flag = ProcessError(ce, CE_LSETUP_FAIL, func,
+                               "The Newton matrix M - kappa df/dv is singular or could not be "
+                               "factored (linear solver setup returned %d) at t = %.17g: check "
+                               "M and df/dv, or reduce h.",
+                               rv, static_cast<double>(t));
+    return -1;
   }
   return 0;
 }
@@ -313,6 +323,7 @@ int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac) {
   if (flag != CE_SUCCESS) return flag;
   ce->jac = jac;
   ce->jac_current = false;
+  ce->started = false;  // solver workspaces (e.g. the constrained Jacobian) are sized at start
   return CE_SUCCESS;
 }
 

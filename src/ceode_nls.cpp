@@ -64,8 +64,7 @@ int LinearSetup(sunbooleantype /*jbad*/, sunbooleantype* jcur, void* mem) {
   const int rv = NewtonSetup(ce, ce->t_eval, ce->x_eval, ce->vtmp, ce->ftmp, ce->co.kappa, kFunc);
   *jcur = SUNTRUE;
   ce->crate = 1;
-  if (rv < 0) ce->cb_flag = CE_LSETUP_FAIL;
-  return rv;
+  return rv;  // NewtonSetup has reported and set cb_flag on failure
 }
 
 int LinearSolve(N_Vector b, void* mem) {
@@ -83,7 +82,18 @@ int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtyp
   SUNNonlinSolGetCurIter(nls, &m);
   ++ce->nni;
   const sunrealtype delnrm = N_VWrmsNorm(del, ewt);
-  if (!std::isfinite(delnrm)) return SUN_NLS_CONV_RECVR;
+  if (!std::isfinite(delnrm)) {
+    // A non-finite f is the user's to fix: a fresh Jacobian or a retry cannot
+    // help, and "did not converge, reduce h" would send the user the wrong way.
+    if (!IsFinite(ce->ftmp)) {
+      ce->cb_flag = ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
+                                 "The acceleration became NaN or Inf inside the nonlinear solve at "
+                                 "t = %.17g: f returned non-finite values.",
+                                 static_cast<double>(ce->t_eval));
+      return -1;
+    }
+    return SUN_NLS_CONV_RECVR;
+  }
   if (m > 0) ce->crate = std::max(kCrDown * ce->crate, delnrm / ce->delp);
   const sunrealtype dcon = delnrm * std::min(SUN_RCONST(1.0), ce->crate) / tol;
   if (dcon <= 1) return SUN_NLS_SUCCESS;
@@ -173,7 +183,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const 
   ce->delp = 0;
   const bool newton = SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
   bool setup = newton && (ce->a_holds != 2 || !ce->jac_current || ce->nst_lastsetup < 0 ||
-                          ce->nst - ce->nst_lastsetup >= ce->msbj ||
+                          ce->nst - ce->nst_lastsetup >= ce->msbj || ce->mass_dirty ||
                           ce->kappa_setup != co.kappa);
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
