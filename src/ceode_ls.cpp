@@ -44,8 +44,10 @@ int ATimes(void* data, N_Vector w, N_Vector z) {
   return 0;
 }
 
+// sqrt(eps) relative to the velocity; at rest the unit floor keeps the increment
+// far above round-off (an increment of order eps would turn df/dv into noise).
 sunrealtype DqIncrement(sunrealtype vj, sunrealtype vscale) {
-  return std::sqrt(SUN_UNIT_ROUNDOFF) * std::max({std::fabs(vj), vscale, SUN_RCONST(1e-8)});
+  return std::sqrt(SUN_UNIT_ROUNDOFF) * std::max({std::fabs(vj), vscale, SUN_RCONST(1.0)});
 }
 
 // Dense difference-quotient Jacobian df/dv, one f evaluation per column.
@@ -112,13 +114,13 @@ int LsInitialize(CEodeMemRec* ce, const char* func) {
   ce->mass_evaluated = false;
   ce->nst_lastsetup = -1;
   ce->jac_current = false;
+  if (HasConstraints(ce)) return CE_SUCCESS;  // the saddle-point solver owns the LS
   if (ce->M != nullptr && ce->LS == nullptr) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "A mass matrix is set but no linear solver: attach one with "
                         "CEodeSetLinearSolver (e.g. SUNLinSol_Dense with a dense matrix).");
   }
   if (ce->LS == nullptr) return CE_SUCCESS;
-  if (HasConstraints(ce)) return CE_SUCCESS;  // the saddle-point solver owns the LS
   if (ce->A == nullptr && !ce->ls_matrix_free) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "The attached linear solver needs a matrix: pass A to CEodeSetLinearSolver.");

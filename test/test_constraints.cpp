@@ -1,0 +1,497 @@
+// Index-3 constraints without index reduction (method.md section 3): the DAE pendulum of the
+// paper's Table 11, multipliers, velocity-dependent forces, error paths, dense versus KLU.
+#include <ceode/ceode.h>
+#include <gtest/gtest.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "test_util.hpp"
+
+namespace {
+
+using ceode_test::Context;
+using ceode_test::LinearSolver;
+using ceode_test::Matrix;
+using ceode_test::Mem;
+using ceode_test::SerialVector;
+using ceode_test::Vector;
+
+constexpr double kG = 9.81;
+constexpr double kL = 1.0;
+constexpr double kM = 1.0;
+constexpr double kPi = 3.14159265358979323846;
+
+// The paper's DAE pendulum: q = (x, y, theta) of the centre of mass, M = diag(m, m, 0),
+// Phi = (x - L sin theta, y + L cos theta); options for damping, a duplicated constraint
+// and a constraint function that fails on request.
+struct Pendulum {
+  double damping = 0;      // f = (-c x', -m g - c y', 0)
+  bool redundant = false;  // Phi_3 = Phi_1
+  long fail_at = -1;       // the constraint function fails at this call
+  long calls = 0;
+  bool sparse = false;
+  int nc() const { return redundant ? 3 : 2; }
+};
+
+int Rhs(sunrealtype, N_Vector q, N_Vector v, N_Vector f, void* ud) {
+  auto* p = static_cast<Pendulum*>(ud);
+  const double* vd = N_VGetArrayPointer(v);
+  double* fd = N_VGetArrayPointer(f);
+  (void)q;
+  fd[0] = -p->damping * vd[0];
+  fd[1] = -kM * kG - p->damping * vd[1];
+  fd[2] = 0;
+  return 0;
+}
+
+int VelJac(sunrealtype, N_Vector, N_Vector, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
+           N_Vector) {
+  auto* p = static_cast<Pendulum*>(ud);
+  if (SUNMatGetID(J) == SUNMATRIX_DENSE) {
+    SUNDenseMatrix_Column(J, 0)[0] = -p->damping;
+    SUNDenseMatrix_Column(J, 1)[1] = -p->damping;
+    return 0;
+  }
+  sunindextype* ptr = SUNSparseMatrix_IndexPointers(J);
+  sunindextype* idx = SUNSparseMatrix_IndexValues(J);
+  sunrealtype* val = SUNSparseMatrix_Data(J);
+  ptr[0] = 0;
+  idx[0] = 0;
+  val[0] = -p->damping;
+  ptr[1] = 1;
+  idx[1] = 1;
+  val[1] = -p->damping;
+  ptr[2] = 2;
+  ptr[3] = 2;
+  return 0;
+}
+
+int Mass(sunrealtype, N_Vector, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+  if (SUNMatGetID(M) == SUNMATRIX_DENSE) {
+    SUNDenseMatrix_Column(M, 0)[0] = kM;
+    SUNDenseMatrix_Column(M, 1)[1] = kM;
+    SUNDenseMatrix_Column(M, 2)[2] = 0;  // point mass: no rotational inertia
+    return 0;
+  }
+  sunindextype* ptr = SUNSparseMatrix_IndexPointers(M);
+  sunindextype* idx = SUNSparseMatrix_IndexValues(M);
+  sunrealtype* val = SUNSparseMatrix_Data(M);
+  for (int i = 0; i < 3; ++i) {
+    ptr[i] = i;
+    idx[i] = i;
+    val[i] = i < 2 ? kM : 0;
+  }
+  ptr[3] = 3;
+  return 0;
+}
+
+int Phi(sunrealtype, N_Vector q, N_Vector phi, void* ud) {
+  auto* p = static_cast<Pendulum*>(ud);
+  if (p->calls++ == p->fail_at) return -1;
+  const double* qd = N_VGetArrayPointer(q);
+  double* r = N_VGetArrayPointer(phi);
+  r[0] = qd[0] - kL * std::sin(qd[2]);
+  r[1] = qd[1] + kL * std::cos(qd[2]);
+  if (p->redundant) r[2] = r[0];
+  return 0;
+}
+
+int Jac(sunrealtype, N_Vector q, SUNMatrix G, void* ud) {
+  auto* p = static_cast<Pendulum*>(ud);
+  const double th = N_VGetArrayPointer(q)[2];
+  const double g02 = -kL * std::cos(th);
+  const double g12 = -kL * std::sin(th);
+  if (SUNMatGetID(G) == SUNMATRIX_DENSE) {
+    for (int r = 0; r < p->nc(); ++r) {
+      const int rr = r % 2;
+      SUNDenseMatrix_Column(G, rr)[r] = 1;
+      SUNDenseMatrix_Column(G, 2)[r] = rr == 0 ? g02 : g12;
+    }
+    return 0;
+  }
+  sunindextype* ptr = SUNSparseMatrix_IndexPointers(G);
+  sunindextype* idx = SUNSparseMatrix_IndexValues(G);
+  sunrealtype* val = SUNSparseMatrix_Data(G);
+  if (SUNSparseMatrix_NNZ(G) < 2 * p->nc()) return -1;
+  for (int r = 0; r < p->nc(); ++r) {
+    const int rr = r % 2;
+    ptr[r] = 2 * r;
+    idx[2 * r] = rr;
+    val[2 * r] = 1;
+    idx[2 * r + 1] = 2;
+    val[2 * r + 1] = rr == 0 ? g02 : g12;
+  }
+  ptr[p->nc()] = 2 * p->nc();
+  return 0;
+}
+
+struct RunResult {
+  int flag = 0;
+  double error = 0;  // max |E - E0|
+  double drift = 0;  // max |x^2 + y^2 - L^2|
+  long steps = 0;
+  long iters = 0;
+  long setups = 0;
+  std::vector<double> q, v, lambda;  // at the end
+  double tension_err = 0;            // max relative error of the rod tension from lambda
+};
+
+// Runs the pendulum with CEODE; checks energy and drift at every step.
+struct RunOptions {
+  const char* method = "G5_ONES";
+  double h = 1e-3;
+  double tend = 10;
+  bool zero_start = true;
+  bool sparse = false;  // KLU with CSR matrices instead of the default dense path
+  bool vel_dependent = false;
+  bool user_jac = false;
+  Pendulum* problem = nullptr;
+};
+
+RunResult RunPendulum(const RunOptions& o) {
+  RunResult res;
+  Context ctx;
+  Pendulum local;
+  Pendulum* p = o.problem != nullptr ? o.problem : &local;
+  p->sparse = o.sparse;
+  const int nc = p->nc();
+  Vector q0 = SerialVector(3, ctx);
+  Vector v0 = SerialVector(3, ctx);
+  double* qd0 = N_VGetArrayPointer(q0.get());
+  qd0[0] = kL;
+  qd0[1] = 0;
+  qd0[2] = kPi / 2;
+  Mem mem(CEodeCreate(ctx));
+  CEodeSetErrFile(mem.get(), nullptr);
+  EXPECT_EQ(CEodeInit(mem.get(), Rhs, 0, q0.get(), v0.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), o.method), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFixedStep(mem.get(), o.h), CE_SUCCESS);
+  CEodeSetZeroStart(mem.get(), o.zero_start ? SUNTRUE : SUNFALSE);
+  CEodeSetUserData(mem.get(), p);
+  CEodeSetMaxNumSteps(mem.get(), 100000000L);
+  Vector tmpl = SerialVector(nc, ctx);
+  EXPECT_EQ(CEodeSetConstraints(mem.get(), tmpl.get(), Phi, Jac), CE_SUCCESS);
+  Matrix Mmat, A;
+  LinearSolver LS;
+  Vector lsv = SerialVector(3 + nc, ctx);
+  if (o.sparse) {
+    Mmat.reset(SUNSparseMatrix(3, 3, 3, CSR_MAT, ctx));
+    A.reset(SUNSparseMatrix(3 + nc, 3 + nc, 4, CSR_MAT, ctx));  // too small: CEODE reallocates
+    LS.reset(SUNLinSol_KLU(lsv.get(), A.get(), ctx));
+  } else {
+    Mmat.reset(SUNDenseMatrix(3, 3, ctx));
+    A.reset(SUNDenseMatrix(3 + nc, 3 + nc, ctx));
+    LS.reset(SUNLinSol_Dense(lsv.get(), A.get(), ctx));
+  }
+  EXPECT_EQ(CEodeSetMassFn(mem.get(), Mass, Mmat.get(), SUNTRUE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  if (o.vel_dependent) CEodeSetVelocityDependence(mem.get(), SUNTRUE);
+  if (o.user_jac) CEodeSetVelJacFn(mem.get(), VelJac);
+
+  Vector q = SerialVector(3, ctx);
+  Vector v = SerialVector(3, ctx);
+  Vector lam = SerialVector(nc, ctx);
+  const double E0 = 0;  // at rest at y = 0
+  double t = 0;
+  const long nsteps = std::lround(o.tend / o.h);
+  double dissipated = 0;
+  double pvv = 0;
+  for (long k = 0; k < nsteps; ++k) {
+    res.flag = CEodeEvolve(mem.get(), t + o.h, q.get(), v.get(), &t, CE_ONE_STEP);
+    if (res.flag < 0) break;
+    const double* qd = N_VGetArrayPointer(q.get());
+    const double* vd = N_VGetArrayPointer(v.get());
+    const double vv = vd[0] * vd[0] + vd[1] * vd[1];
+    dissipated += 0.5 * o.h * p->damping * (vv + pvv);  // trapezoid of c |v|^2
+    pvv = vv;
+    const double E = 0.5 * kM * vv + kM * kG * qd[1] + dissipated;
+    res.error = std::max(res.error, std::fabs(E - E0));
+    res.drift = std::max(res.drift, std::fabs(qd[0] * qd[0] + qd[1] * qd[1] - kL * kL));
+    if (k % 97 == 0 && p->damping == 0) {
+      // Rod tension from the multipliers against m (|v|^2 / L + g cos(angle from vertical)).
+      CEodeGetMultipliers(mem.get(), lam.get());
+      const double* ld = N_VGetArrayPointer(lam.get());
+      const double tension = (ld[0] * qd[0] + ld[1] * qd[1]) / kL;
+      const double exact = kM * (vv / kL - kG * qd[1] / kL);
+      res.tension_err = std::max(res.tension_err, std::fabs(tension - exact) / (kM * kG));
+    }
+  }
+  CEodeGetNumSteps(mem.get(), &res.steps);
+  CEodeGetNumNonlinSolvIters(mem.get(), &res.iters);
+  CEodeGetNumLinSolvSetups(mem.get(), &res.setups);
+  res.q.assign(N_VGetArrayPointer(q.get()), N_VGetArrayPointer(q.get()) + 3);
+  res.v.assign(N_VGetArrayPointer(v.get()), N_VGetArrayPointer(v.get()) + 3);
+  if (CEodeGetMultipliers(mem.get(), lam.get()) == CE_SUCCESS) {
+    res.lambda.assign(N_VGetArrayPointer(lam.get()), N_VGetArrayPointer(lam.get()) + nc);
+  }
+  std::printf("  %-8s h = %g %s: error %.3e drift %.3e, %.2f Newton iterations/step, "
+              "%ld setups\n",
+              o.method, o.h, o.zero_start ? "(zero start)" : "(consistent)", res.error, res.drift,
+              res.steps > 0 ? static_cast<double>(res.iters) / res.steps : 0.0, res.setups);
+  return res;
+}
+
+// Table 11 of the paper, from test/data/paper_pendulum_dae.csv: h -> (error, drift).
+std::map<double, std::pair<double, double>> PaperTable11() {
+  std::map<double, std::pair<double, double>> out;
+  std::ifstream in(std::string(CEODE_TEST_DATA_DIR) + "/paper_pendulum_dae.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("method", 0) == 0) continue;
+    std::stringstream ss(line);
+    std::string method, hs, es, ds, ts;
+    std::getline(ss, method, ',');
+    std::getline(ss, hs, ',');
+    std::getline(ss, es, ',');
+    std::getline(ss, ds, ',');
+    if (method == "G5_ONES") out[std::stod(hs)] = {std::stod(es), std::stod(ds)};
+  }
+  return out;
+}
+
+TEST(Constraints, G5OnesReproducesThePapersTable11EnergyErrorWithinTenPercent) {
+  const auto table = PaperTable11();
+  ASSERT_EQ(table.count(1e-2), 1u) << "test/data/paper_pendulum_dae.csv is missing rows";
+  ASSERT_EQ(table.count(1e-3), 1u);
+  for (double h : {1e-2, 1e-3}) {
+    RunOptions o;
+    o.h = h;
+    const RunResult r = RunPendulum(o);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    const double ref = table.at(h).first;
+    EXPECT_NEAR(r.error, ref, 0.1 * ref) << "h = " << h;
+    EXPECT_LE(r.drift, 1e-14) << "h = " << h;
+  }
+}
+
+TEST(Constraints, G5OnesKeepsTheEnergyErrorBelowTwoTimesTenToTheMinusTwelveAtHEqualsOneEMinus4) {
+  RunOptions o;
+  o.h = 1e-4;
+  const RunResult r = RunPendulum(o);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  EXPECT_LE(r.error, 2e-12);
+  EXPECT_LE(r.drift, 1e-14);
+}
+
+// One million steps (about 2 s in Release): the paper's Table 11 reports 2.63e-12 here.
+TEST(Constraints, G5OnesKeepsTheDriftAtRoundOffAtHEqualsOneEMinus5) {
+  RunOptions o;
+  o.h = 1e-5;
+  const RunResult r = RunPendulum(o);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  EXPECT_LE(r.drift, 1e-14);
+  EXPECT_LE(r.error, 1e-11);
+}
+
+TEST(Constraints, G5OnesWithTheConsistentStartKeepsTheDriftAtRoundOff) {
+  for (double h : {1e-2, 1e-3, 1e-4}) {
+    RunOptions o;
+    o.h = h;
+    o.zero_start = false;
+    const RunResult r = RunPendulum(o);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    EXPECT_LE(r.drift, 1e-14) << "h = " << h;
+  }
+}
+
+TEST(Constraints, G3CentralDifferencesAndG4KeepTheDriftAtRoundOff) {
+  for (const char* m : {"G3_CD", "G4_A34", "G4_A54"}) {
+    for (double h : {1e-2, 1e-3}) {
+      RunOptions o;
+      o.method = m;
+      o.h = h;
+      o.zero_start = false;
+      const RunResult r = RunPendulum(o);
+      ASSERT_EQ(r.flag, CE_SUCCESS) << m;
+      EXPECT_LE(r.drift, 1e-14) << m << " h = " << h;
+      EXPECT_LE(r.error, 1e-2) << m << " h = " << h;
+    }
+  }
+}
+
+// In constrained directions the position x(t+h) is imposed, and the history follows the method's
+// recurrence with x prescribed. For G4 alpha = 1/4 that recurrence has the root -1.94 (G4_A34: -1,
+// G4_A54 and G5_ONES: |0.64|), so constrained components of the history grow by 1.94 per step.
+TEST(Constraints, G4AlphaOneQuarterIsUnstableInConstrainedDirections) {
+  RunOptions o;
+  o.method = "G4_A14";
+  o.h = 1e-2;
+  o.tend = 1;
+  o.zero_start = false;
+  const RunResult r = RunPendulum(o);
+  EXPECT_TRUE(r.flag != CE_SUCCESS || r.error > 1e-1) << "error " << r.error;
+}
+
+TEST(Constraints, MultipliersGiveTheRodTension) {
+  RunOptions o;
+  o.h = 1e-3;
+  const RunResult r = RunPendulum(o);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  ASSERT_EQ(r.lambda.size(), 2u);
+  // Relative to m g; the tension comes from a(t) of a third-order method.
+  EXPECT_LE(r.tension_err, 1e-6);
+}
+
+TEST(Constraints, LinearDampingConvergesAndDissipatesTheRightEnergy) {
+  for (bool user_jac : {false, true}) {
+    Pendulum p;
+    p.damping = 0.5;
+    RunOptions o;
+    o.h = 1e-3;
+    o.zero_start = false;
+    o.vel_dependent = true;
+    o.user_jac = user_jac;
+    o.problem = &p;
+    const RunResult r = RunPendulum(o);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    EXPECT_LE(r.drift, 1e-14);
+    // E + dissipated work (trapezoid, O(h^2)) stays constant.
+    EXPECT_LE(r.error, 1e-5);
+  }
+}
+
+TEST(Constraints, ARedundantConstraintGivesAClearSetupError) {
+  Pendulum p;
+  p.redundant = true;
+  RunOptions o;
+  o.problem = &p;
+  o.tend = 0.01;
+  const RunResult r = RunPendulum(o);
+  EXPECT_EQ(r.flag, CE_LSETUP_FAIL);
+  for (double x : r.q) EXPECT_TRUE(std::isfinite(x));
+}
+
+TEST(Constraints, AFailingConstraintCallbackGivesConstrFailAndTheMemoryStaysUsable) {
+  Context ctx;
+  Pendulum p;
+  Vector q0 = SerialVector(3, ctx);
+  Vector v0 = SerialVector(3, ctx);
+  N_VGetArrayPointer(q0.get())[0] = kL;
+  N_VGetArrayPointer(q0.get())[2] = kPi / 2;
+  Mem mem(CEodeCreate(ctx));
+  CEodeSetErrFile(mem.get(), nullptr);
+  ASSERT_EQ(CEodeInit(mem.get(), Rhs, 0, q0.get(), v0.get()), CE_SUCCESS);
+  CEodeSetMethodByName(mem.get(), "G5_ONES");
+  CEodeSetFixedStep(mem.get(), 1e-3);
+  CEodeSetUserData(mem.get(), &p);
+  Vector tmpl = SerialVector(2, ctx);
+  ASSERT_EQ(CEodeSetConstraints(mem.get(), tmpl.get(), Phi, Jac), CE_SUCCESS);
+  Matrix Mmat(SUNDenseMatrix(3, 3, ctx));
+  Matrix A(SUNDenseMatrix(5, 5, ctx));
+  Vector lsv = SerialVector(5, ctx);
+  LinearSolver LS(SUNLinSol_Dense(lsv.get(), A.get(), ctx));
+  CEodeSetMassFn(mem.get(), Mass, Mmat.get(), SUNTRUE);
+  CEodeSetLinearSolver(mem.get(), LS.get(), A.get());
+  Vector q = SerialVector(3, ctx);
+  Vector v = SerialVector(3, ctx);
+  double t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 0.1, q.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  p.fail_at = p.calls + 1;
+  double tfail = 0;
+  EXPECT_EQ(CEodeEvolve(mem.get(), 0.2, q.get(), v.get(), &tfail, CE_NORMAL), CE_CONSTR_FAIL);
+  const char* msg = nullptr;
+  CEodeGetLastErrorMessage(mem.get(), &msg);
+  ASSERT_NE(msg, nullptr);
+  EXPECT_NE(std::string(msg).find("constraint function failed"), std::string::npos) << msg;
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isfinite(N_VGetArrayPointer(q.get())[i]));
+  // The memory continues from the last good state and gives the uninterrupted answer.
+  p.fail_at = -1;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 1.0, q.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  RunOptions o;
+  o.h = 1e-3;
+  o.tend = 1.0;
+  o.zero_start = false;
+  const RunResult ref = RunPendulum(o);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(N_VGetArrayPointer(q.get())[i], ref.q[i], 1e-12);
+}
+
+TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
+  for (bool vdep : {false, true}) {
+    Pendulum pd, ps;
+    pd.damping = ps.damping = vdep ? 0.3 : 0;
+    RunOptions o;
+    o.h = 1e-3;
+    o.tend = 2;
+    o.zero_start = false;
+    o.vel_dependent = vdep;
+    o.user_jac = vdep;
+    o.problem = &pd;
+    const RunResult dense = RunPendulum(o);
+    o.sparse = true;
+    o.problem = &ps;
+    const RunResult sparse = RunPendulum(o);
+    ASSERT_EQ(dense.flag, CE_SUCCESS);
+    ASSERT_EQ(sparse.flag, CE_SUCCESS);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(dense.q[i], sparse.q[i], 1e-12);
+      EXPECT_NEAR(dense.v[i], sparse.v[i], 1e-12);
+    }
+    // The multipliers come from a = (x(t+h) - X0) / mu + B_2: the constraint fixes x(t+h) only to
+    // round-off, so a and lambda are resolved to about eps |x| m / mu (1.8e-10 at h = 1e-3 for
+    // G5_ONES, mu = 1.25 h^2), whatever the linear solver. Positions and velocities agree to 1e-12.
+    const double lambda_resolution = 2.2e-16 * kL * kM / (1.25 * o.h * o.h);
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(dense.lambda[i], sparse.lambda[i], lambda_resolution);
+    }
+  }
+}
+
+// Cartesian pendulum with M = I: no mass function and no linear solver, so CEODE builds its own
+// dense saddle-point solver.
+int CartRhs(sunrealtype, N_Vector, N_Vector, N_Vector f, void*) {
+  double* fd = N_VGetArrayPointer(f);
+  fd[0] = 0;
+  fd[1] = -kG;
+  return 0;
+}
+int CartPhi(sunrealtype, N_Vector q, N_Vector phi, void*) {
+  const double* x = N_VGetArrayPointer(q);
+  N_VGetArrayPointer(phi)[0] = 0.5 * (x[0] * x[0] + x[1] * x[1] - kL * kL);
+  return 0;
+}
+int CartJac(sunrealtype, N_Vector q, SUNMatrix G, void*) {
+  const double* x = N_VGetArrayPointer(q);
+  SUNDenseMatrix_Column(G, 0)[0] = x[0];
+  SUNDenseMatrix_Column(G, 1)[0] = x[1];
+  return 0;
+}
+
+TEST(Constraints, WithoutALinearSolverCeodeBuildsItsOwnDenseSaddlePointSolver) {
+  Context ctx;
+  Vector q0 = SerialVector(2, ctx);
+  Vector v0 = SerialVector(2, ctx);
+  N_VGetArrayPointer(q0.get())[0] = kL;
+  Mem mem(CEodeCreate(ctx));
+  CEodeSetErrFile(mem.get(), nullptr);
+  ASSERT_EQ(CEodeInit(mem.get(), CartRhs, 0, q0.get(), v0.get()), CE_SUCCESS);
+  CEodeSetMethodByName(mem.get(), "G5_ONES");
+  CEodeSetFixedStep(mem.get(), 1e-3);
+  Vector tmpl = SerialVector(1, ctx);
+  ASSERT_EQ(CEodeSetConstraints(mem.get(), tmpl.get(), CartPhi, CartJac), CE_SUCCESS);
+  Vector q = SerialVector(2, ctx);
+  Vector v = SerialVector(2, ctx);
+  double t = 0;
+  double drift = 0, err = 0;
+  for (int k = 0; k < 2000; ++k) {
+    ASSERT_EQ(CEodeEvolve(mem.get(), t + 1e-3, q.get(), v.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+    const double* x = N_VGetArrayPointer(q.get());
+    const double* vd = N_VGetArrayPointer(v.get());
+    drift = std::max(drift, std::fabs(x[0] * x[0] + x[1] * x[1] - kL * kL));
+    err = std::max(err, std::fabs(0.5 * (vd[0] * vd[0] + vd[1] * vd[1]) + kG * x[1]));
+  }
+  EXPECT_LE(drift, 1e-14);
+  EXPECT_LE(err, 1e-8);
+}
+
+}  // namespace
