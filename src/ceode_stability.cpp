@@ -7,6 +7,9 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdint>
+#include <initializer_list>
+#include <limits>
 #include <memory>
 
 #include "ceode_impl.hpp"
@@ -55,7 +58,7 @@ class StepMap {
       ok_ = CEodeSetVelocityDependence(mem_, SUNTRUE) == CE_SUCCESS &&
             CEodeSetLinearSolver(mem_, LS_, A_) == CE_SUCCESS &&
             CEodeSetVelJacFn(mem_, TestJac) == CE_SUCCESS &&
-            CEodeSetNonlinTolerances(mem_, 1e-15, 1e-300) == CE_SUCCESS;
+            CEodeSetNonlinTolerances(mem_, 1e-15, 0) == CE_SUCCESS;
     }
     sunrealtype t = 0;
     // One real step builds the solver objects and coefficients for h = 1.
@@ -104,24 +107,127 @@ class StepMap {
 };
 
 int CheckArgs(int degree, const sunrealtype* params, sunrealtype xi) {
-  if (degree < kMinDegree || degree > kMaxDegree || params == nullptr || !(xi >= 0)) {
+  if (degree < kMinDegree || degree > kMaxDegree || params == nullptr || !(xi >= 0) ||
+      !std::isfinite(xi)) {
     return CE_ILL_INPUT;
   }
+  for (int i = 0; i < degree - 1; ++i) {
+    if (!std::isfinite(params[i])) return CE_ILL_INPUT;
+  }
+  // beta (and gamma for d >= 4) divide in the step: CEodeSetMethod refuses them too.
+  if (params[1] == 0 || (degree >= 4 && params[2] == 0)) return CE_ILL_INPUT;
   return CE_SUCCESS;
 }
 
-sunrealtype Radius(const Eigen::MatrixXd& A) {
-  return A.eigenvalues().cwiseAbs().maxCoeff();
+// The eigen-analysis of one amplification matrix.
+struct Spectrum {
+  sunrealtype rho = 0;     // spectral radius
+  sunrealtype excess = 0;  // max_i (|lambda_i| - 1 - tol_i): > 0 means unstable
+};
+
+// Smallest tolerance on |lambda| = 1, for well-conditioned eigenvalues.
+constexpr sunrealtype kRhoTolFloor = 1e-13;
+// Multiplier of the first-order eigenvalue error bound kappa_i * eps * ||A||.
+constexpr sunrealtype kRhoTolFactor = 64;
+
+// The undamped physical pair sits exactly on the unit circle, so rho = 1 must be
+// recognised through rounding. A fixed tolerance cannot serve everywhere: near
+// a collision of eigenvalues (at Omega -> 0, or where the pair meets a spurious
+// root, as G4_A34 does at sqrt(3)) the computed |lambda| errs by 1e-11 and more,
+// while G5_TOP's physical pair leaves the circle by only 1e-10 near Omega = 0.07.
+// So each eigenvalue gets its own tolerance from its condition number
+// kappa_i = |x_i| |y_i| / |y_i^H x_i| (right and left eigenvectors): the first-order
+// error bound kappa_i * eps * ||A||, times a safety factor.
+Spectrum Analyse(const Eigen::MatrixXd& A) {
+  Spectrum s;
+  Eigen::EigenSolver<Eigen::MatrixXd> es(A, true);
+  if (es.info() != Eigen::Success) {
+    s.rho = s.excess = std::numeric_limits<sunrealtype>::infinity();
+    return s;
+  }
+  const Eigen::VectorXcd lam = es.eigenvalues();
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  Eigen::FullPivLU<Eigen::MatrixXcd> lu(V);
+  const sunrealtype anorm = A.norm();
+  const sunrealtype eps = std::numeric_limits<sunrealtype>::epsilon();
+  Eigen::MatrixXcd W;  // rows: left eigenvectors with y_i^H x_i = 1
+  const bool invertible = lu.isInvertible();
+  if (invertible) W = lu.inverse();
+  s.excess = -std::numeric_limits<sunrealtype>::infinity();
+  for (int i = 0; i < lam.size(); ++i) {
+    const sunrealtype mod = std::abs(lam(i));
+    s.rho = std::max(s.rho, mod);
+    // A defective matrix has no inverse: its eigenvalues are known to sqrt(eps) only.
+    const sunrealtype kappa = invertible ? V.col(i).norm() * W.row(i).norm() : 1 / std::sqrt(eps);
+    // Capped at sqrt(eps), the accuracy of an exactly defective eigenvalue, so that a
+    // crossing through a Jordan block (G4_A34 at sqrt(3)) is not overshot.
+    const sunrealtype tol =
+        std::min(std::sqrt(eps), std::max(kRhoTolFloor, kRhoTolFactor * kappa * eps * anorm));
+    s.excess = std::max(s.excess, mod - 1 - tol);
+  }
+  return s;
 }
 
-// Tolerance on rho = 1: the undamped eigenvalues sit on the unit circle.
-constexpr sunrealtype kRhoTol = 1e-9;
+// The scan's grid: instability confined to an interval narrower than this (or
+// below it, near Omega = 0) is below the resolution of the analysis.
+constexpr sunrealtype kScanStep = 1e-3;
+constexpr sunrealtype kScanMax = 20;
 
 }  // namespace
 
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max) {
   return CEodeStabilityLimit(degree, params, 0, Omega_max);
 }
+
+namespace {
+
+// omega_max^2 ~ the largest eigenvalue of -dg/dx, g = M^{-1} f, by power iteration
+// with directional differences at (x, v, t) = (xcur, D_1, tcur). The iteration
+// approaches from below, so the estimate is a lower bound of the top frequency.
+int EstimateMaxFrequency(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
+  constexpr int kMaxIters = 60;
+  constexpr int kMinIters = 8;
+  constexpr sunrealtype kStagnation = 1e-6;  // relative change that ends the iteration
+  N_Vector w = ce->vtmp;
+  N_Vector g0 = ce->atmp;
+  N_Vector xp = ce->xnew;
+  N_Vector gp = ce->apred;
+  sunrealtype* wd = N_VGetArrayPointer(w);
+  N_VConst(1, w);
+  // A pseudo-random start avoids a start vector orthogonal to the top mode (a
+  // uniform chain's top mode sums to zero); vectors without one local array (MPI)
+  // start from ones.
+  if (wd != nullptr && N_VGetCommunicator(w) == nullptr) {
+    std::uint64_t seed = 12345;
+    const sunindextype nl = N_VGetLength(w);
+    for (sunindextype i = 0; i < nl; ++i) {
+      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      wd[i] = 0.5 + static_cast<sunrealtype>(seed >> 33) / 4294967296.0;
+    }
+  }
+  int flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], g0, func);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype xscale = 1 + N_VMaxNorm(ce->xcur);
+  sunrealtype lam = 0;
+  for (int it = 0; it < kMaxIters; ++it) {
+    const sunrealtype wn = std::sqrt(N_VDotProd(w, w));
+    if (!(wn > 0) || !std::isfinite(wn)) break;
+    N_VScale(1 / wn, w, w);
+    const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * xscale;
+    N_VLinearSum(1, ce->xcur, sig, w, xp);
+    flag = EvalAccel(ce, ce->tcur, xp, ce->D[1], gp, func);
+    if (flag != CE_SUCCESS) return flag;
+    N_VLinearSum(-1 / sig, gp, 1 / sig, g0, w);
+    const sunrealtype lam_new = std::sqrt(N_VDotProd(w, w));
+    const bool done = it >= kMinIters && std::fabs(lam_new - lam) <= kStagnation * lam_new;
+    lam = lam_new;
+    if (done) break;
+  }
+  *omega = std::sqrt(lam);
+  return CE_SUCCESS;
+}
+
+}  // namespace
 
 int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (ce->guard_mode == CE_GUARD_OFF) return CE_SUCCESS;
@@ -130,40 +236,11 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
   } else if (HasConstraints(ce)) {
     return CE_SUCCESS;  // constrained frequencies need the user's estimate
   } else {
-    // Power iteration on -dg/dx, g = M^{-1} f, by directional differences at (x, v, t).
-    N_Vector w = ce->vtmp;
-    N_Vector g0 = ce->atmp;
-    N_Vector xp = ce->xnew;
-    N_Vector gp = ce->apred;
-    sunrealtype* wd = N_VGetArrayPointer(w);
-    N_VConst(1, w);
-    // A pseudo-random start avoids a start vector orthogonal to the top mode;
-    // vectors without one local array (MPI) start from ones.
-    if (wd != nullptr && N_VGetCommunicator(w) == nullptr) {
-      unsigned long seed = 12345;
-      const sunindextype nl = N_VGetLength(w);
-      for (sunindextype i = 0; i < nl; ++i) {
-        seed = seed * 6364136223846793005UL + 1442695040888963407UL;
-        wd[i] = 0.5 + static_cast<sunrealtype>(seed >> 33) / 4294967296.0;
-      }
-    }
-    int flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], g0, func);
+    const int flag = EstimateMaxFrequency(ce, func, &ce->omega_est);
     if (flag != CE_SUCCESS) return flag;
-    const sunrealtype xscale = 1 + N_VMaxNorm(ce->xcur);
-    sunrealtype lam = 0;
-    for (int it = 0; it < 60; ++it) {
-      const sunrealtype wn = std::sqrt(N_VDotProd(w, w));
-      if (!(wn > 0)) break;
-      N_VScale(1 / wn, w, w);
-      const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * xscale;
-      N_VLinearSum(1, ce->xcur, sig, w, xp);
-      flag = EvalAccel(ce, ce->tcur, xp, ce->D[1], gp, func);
-      if (flag != CE_SUCCESS) return flag;
-      N_VLinearSum(-1 / sig, gp, 1 / sig, g0, w);
-      lam = std::sqrt(N_VDotProd(w, w));
-    }
-    ce->omega_est = std::sqrt(lam);
   }
+  // No oscillation to resolve (f independent of x), or f not differentiable here.
+  if (!(ce->omega_est > 0) || !std::isfinite(ce->omega_est)) return CE_SUCCESS;
   if (ce->omega_limit == 0) {
     sunrealtype lim = 0;
     if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) return CE_SUCCESS;
@@ -171,29 +248,42 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
   }
   const sunrealtype Omega = ce->h * ce->omega_est;
   if (ce->omega_limit > 0 && Omega <= ce->omega_limit) return CE_SUCCESS;
-  const int flag = ce->guard_mode == CE_GUARD_REFUSE ? CE_UNSTABLE : CE_WARNING;
+  const bool refuse = ce->guard_mode == CE_GUARD_REFUSE;
+  if (!refuse && ce->guard_warned) return CE_SUCCESS;  // warn once per run
+  ce->guard_warned = true;
+  const int flag = refuse ? CE_UNSTABLE : CE_WARNING;
+  const char* source = ce->omega_user > 0 ? "given by CEodeSetMaxFrequency" : "estimated";
   if (ce->omega_limit < 0) {
     sunrealtype rho = 1;
     CEodeSpectralRadius(ce->degree, ce->params, Omega, 0, &rho);
-    if (flag == CE_WARNING && ce->guard_warned) return CE_SUCCESS;
-    ce->guard_warned = true;
+    const sunrealtype growth = std::log(std::max(rho, SUN_RCONST(1.0) + SUN_UNIT_ROUNDOFF));
     ProcessError(ce, flag, func,
-                 "%s is unstable for every step: at h * omega_max = %g the error grows by rho = "
-                 "%.9g per step (doubling after about %.3g steps). Use a stable set for long runs.",
-                 ce->method_name.c_str(), static_cast<double>(Omega), static_cast<double>(rho),
-                 static_cast<double>(std::log(2.0) / std::log(std::max(rho, 1 + 1e-300))));
-    return flag == CE_WARNING ? CE_SUCCESS : flag;
+                 "At t = %.9g (step %ld): %s is unstable for every step size. With omega_max = %g "
+                 "(%s) and h = %g, Omega = %g and errors grow by rho = %.9g per step, i.e. "
+                 "x%.3g per unit time (doubling every %.3g steps). Use a stable set (e.g. G4_A34) "
+                 "for long runs%s.",
+                 static_cast<double>(ce->tcur), ce->nst, ce->method_name.c_str(),
+                 static_cast<double>(ce->omega_est), source, static_cast<double>(ce->h),
+                 static_cast<double>(Omega), static_cast<double>(rho),
+                 static_cast<double>(std::exp(growth / ce->h)),
+                 static_cast<double>(std::log(2.0) / growth),
+                 refuse ? "" : " (CE_GUARD_REFUSE stops instead of warning)");
+  } else {
+    ProcessError(ce, flag, func,
+                 "At t = %.9g (step %ld): h * omega_max = %g * %g = %g exceeds the stability limit "
+                 "Omega_max = %.6g of %s (omega_max %s), so the run will diverge. Use "
+                 "h < %.6g%s.",
+                 static_cast<double>(ce->tcur), ce->nst, static_cast<double>(ce->h),
+                 static_cast<double>(ce->omega_est), static_cast<double>(Omega),
+                 static_cast<double>(ce->omega_limit), ce->method_name.c_str(), source,
+                 static_cast<double>(ce->omega_limit / ce->omega_est),
+                 refuse ? "" : " (CE_GUARD_REFUSE stops instead of warning)");
   }
-  if (flag == CE_WARNING && ce->guard_warned) return CE_SUCCESS;
-  ce->guard_warned = true;
-  ProcessError(ce, flag, func,
-               "h * omega_max = %g * %g = %g exceeds the stability limit Omega_max = %.6g of %s: "
-               "the run will diverge. Use h < %.6g%s.",
-               static_cast<double>(ce->h), static_cast<double>(ce->omega_est),
-               static_cast<double>(Omega), static_cast<double>(ce->omega_limit),
-               ce->method_name.c_str(), static_cast<double>(ce->omega_limit / ce->omega_est),
-               flag == CE_WARNING ? " (set CE_GUARD_REFUSE to stop instead of warning)" : "");
-  return flag == CE_WARNING ? CE_SUCCESS : flag;
+  if (!refuse) return CE_SUCCESS;
+  // The next CEodeEvolve restarts here and checks again, so a refused run cannot
+  // be resumed by simply calling CEodeEvolve once more.
+  ce->started = false;
+  return CE_UNSTABLE;
 }
 
 }  // namespace ceode
@@ -202,7 +292,8 @@ extern "C" {
 
 int CEodeAmplificationMatrix(int degree, const sunrealtype* params, sunrealtype Omega,
                              sunrealtype xi, sunrealtype* A) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || A == nullptr || !(Omega >= 0)) {
+  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || A == nullptr || !(Omega >= 0) ||
+      !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
   }
   ceode::StepMap map(degree, params, xi);
@@ -216,13 +307,14 @@ int CEodeAmplificationMatrix(int degree, const sunrealtype* params, sunrealtype 
 
 int CEodeSpectralRadius(int degree, const sunrealtype* params, sunrealtype Omega, sunrealtype xi,
                         sunrealtype* rho) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || rho == nullptr || !(Omega >= 0)) {
+  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || rho == nullptr || !(Omega >= 0) ||
+      !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
   }
   ceode::StepMap map(degree, params, xi);
   Eigen::MatrixXd M;
   if (!map.ok() || !map.Build(Omega, &M)) return CE_ILL_INPUT;
-  *rho = ceode::Radius(M);
+  *rho = ceode::Analyse(M).rho;
   return CE_SUCCESS;
 }
 
@@ -234,29 +326,65 @@ int CEodeStabilityLimit(int degree, const sunrealtype* params, sunrealtype xi,
   ceode::StepMap map(degree, params, xi);
   if (!map.ok()) return CE_ILL_INPUT;
   Eigen::MatrixXd M;
+  bool failed = false;
   auto stable = [&](sunrealtype Om) {
-    return map.Build(Om, &M) && ceode::Radius(M) <= 1 + ceode::kRhoTol;
+    if (!map.Build(Om, &M)) {
+      failed = true;
+      return false;
+    }
+    return ceode::Analyse(M).excess <= 0;
   };
-  // Scan (0, 20] on a fine grid, then bisect the first sign change.
-  constexpr sunrealtype kStep = 1e-3;
-  constexpr int kMaxK = 20000;
+  using ceode::kScanMax;
+  using ceode::kScanStep;
+  // Growth that only shows below the grid (rho - 1 ~ Omega^2 for G4_A54, or a
+  // damped spurious root ~ xi Omega) still makes every h unstable.
+  for (sunrealtype Om : {1e-5, 1e-4}) {
+    if (!stable(Om)) {
+      *Omega_max = 0;
+      return failed ? CE_ILL_INPUT : CE_SUCCESS;
+    }
+  }
+  const int kmax = static_cast<int>(kScanMax / kScanStep + 0.5);
   int k = 1;
-  while (k <= kMaxK && stable(k * kStep)) ++k;
+  while (k <= kmax && stable(k * kScanStep)) ++k;
+  if (failed) return CE_ILL_INPUT;
   if (k == 1) {
     *Omega_max = 0;
     return CE_SUCCESS;
   }
-  if (k > kMaxK) {
-    *Omega_max = kMaxK * kStep;
+  if (k > kmax) {
+    *Omega_max = kScanMax;  // stable on the whole scanned range
     return CE_SUCCESS;
   }
-  sunrealtype lo = (k - 1) * kStep;
-  sunrealtype hi = k * kStep;
-  for (int it = 0; it < 60 && hi - lo > 1e-13 * hi; ++it) {
+  sunrealtype lo = (k - 1) * kScanStep;
+  sunrealtype hi = k * kScanStep;
+  while (hi - lo > 4 * std::numeric_limits<sunrealtype>::epsilon() * hi) {
     const sunrealtype mid = 0.5 * (lo + hi);
+    if (mid <= lo || mid >= hi) break;
     (stable(mid) ? lo : hi) = mid;
   }
+  if (failed) return CE_ILL_INPUT;
   *Omega_max = lo;
+  return CE_SUCCESS;
+}
+
+int CEodeSpectralRadii(int degree, const sunrealtype* params, sunrealtype xi, int n,
+                       const sunrealtype* Omega, sunrealtype* rho) {
+  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || n < 0 || (n > 0 && Omega == nullptr) ||
+      (n > 0 && rho == nullptr)) {
+    return CE_ILL_INPUT;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!(Omega[i] >= 0) || !std::isfinite(Omega[i])) return CE_ILL_INPUT;
+  }
+  if (n == 0) return CE_SUCCESS;
+  ceode::StepMap map(degree, params, xi);
+  if (!map.ok()) return CE_ILL_INPUT;
+  Eigen::MatrixXd M;
+  for (int i = 0; i < n; ++i) {
+    if (!map.Build(Omega[i], &M)) return CE_ILL_INPUT;
+    rho[i] = ceode::Analyse(M).rho;
+  }
   return CE_SUCCESS;
 }
 
