@@ -91,9 +91,7 @@ int Prepare(CEodeMemRec* ce, const char* func) {
   if (flag != CE_SUCCESS) return flag;
   flag = ConstrInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
-  flag = StartMethod(ce);
-  if (flag != CE_SUCCESS) return flag;
-  return GuardCheck(ce, func);
+  return StartMethod(ce);
 }
 
 }  // namespace
@@ -185,6 +183,10 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   }
   if (!std::isfinite(tout)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
   flag = ceode::Prepare(ce, __func__);
+  if (flag == CE_SUCCESS && ce->guard_pending) {
+    ce->guard_pending = false;
+    flag = ceode::GuardCheck(ce, __func__);
+  }
   if (flag < 0) {
     // Nothing was integrated: hand back the current state, never garbage.
     N_VScale(1.0, ce->xcur, xout);

@@ -101,7 +101,7 @@ struct CEodeMemRec {
   sunrealtype tstop = 0;
   bool tstop_set = false;
   long int mxstep = 500000000L;
-  int maxcor = 4;
+  int maxcor = 6;
   sunrealtype nls_reltol = 1e-12;
   sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
   long int msbj = 20;
@@ -149,11 +149,14 @@ struct CEodeMemRec {
   sunrealtype omega_est = 0;
   sunrealtype omega_limit = 0;  // Omega_max of the method, computed lazily
   bool guard_warned = false;
+  bool guard_pending = false;  // check at the next CEodeEvolve (start, new omega or mode)
+  sunrealtype xl1_start = 0;   // ||x||_1 at the last (re)start, reference for explosive growth
 
   // Counters
   long int nst = 0;
   long int nfe = 0;
   long int nfe_start = 0;
+  long int nfe_guard = 0;  // f evaluations of the stability guard's power iteration
   long int nni = 0;
   long int nnf = 0;
   long int nsetups = 0;

@@ -242,6 +242,8 @@ int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
   }
   ce->guard_mode = mode;
   ce->guard_every = every;
+  ce->guard_warned = false;
+  ce->guard_pending = true;
   return CE_SUCCESS;
 }
 
@@ -255,6 +257,8 @@ int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
                         static_cast<double>(omega_max));
   }
   ce->omega_user = omega_max;
+  ce->guard_warned = false;
+  ce->guard_pending = true;  // a new estimate is checked at the next CEodeEvolve
   return CE_SUCCESS;
 }
 
@@ -287,6 +291,9 @@ int CEodeGetNumRhsEvals(void* mem, long int* n) {
 }
 int CEodeGetNumStartRhsEvals(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_start);
+}
+int CEodeGetNumGuardRhsEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_guard);
 }
 int CEodeGetNumNonlinSolvIters(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nni);
@@ -341,6 +348,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Step size", static_cast<double>(ce->h), false},
       {"RHS fn evals", static_cast<double>(ce->nfe), true},
       {"RHS fn evals in start", static_cast<double>(ce->nfe_start), true},
+      {"RHS fn evals in stability guard", static_cast<double>(ce->nfe_guard), true},
       {"NLS iters", static_cast<double>(ce->nni), true},
       {"NLS fails", static_cast<double>(ce->nnf), true},
       {"LS setups", static_cast<double>(ce->nsetups), true},

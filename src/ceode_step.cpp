@@ -18,9 +18,9 @@ const MethodSet kMethodSets[] = {
     {"G4_A54", 4, {5.0 / 4.0, 1.0 / 3.0, 0.5}, "very accurate, weakly unstable for every h"},
     {"G4_A14", 4, {1.0 / 4.0, 1.0 / 3.0, 0.5}, "order 3"},
     {"G4_A34", 4, {3.0 / 4.0, 1.0 / 3.0, 0.5}, "order 3, largest G4 stability region"},
-    {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}, "order 3"},
+    {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}, "order 3, weakly unstable for every h (measured)"},
     {"G5_TOP", 5, {1.62, 1.03522, 1.0291293, 1.016}, "used for the spinning top"},
-    {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}, "used for the DAE pendulum"},
+    {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}, "DAE pendulum set, weakly unstable for every h"},
 };
 
 sunrealtype Factorial(int n) {
@@ -304,6 +304,8 @@ int StartMethod(CEodeMemRec* ce) {
   ComputeStepCoeffs(d, ce->params, h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
+  ce->guard_pending = true;
+  ce->xl1_start = N_VL1Norm(ce->xcur);
   if (HasConstraints(ce)) {
     const long int nfe0 = ce->nfe;
     const int flag = ConstrStart(ce, func);
@@ -428,6 +430,18 @@ int TakeStep(CEodeMemRec* ce) {
     xl1 = N_VL1Norm(ce->xnew);
   }
 
+  // Explosive growth: stop long before overflow, while the state is still readable.
+  constexpr sunrealtype kGrowthLimit = 1e15;
+  constexpr sunrealtype kAbsoluteLimit = 1e150;
+  if (std::isfinite(xl1) && (xl1 > kAbsoluteLimit || xl1 > kGrowthLimit * (1 + ce->xl1_start))) {
+    return ProcessError(ce, CE_UNSTABLE, func,
+                        "The state grew explosively: ||x||_1 = %g at t = %.17g (step %ld), %g at "
+                        "the start. h = %g is most likely beyond the stability limit of %s (h * "
+                        "omega_max must stay below Omega_max, see CEodeStabilityLimit); reduce h.",
+                        static_cast<double>(xl1), static_cast<double>(t), ce->nst + 1,
+                        static_cast<double>(ce->xl1_start), static_cast<double>(ce->h),
+                        ce->method_name.c_str());
+  }
   if (!std::isfinite(xl1)) {
     const sunrealtype xn = N_VMaxNorm(ce->xnext);
     if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {

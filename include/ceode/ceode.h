@@ -125,6 +125,7 @@ SUNDIALS_EXPORT int CEodeGetCurrentStep(void* mem, sunrealtype* hcur);
 SUNDIALS_EXPORT int CEodeGetNumSteps(void* mem, long int* nsteps);
 SUNDIALS_EXPORT int CEodeGetNumRhsEvals(void* mem, long int* nfevals);
 SUNDIALS_EXPORT int CEodeGetNumStartRhsEvals(void* mem, long int* nfevals);
+SUNDIALS_EXPORT int CEodeGetNumGuardRhsEvals(void* mem, long int* nfevals);
 SUNDIALS_EXPORT int CEodeGetNumNonlinSolvIters(void* mem, long int* nniters);
 SUNDIALS_EXPORT int CEodeGetNumNonlinSolvConvFails(void* mem, long int* nnfails);
 SUNDIALS_EXPORT int CEodeGetNumLinSolvSetups(void* mem, long int* nlinsetups);

@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# The main job: every work-precision scene, CEODE side by side with ARKODE,
+# CVODE and IDA, from a clean checkout to docs/results/ in one command.
+#
+#   scripts/main_job.sh            # deps, Release build in ./build, all scenes, plots, ratios
+#
+# Steps: scripts/install_deps.sh; configure and build (Release, ./build) the
+# scene programs; run each scene (progress line per scene, its table saved as
+# docs/results/<scene>.txt, its rows as docs/results/<scene>.csv); the DAE
+# examples (examples/pendulum_dae, chain_dae) when they were built; the per-step
+# Google Benchmark; one log-log work-precision plot per scene (PNG + SVG); the
+# CEODE / best-SUNDIALS time ratios at equal error (docs/results/ratios.csv).
+# Exit code: 0 when every step and every scene's own checks passed.
+# Environment: JOBS (build parallelism, default 2), PYTHON (needs matplotlib).
+set -uo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+OUT=$ROOT/docs/results
+BUILD=$ROOT/build
+JOBS=${JOBS:-2}
+T0=$(date +%s)
+status=0
+elapsed() { echo $(( $(date +%s) - T0 )); }
+step() { printf '[main_job %4ss] %s\n' "$(elapsed)" "$*"; }
+
+# Debian's python3 carries python3-matplotlib; a pyenv/venv python3 earlier on
+# PATH may not, so prefer /usr/bin/python3 when it can import matplotlib.
+if [ -z "${PYTHON:-}" ]; then
+  PYTHON=python3
+  if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then PYTHON=/usr/bin/python3; fi
+fi
+
+step "dependencies (scripts/install_deps.sh)"
+scripts/install_deps.sh || { echo "install_deps.sh failed"; exit 1; }
+
+step "configure Release in ./build"
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_BENCHMARKS=ON \
+  > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
+rm -f "$BUILD.configure.log"
+
+# Only what the job runs: the scene programs, the per-step benchmark and the
+# DAE examples (the unit tests are scripts/test.sh's business).
+targets=()
+for src in bench/wp_*.c bench/wp_*.cpp; do
+  [ -e "$src" ] && targets+=("$(basename "${src%.*}")")
+done
+[ -e bench/bench_step.cpp ] && targets+=(bench_step)
+step "build (${targets[*]})"
+if ! cmake --build "$BUILD" -j"$JOBS" --target "${targets[@]}" > "$BUILD/main_job_build.log" 2>&1; then
+  tail -40 "$BUILD/main_job_build.log"
+  echo "build failed (log: $BUILD/main_job_build.log)"
+  exit 1
+fi
+# The DAE examples are another author's work in progress: a failure to build
+# one skips its scene instead of stopping the job.
+for ex in pendulum_dae chain_dae; do
+  if [ -e "examples/$ex.c" ] || [ -e "examples/$ex.cpp" ]; then
+    step "build $ex"
+    cmake --build "$BUILD" -j"$JOBS" --target "$ex" >> "$BUILD/main_job_build.log" 2>&1 ||
+      { step "build of $ex FAILED (log: $BUILD/main_job_build.log)"; status=1; }
+  fi
+done
+
+mkdir -p "$OUT"
+scenes=()
+run_scene() {  # name, executable
+  local name=$1 exe=$2 t1 rc
+  t1=$(date +%s)
+  step "scene $name ..."
+  "$exe" --csv "$OUT/$name.csv" > "$OUT/$name.txt" 2> "$OUT/$name.stderr.txt"
+  rc=$?
+  [ -s "$OUT/$name.stderr.txt" ] || rm -f "$OUT/$name.stderr.txt"
+  if [ $rc -eq 0 ]; then
+    step "scene $name done in $(( $(date +%s) - t1 )) s: $(grep -c . "$OUT/$name.csv") CSV lines"
+  else
+    step "scene $name FAILED its checks (exit $rc) after $(( $(date +%s) - t1 )) s; see $OUT/$name.txt"
+    status=1
+  fi
+  scenes+=("$OUT/$name.csv")
+}
+for t in "${targets[@]}"; do
+  case $t in
+    wp_*) run_scene "${t#wp_}" "$BUILD/bench/$t" ;;
+  esac
+done
+for ex in pendulum_dae chain_dae; do
+  if [ -x "$BUILD/examples/$ex" ]; then
+    run_scene "$ex" "$BUILD/examples/$ex"
+  else
+    step "scene $ex skipped: $BUILD/examples/$ex was not built"
+  fi
+done
+
+if [ -x "$BUILD/bench/bench_step" ]; then
+  step "per-step cost (Google Benchmark, median of 5)"
+  if ! "$BUILD/bench/bench_step" --benchmark_min_time=0.05 --benchmark_repetitions=5 \
+      --benchmark_report_aggregates_only=true --benchmark_out="$OUT/bench_step.json" \
+      --benchmark_out_format=json > "$OUT/bench_step.txt" 2>&1; then
+    step "bench_step FAILED"
+    status=1
+  fi
+  grep -E '_median' "$OUT/bench_step.txt" | sed 's/^/    /'
+fi
+
+step "plots"
+mine=()
+dae=()
+for c in "${scenes[@]}"; do
+  case $(basename "$c") in
+    pendulum_dae.csv | chain_dae.csv) dae+=("$c") ;;
+    *) mine+=("$c") ;;
+  esac
+done
+"$PYTHON" scripts/plot_results.py "${mine[@]}" || status=1
+# The DAE plots belong to the examples' author: drawn only when missing.
+if ((${#dae[@]})); then "$PYTHON" scripts/plot_results.py --skip-existing "${dae[@]}" || status=1; fi
+
+step "ratios at equal error"
+"$PYTHON" scripts/ratios.py --out "$OUT/ratios.csv" "${scenes[@]}" || status=1
+
+echo
+for c in "${scenes[@]}"; do
+  n=$(basename "$c" .csv)
+  printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem' "$OUT/$n.txt" | tr '\n' ' ')"
+done
+step "total $(elapsed) s; results in docs/results/ (exit $status)"
+exit $status

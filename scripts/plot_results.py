@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""Draws one log-log work-precision plot per scene CSV: error against run time,
+one curve per (solver, config). Writes <csv stem>.png and .svg beside the CSV
+(or into --outdir).
+
+Usage: plot_results.py [--outdir DIR] [--skip-existing] FILE.csv ...
+  --skip-existing  leaves a plot alone when its PNG already exists (the DAE
+                   scenes' plots belong to their examples' author).
+"""
+import argparse
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only, no display needed
+import matplotlib.pyplot as plt  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from wp_curves import is_ceode, is_sundials, read_curves, usable  # noqa: E402
+
+# Errors above this are runs past a stability limit: listed in the CSV, not drawn.
+MAX_DRAWN_ERROR = 10.0
+
+
+def style(solver, index):
+    markers = "os^vD<>ph*"
+    if is_ceode(solver):
+        return dict(linestyle="-", marker=markers[index % len(markers)])
+    if is_sundials(solver):
+        return dict(linestyle="--", marker=markers[index % len(markers)], fillstyle="none")
+    # The hand-written reference loop: grey, dotted.
+    return dict(linestyle=":", marker="x+"[index % 2], color="0.3")
+
+
+def plot(path, outdir, skip_existing):
+    scene, curves = read_curves(path)
+    if scene is None:
+        print(f"{path}: no rows, skipped")
+        return
+    stem = os.path.splitext(os.path.basename(path))[0]
+    base = os.path.join(outdir or os.path.dirname(path), stem)
+    if skip_existing and os.path.exists(base + ".png"):
+        print(f"{base}.png exists, left alone")
+        return
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    nc = ns = nh = 0
+    for (solver, config), pts in curves.items():
+        pts = [p for p in pts if usable(p) and p["error"] <= MAX_DRAWN_ERROR]
+        if not pts:
+            continue
+        if is_ceode(solver):
+            st, nc = style(solver, nc), nc + 1
+        elif is_sundials(solver):
+            st, ns = style(solver, ns), ns + 1
+        else:
+            st, nh = style(solver, nh), nh + 1
+        label = solver if config in ("", solver) else f"{solver} {config}"
+        ax.loglog([p["seconds"] for p in pts], [p["error"] for p in pts], label=label, ms=4, lw=1.2,
+                  **st)
+    ax.set_xlabel("CPU time per solve (s), median of 5 repetitions")
+    ax.set_ylabel("error (scene's measure)")
+    ax.set_title(f"{scene}: work-precision (lower left is better)")
+    ax.grid(True, which="major", alpha=0.4)
+    ax.grid(True, which="minor", alpha=0.12)
+    ax.legend(fontsize=7, ncol=2, loc="best")
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{base}.{ext}", dpi=120)
+    plt.close(fig)
+    print(f"wrote {base}.png and .svg")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("csv", nargs="+")
+    ap.add_argument("--outdir")
+    ap.add_argument("--skip-existing", action="store_true")
+    args = ap.parse_args()
+    for p in args.csv:
+        plot(p, args.outdir, args.skip_existing)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
