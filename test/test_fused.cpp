@@ -42,6 +42,7 @@ RunResult RunChain(const std::string& method, bool fused, bool compensated) {
   EXPECT_EQ(CEodeInit(mem, ChainRhs, 0, x, v), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem, method.c_str()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetCompensatedSummation(mem, compensated ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   sunrealtype t = 0;
