@@ -1,0 +1,42 @@
+/* Integrates x'' = -x over one period with G4_A34 and checks the answer:
+ * proves the installed headers, library and CMake package work from C. */
+#include <ceode/ceode.h>
+#include <math.h>
+#include <nvector/nvector_serial.h>
+#include <stdio.h>
+
+static int rhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
+  (void)t;
+  (void)v;
+  (void)data;
+  N_VScale(-1.0, x, f);
+  return 0;
+}
+
+int main(void) {
+  SUNContext ctx = NULL;
+  N_Vector x, v;
+  void* mem;
+  sunrealtype t = 0;
+  const sunrealtype period = 2.0 * 3.14159265358979323846;
+  int flag;
+  double err;
+  if (SUNContext_Create(NULL, &ctx) != 0) return 1;
+  x = N_VNew_Serial(1, ctx);
+  v = N_VNew_Serial(1, ctx);
+  NV_Ith_S(x, 0) = 1.0;
+  NV_Ith_S(v, 0) = 0.0;
+  mem = CEodeCreate(ctx);
+  flag = CEodeInit(mem, rhs, 0.0, x, v);
+  if (flag == CE_SUCCESS) flag = CEodeSetMethodByName(mem, "G4_A34");
+  if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, 1e-3);
+  if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, period, x, v, &t, CE_NORMAL);
+  err = fabs(NV_Ith_S(x, 0) - 1.0) + fabs(NV_Ith_S(v, 0));
+  printf("CEODE %d.%d.%d consumer: flag %d, t = %.6f, error after one period = %.3e\n",
+         CEODE_VERSION_MAJOR, CEODE_VERSION_MINOR, CEODE_VERSION_PATCH, flag, (double)t, err);
+  CEodeFree(&mem);
+  N_VDestroy(x);
+  N_VDestroy(v);
+  SUNContext_Free(&ctx);
+  return flag == CE_SUCCESS && err < 1e-8 ? 0 : 1;
+}

@@ -1,0 +1,220 @@
+// Output: dense output between steps, one-step mode, stop time, step limit and
+// the statistics printout.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "test_util.hpp"
+
+namespace {
+
+using ceode_test::Context;
+using ceode_test::ConvergenceSteps;
+using ceode_test::DampedForced;
+using ceode_test::FitOrder;
+using ceode_test::Harmonic;
+using ceode_test::Mem;
+using ceode_test::RunExact;
+using ceode_test::RunOptions;
+using ceode_test::RunResult;
+using ceode_test::SerialVector;
+using ceode_test::Vector;
+
+struct InterpCase {
+  const char* method;
+  int order;
+  const char* label;
+};
+
+class DenseOutput : public ::testing::TestWithParam<InterpCase> {};
+
+// Output times 0.1234 k never fall on a step for any h of the fit, so every
+// output comes from the interpolant inside a step.
+TEST_P(DenseOutput, IsAccurateToTheMethodsOrderBetweenSteps) {
+  const InterpCase& c = GetParam();
+  DampedForced prob;
+  RunOptions opt;
+  opt.method = c.method;
+  opt.implicit = true;
+  for (int k = 1; k <= 80; ++k) opt.tout.push_back(SUN_RCONST(0.1234) * k + SUN_RCONST(1e-4));
+  const std::vector<double> hs = ConvergenceSteps(0.04);
+  std::vector<double> ex, ev, ex_steps;
+  for (double h : hs) {
+    opt.h = h;
+    const RunResult r = RunExact(prob, opt);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    ex.push_back(r.err_x);
+    ev.push_back(r.err_v);
+    RunOptions at_steps = opt;
+    at_steps.tout.clear();
+    ex_steps.push_back(RunExact(prob, at_steps).err_x);
+  }
+  const double px = FitOrder(hs, ex);
+  const double pv = FitOrder(hs, ev);
+  std::printf(
+      "[ output   ] %-7s interpolated order x: %.3f v: %.3f; at h = %g error x %.3e "
+      "(%.3e at the steps)\n",
+      c.method, px, pv, hs.back(), ex.back(), ex_steps.back());
+  EXPECT_GE(px, c.order - 0.1);
+  EXPECT_GE(pv, c.order - 0.1);
+  // The interpolant adds no error of its own worth speaking of.
+  EXPECT_LE(ex.back(), 2 * ex_steps.back());
+}
+
+INSTANTIATE_TEST_SUITE_P(Sets, DenseOutput,
+                         ::testing::Values(InterpCase{"G3_CD", 2, "G3CentralDifferences"},
+                                           InterpCase{"G3_A2", 2, "G3AlphaTwo"},
+                                           InterpCase{"G4_A34", 3, "G4AlphaThreeQuarters"},
+                                           InterpCase{"G4_A14", 3, "G4AlphaOneQuarter"},
+                                           InterpCase{"G5", 3, "G5"}),
+                         [](const ::testing::TestParamInfo<InterpCase>& info) {
+                           return info.param.label;
+                         });
+
+// A harmonic run on the explicit path with h = 0.01.
+class HarmonicRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    x_ = SerialVector(1, ctx_, prob_.x0);
+    v_ = SerialVector(1, ctx_, prob_.v0);
+    mem_.reset(CEodeCreate(ctx_));
+    ASSERT_EQ(CEodeInit(mem(), Harmonic::F, 0, x_.get(), v_.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetUserData(mem(), &prob_), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(mem(), "G4_A34"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(0.01)), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetErrFile(mem(), nullptr), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_OFF, 0), CE_SUCCESS);  // slow under ASan
+  }
+  void* mem() { return mem_.get(); }
+  int Evolve(sunrealtype tout, sunrealtype* t, int itask = CE_NORMAL) {
+    return CEodeEvolve(mem(), tout, x_.get(), v_.get(), t, itask);
+  }
+  sunrealtype X() const { return NV_Ith_S(x_.get(), 0); }
+  sunrealtype V() const { return NV_Ith_S(v_.get(), 0); }
+
+  Context ctx_;
+  Harmonic prob_;
+  Vector x_, v_;
+  Mem mem_;
+};
+
+TEST_F(HarmonicRun, OneStepModeReturnsEveryStepWithTheSameValuesAsNormalMode) {
+  std::vector<sunrealtype> xs, vs;
+  sunrealtype t = 0;
+  for (int k = 1; k <= 50; ++k) {
+    ASSERT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_SUCCESS);
+    EXPECT_NEAR(t, 0.01 * k, 1e-14);
+    xs.push_back(X());
+    vs.push_back(V());
+  }
+  long int nst = 0;
+  CEodeGetNumSteps(mem(), &nst);
+  EXPECT_EQ(nst, 50);
+  // Normal mode on the step grid returns the method's own values, not interpolated ones.
+  Vector x0 = SerialVector(1, ctx_, prob_.x0);
+  Vector v0 = SerialVector(1, ctx_, prob_.v0);
+  ASSERT_EQ(CEodeReInit(mem(), 0, x0.get(), v0.get()), CE_SUCCESS);
+  for (int k : {7, 20, 50}) {
+    ASSERT_EQ(Evolve(SUN_RCONST(0.01) * k, &t), CE_SUCCESS);
+    EXPECT_EQ(X(), xs[k - 1]) << k;
+    EXPECT_EQ(V(), vs[k - 1]) << k;
+  }
+}
+
+TEST_F(HarmonicRun, StopTimeIsHitExactlyAndReturnsTstopReturn) {
+  ASSERT_EQ(CEodeSetStopTime(mem(), SUN_RCONST(0.377)), CE_SUCCESS);
+  sunrealtype t = 0;
+  EXPECT_EQ(Evolve(1, &t), CE_TSTOP_RETURN);
+  EXPECT_EQ(t, SUN_RCONST(0.377));
+  sunrealtype xe = 0, ve = 0;
+  prob_.Exact(t, &xe, &ve);
+  // From the interpolant: within the 10 s run's max error at this h (4e-7, third order).
+  EXPECT_NEAR(X(), xe, 1e-6);
+  EXPECT_NEAR(V(), ve, 1e-6);
+  long int nst = 0;
+  CEodeGetNumSteps(mem(), &nst);
+  EXPECT_EQ(nst, 37);  // no step beyond what tstop needs
+  // The stop time is used up: the run continues to tout.
+  EXPECT_EQ(Evolve(1, &t), CE_SUCCESS);
+  EXPECT_EQ(t, 1);
+  // One-step mode stops at tstop too.
+  ASSERT_EQ(CEodeSetStopTime(mem(), SUN_RCONST(1.005)), CE_SUCCESS);
+  EXPECT_EQ(Evolve(2, &t, CE_ONE_STEP), CE_TSTOP_RETURN);
+  EXPECT_EQ(t, SUN_RCONST(1.005));
+}
+
+TEST_F(HarmonicRun, StepLimitGivesTooMuchWorkAndTheRunCanContinue) {
+  ASSERT_EQ(CEodeSetMaxNumSteps(mem(), 30), CE_SUCCESS);
+  sunrealtype t = 0;
+  EXPECT_EQ(Evolve(1, &t), CE_TOO_MUCH_WORK);
+  EXPECT_NEAR(t, 0.3, 1e-14);
+  const char* msg = nullptr;
+  ASSERT_EQ(CEodeGetLastErrorMessage(mem(), &msg), CE_SUCCESS);
+  EXPECT_NE(std::string(msg).find("CEodeSetMaxNumSteps"), std::string::npos) << msg;
+  EXPECT_TRUE(std::isfinite(X()));
+  // The limit counts per call: each call makes 30 more steps.
+  EXPECT_EQ(Evolve(1, &t), CE_TOO_MUCH_WORK);
+  EXPECT_NEAR(t, 0.6, 1e-14);
+  ASSERT_EQ(CEodeSetMaxNumSteps(mem(), 0), CE_SUCCESS);  // back to the default
+  EXPECT_EQ(Evolve(1, &t), CE_SUCCESS);
+  EXPECT_EQ(t, 1);
+  // The interruptions changed nothing: the same state as one uninterrupted run.
+  const sunrealtype x_interrupted = X();
+  const sunrealtype v_interrupted = V();
+  Vector x0 = SerialVector(1, ctx_, prob_.x0);
+  Vector v0 = SerialVector(1, ctx_, prob_.v0);
+  ASSERT_EQ(CEodeReInit(mem(), 0, x0.get(), v0.get()), CE_SUCCESS);
+  EXPECT_EQ(Evolve(1, &t), CE_SUCCESS);
+  EXPECT_EQ(X(), x_interrupted);
+  EXPECT_EQ(V(), v_interrupted);
+}
+
+std::string ReadAll(std::FILE* f) {
+  std::string s;
+  std::rewind(f);
+  char buf[512];
+  size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) s.append(buf, n);
+  return s;
+}
+
+TEST_F(HarmonicRun, PrintAllStatsWritesATableAndACsvLine) {
+  sunrealtype t = 0;
+  ASSERT_EQ(Evolve(1, &t), CE_SUCCESS);
+  long int nst = 0, nfe = 0;
+  CEodeGetNumSteps(mem(), &nst);
+  CEodeGetNumRhsEvals(mem(), &nfe);
+  ASSERT_EQ(nst, 100);
+
+  std::FILE* table = std::tmpfile();
+  ASSERT_NE(table, nullptr);
+  EXPECT_EQ(CEodePrintAllStats(mem(), table, SUN_OUTPUTFORMAT_TABLE), CE_SUCCESS);
+  const std::string tab = ReadAll(table);
+  std::fclose(table);
+  EXPECT_NE(tab.find("Method"), std::string::npos) << tab;
+  EXPECT_NE(tab.find("G4_A34"), std::string::npos) << tab;
+  EXPECT_NE(tab.find("Steps"), std::string::npos) << tab;
+  EXPECT_NE(tab.find("= 100\n"), std::string::npos) << tab;
+  EXPECT_NE(tab.find("= " + std::to_string(nfe) + "\n"), std::string::npos) << tab;
+  EXPECT_GE(std::count(tab.begin(), tab.end(), '\n'), 10);
+
+  std::FILE* csv = std::tmpfile();
+  ASSERT_NE(csv, nullptr);
+  EXPECT_EQ(CEodePrintAllStats(mem(), csv, SUN_OUTPUTFORMAT_CSV), CE_SUCCESS);
+  const std::string line = ReadAll(csv);
+  std::fclose(csv);
+  EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1) << line;
+  EXPECT_EQ(line.rfind("Method,G4_A34,", 0), 0u) << line;
+  EXPECT_NE(line.find(",Steps,100,"), std::string::npos) << line;
+  EXPECT_NE(line.find(",RHS fn evals," + std::to_string(nfe) + ","), std::string::npos) << line;
+  // Name,value pairs: an odd number of commas.
+  EXPECT_EQ(std::count(line.begin(), line.end(), ',') % 2, 1) << line;
+
+  EXPECT_EQ(CEodePrintAllStats(mem(), nullptr, SUN_OUTPUTFORMAT_TABLE), CE_ILL_INPUT);
+}
+
+}  // namespace
