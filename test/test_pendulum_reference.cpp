@@ -14,15 +14,8 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
+using ceode_test::PendulumEnergyError;
 
-constexpr sunrealtype kGrav = SUN_RCONST(9.81);
-constexpr sunrealtype kLen = 1;
-constexpr sunrealtype kMass = 1;
-constexpr sunrealtype kTend = 10;
 
 struct Reference {
   std::string method;
@@ -62,41 +55,6 @@ std::vector<Reference> CheckedReferences() {
     if (step_checked && r.error > 1e-10) out.push_back(r);
   }
   return out;
-}
-
-int PendulumRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
-  NV_Ith_S(f, 0) = -(kGrav / kLen) * std::cos(NV_Ith_S(x, 0));
-  return 0;
-}
-
-sunrealtype Energy(sunrealtype th, sunrealtype om) {
-  return SUN_RCONST(0.5) * kMass * kLen * kLen * om * om + kMass * kGrav * kLen * std::sin(th);
-}
-
-// Max |E - E0| over every step, where the method has theta and theta' together.
-double PendulumEnergyError(const std::string& method, sunrealtype h, bool zero_start) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx, 0);
-  Vector v = SerialVector(1, ctx, 0);
-  Mem mem(CEodeCreate(ctx));
-  EXPECT_EQ(CEodeInit(mem.get(), PendulumRhs, 0, x.get(), v.get()), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetMethodByName(mem.get(), method.c_str()), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetFixedStep(mem.get(), h), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetZeroStart(mem.get(), zero_start ? SUNTRUE : SUNFALSE), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
-  const sunrealtype e0 = Energy(0, 0);
-  const long int nsteps = std::lround(kTend / h);
-  double emax = 0;
-  sunrealtype t = 0;
-  for (long int i = 0; i < nsteps; ++i) {
-    const int flag = CEodeEvolve(mem.get(), kTend, x.get(), v.get(), &t, CE_ONE_STEP);
-    if (flag != CE_SUCCESS) {
-      ADD_FAILURE() << method << " h = " << h << ": CEodeEvolve returned " << flag;
-      return NAN;
-    }
-    emax = std::max(emax, std::fabs(Energy(NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)) - e0));
-  }
-  return emax;
 }
 
 // The paper's figures carry 3 to 6 digits and were reproduced to 3 digits;

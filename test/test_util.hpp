@@ -4,6 +4,7 @@
 #define CEODE_TEST_TEST_UTIL_HPP_
 
 #include <ceode/ceode.h>
+#include <gtest/gtest.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -303,6 +304,54 @@ inline std::vector<double> ConvergenceSteps(double hmax) {
   std::vector<double> hs;
   for (int k = 0; k < 5; ++k) hs.push_back(hmax / (1 << k));
   return hs;
+}
+
+// The IFToMM simple pendulum of method.md section 6: theta from the horizontal,
+// m = 1 kg, L = 1 m, released at rest from theta = 0, 10 s.
+namespace pendulum {
+constexpr sunrealtype kGrav = SUN_RCONST(9.81);
+constexpr sunrealtype kLen = 1;
+constexpr sunrealtype kMass = 1;
+constexpr sunrealtype kTend = 10;
+
+inline int Rhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
+  NV_Ith_S(f, 0) = -(kGrav / kLen) * std::cos(NV_Ith_S(x, 0));
+  return 0;
+}
+
+inline sunrealtype Energy(sunrealtype th, sunrealtype om) {
+  return SUN_RCONST(0.5) * kMass * kLen * kLen * om * om + kMass * kGrav * kLen * std::sin(th);
+}
+}  // namespace pendulum
+
+// Max |E - E0| over every step, where the method has theta and theta' together.
+inline double PendulumEnergyError(const std::string& method, sunrealtype h, bool zero_start,
+                                  bool compensated = false) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx, 0);
+  Vector v = SerialVector(1, ctx, 0);
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), pendulum::Rhs, 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), method.c_str()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFixedStep(mem.get(), h), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetZeroStart(mem.get(), zero_start ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetCompensatedSummation(mem.get(), compensated ? SUNTRUE : SUNFALSE),
+            CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  const sunrealtype e0 = pendulum::Energy(0, 0);
+  const long int nsteps = std::lround(pendulum::kTend / h);
+  double emax = 0;
+  sunrealtype t = 0;
+  for (long int i = 0; i < nsteps; ++i) {
+    const int flag = CEodeEvolve(mem.get(), pendulum::kTend, x.get(), v.get(), &t, CE_ONE_STEP);
+    if (flag != CE_SUCCESS) {
+      ADD_FAILURE() << method << " h = " << h << ": CEodeEvolve returned " << flag;
+      return NAN;
+    }
+    emax = std::max(
+        emax, std::fabs(pendulum::Energy(NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)) - e0));
+  }
+  return emax;
 }
 
 }  // namespace ceode_test
