@@ -44,6 +44,49 @@ struct StepCoeffs {
 };
 void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
 
+// One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
+// for a quantity that accumulates). Zero coefficients are dropped when the plan
+// is built, so they cost no memory pass.
+struct Combo {
+  int m = 0;  // only the first m entries below are set
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
+  int level = 0;           // compensation slot of an accumulated quantity
+  N_Vector out = nullptr;
+
+  void Add(sunrealtype coef, N_Vector v) {
+    if (coef != 0) {
+      c[m] = coef;
+      X[m++] = v;
+    }
+  }
+};
+
+// The update after the solve, in order: z, the lower derivatives, x(t + h).
+struct UpdatePlan {
+  int n = 0;
+  Combo combos[kMaxDegree];
+};
+
+// The same plan on raw arrays, for the one-pass kernel on serial vectors.
+struct FusedTerms {
+  int m;
+  sunrealtype c[kMaxDegree + 3];
+  sunrealtype* X[kMaxDegree + 3];
+  sunrealtype* old;
+  sunrealtype* compnew;
+  sunrealtype* out;
+};
+struct FusedPlan {
+  int n = 0;
+  FusedTerms terms[kMaxDegree];
+};
+
+// History and new derivatives swap every step and the three position buffers
+// rotate with period 3: six configurations in all.
+constexpr int kNumPlans = 6;
+
 }  // namespace ceode
 
 // The solver memory. Named like SUNDIALS' CVodeMemRec so users reading a
@@ -64,6 +107,9 @@ struct CEodeMemRec {
   bool zero_start = false;
   bool compensated = false;
   bool fused = true;  // one-pass update kernel for serial vectors
+  bool fused_ready = false;  // fused_plans are valid (serial vectors)
+  std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
+  std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep
   ceode::StepCoeffs co;
 
@@ -187,6 +233,7 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func);  // a = M^{-1} f(t, x, v)
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);

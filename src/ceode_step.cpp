@@ -54,31 +54,6 @@ void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
   for (int i = 0; i < m; ++i) w[i] = C[i][q];
 }
 
-// One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
-// for a quantity that accumulates). Zero coefficients are dropped when the plan
-// is built, so they cost no memory pass.
-struct Combo {
-  int m = 0;  // only the first m entries below are set: no zeroing on the hot path
-  sunrealtype c[kMaxDegree + 2];
-  N_Vector X[kMaxDegree + 2];
-  N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
-  int level = 0;           // compensation slot of an accumulated quantity
-  N_Vector out = nullptr;
-
-  void Add(sunrealtype coef, N_Vector v) {
-    if (coef != 0) {
-      c[m] = coef;
-      X[m++] = v;
-    }
-  }
-};
-
-// The update after the solve: z, the lower derivatives, then x(t + h), in order.
-struct UpdatePlan {
-  int n = 0;
-  Combo combos[kMaxDegree];
-};
-
 // z = sum c_i X_i with exactly the rounding of N_VScale / N_VLinearSum /
 // N_VLinearCombination, so the fused kernel below can reproduce it bit for bit.
 void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
@@ -133,6 +108,25 @@ void CombineBlock(int m, const sunrealtype* c, sunrealtype* const* X, sunindexty
     return;
   }
   const sunrealtype* x0 = X[0] + off;
+  if (len <= 4) {  // tiny systems: plain scalar code, without the vector loops' set-up
+    for (sunindextype i = 0; i < len; ++i) {
+      sunrealtype acc;
+      if (m == 2) {
+        const sunrealtype a = c[0];
+        const sunrealtype b = c[1];
+        const sunrealtype y = X[1][off + i];
+        const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
+        acc = (!unit && a == b)    ? a * (x0[i] + y)
+              : (!unit && a == -b) ? a * (x0[i] - y)
+                                   : a * x0[i] + b * y;
+      } else {
+        acc = c[0] * x0[i];
+        for (int j = 1; j < m; ++j) acc += c[j] * X[j][off + i];
+      }
+      out[i] = acc;
+    }
+    return;
+  }
   if (m == 2) {
     const sunrealtype a = c[0];
     const sunrealtype b = c[1];
@@ -160,39 +154,10 @@ void CombineBlock(int m, const sunrealtype* c, sunrealtype* const* X, sunindexty
 // instead of one pass over the vectors per term. Same operations in the same
 // order as RunCombo, so the numbers are the same to the bit.
 // Returns false when the vectors are not serial (the generic path runs).
-bool FusedUpdate(CEodeMemRec* ce, const UpdatePlan& plan, sunrealtype* l1norm) {
-  if (!ce->fused || N_VGetVectorID(ce->xnext) != SUNDIALS_NVEC_SERIAL) return false;
-  // Each combination with its accumulated term (or, compensated, minus its
-  // compensation) appended, exactly as RunCombo hands it to Combine.
-  struct Terms {
-    int m;
-    sunrealtype c[kMaxDegree + 3];
-    sunrealtype* X[kMaxDegree + 3];
-    sunrealtype* old;
-    sunrealtype* compnew;
-    sunrealtype* out;
-  } terms[kMaxDegree];
-  for (int k = 0; k < plan.n; ++k) {
-    const Combo& cb = plan.combos[k];
-    Terms& tk = terms[k];
-    tk.m = cb.m;
-    for (int j = 0; j < cb.m; ++j) {
-      tk.c[j] = cb.c[j];
-      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
-    }
-    tk.old = nullptr;
-    tk.compnew = nullptr;
-    if (cb.old != nullptr && !ce->compensated) {
-      tk.c[tk.m] = 1;
-      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
-    } else if (cb.old != nullptr) {
-      tk.c[tk.m] = -1;
-      tk.X[tk.m++] = N_VGetArrayPointer(ce->comp[cb.level]);
-      tk.old = N_VGetArrayPointer(cb.old);
-      tk.compnew = N_VGetArrayPointer(ce->compnew[cb.level]);
-    }
-    tk.out = N_VGetArrayPointer(cb.out);
-  }
+bool FusedUpdate(CEodeMemRec* ce, const FusedPlan& fp, sunrealtype* l1norm) {
+  if (!ce->fused || !ce->fused_ready) return false;
+  const auto& terms = fp.terms;
+  const FusedPlan& plan = fp;
   constexpr sunindextype kBlock = 256;
   sunrealtype y[kBlock];
   const sunindextype n = N_VGetLength(ce->xnext);
@@ -201,7 +166,7 @@ bool FusedUpdate(CEodeMemRec* ce, const UpdatePlan& plan, sunrealtype* l1norm) {
   for (sunindextype off = 0; off < n; off += kBlock) {
     const sunindextype len = std::min(kBlock, n - off);
     for (int k = 0; k < plan.n; ++k) {
-      const Terms& tk = terms[k];
+      const FusedTerms& tk = terms[k];
       if (tk.old == nullptr) {
         CombineBlock(tk.m, tk.c, tk.X, off, len, tk.out + off);
         continue;
@@ -305,6 +270,106 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
   return MassSolve(ce, a, func);
 }
 
+namespace {
+
+// The update after the solve: z = (a - B_2)/c_2 (d = 3: z is a itself), the
+// lower derivatives from the history and z, then the position increment.
+void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext, N_Vector xnew,
+               UpdatePlan* plan) {
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  plan->n = 0;
+  N_Vector a = Dn[2];
+  N_Vector z = Dn[d - 1];
+  if (d > 3) {
+    Combo& cb = plan->combos[plan->n++];
+    cb = Combo{};
+    cb.Add(1 / co.c[2], a);
+    for (int j = 2; j < d; ++j) cb.Add(-co.T[2][j] / co.c[2], D[j]);
+    cb.out = z;
+  }
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k == 2) continue;  // D_2(t) = a exactly
+    Combo& cb = plan->combos[plan->n++];
+    cb = Combo{};
+    for (int j = k + 1; j < d; ++j) cb.Add(co.T[k][j], D[j]);
+    cb.Add(co.c[k], z);
+    cb.old = D[k];
+    cb.level = k;
+    cb.out = Dn[k];
+  }
+  Combo& cb = plan->combos[plan->n++];
+  cb = Combo{};
+  for (int i = 1; i <= d - 2; ++i) cb.Add(co.w[i], Dn[i]);
+  cb.Add(co.wz_old, D[d - 1]);
+  cb.Add(co.wz_new, z);
+  cb.old = xnext;
+  cb.level = 0;
+  cb.out = xnew;
+}
+
+// Raw-pointer form of a plan: each combination with its accumulated term (or,
+// compensated, minus its compensation) appended, exactly as RunCombo hands it
+// to Combine.
+void BuildFusedPlan(const CEodeMemRec* ce, const UpdatePlan& plan, N_Vector* comp,
+                    N_Vector* compnew, FusedPlan* fp) {
+  fp->n = plan.n;
+  for (int k = 0; k < plan.n; ++k) {
+    const Combo& cb = plan.combos[k];
+    FusedTerms& tk = fp->terms[k];
+    tk.m = cb.m;
+    for (int j = 0; j < cb.m; ++j) {
+      tk.c[j] = cb.c[j];
+      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
+    }
+    tk.old = nullptr;
+    tk.compnew = nullptr;
+    if (cb.old != nullptr && !ce->compensated) {
+      tk.c[tk.m] = 1;
+      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
+    } else if (cb.old != nullptr) {
+      tk.c[tk.m] = -1;
+      tk.X[tk.m++] = N_VGetArrayPointer(comp[cb.level]);
+      tk.old = N_VGetArrayPointer(cb.old);
+      tk.compnew = N_VGetArrayPointer(compnew[cb.level]);
+    }
+    tk.out = N_VGetArrayPointer(cb.out);
+  }
+}
+
+}  // namespace
+
+// The vectors only trade places from step to step (history <-> new every step,
+// the three positions in a cycle of three), so six plans, built once per start,
+// cover every step: the step itself builds nothing.
+void BuildPlans(CEodeMemRec* ce) {
+  const int d = ce->degree;
+  N_Vector D[kMaxDegree];
+  N_Vector Dn[kMaxDegree];
+  N_Vector comp[kMaxDegree];
+  N_Vector compnew[kMaxDegree];
+  for (int k = 0; k < kMaxDegree; ++k) {
+    D[k] = ce->D[k];
+    Dn[k] = ce->Dnew[k];
+    comp[k] = ce->comp[k];
+    compnew[k] = ce->compnew[k];
+  }
+  N_Vector xcur = ce->xcur;
+  N_Vector xnext = ce->xnext;
+  N_Vector xnew = ce->xnew;
+  ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
+  for (int i = 0; i < kNumPlans; ++i) {
+    BuildPlan(ce, D, Dn, xnext, xnew, &ce->plans[i]);
+    if (ce->fused_ready) BuildFusedPlan(ce, ce->plans[i], comp, compnew, &ce->fused_plans[i]);
+    for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
+    for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
+    N_Vector old = xcur;
+    xcur = xnext;
+    xnext = xnew;
+    xnew = old;
+  }
+}
+
 int StartMethod(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
@@ -329,6 +394,7 @@ int StartMethod(CEodeMemRec* ce) {
   ce->nsteps_h = 0;
   ce->guard_pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
+  BuildPlans(ce);
   if (HasConstraints(ce)) {
     const long int nfe0 = ce->nfe;
     const int flag = ConstrStart(ce, func);
@@ -401,7 +467,6 @@ int StartMethod(CEodeMemRec* ce) {
 int TakeStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
-  const StepCoeffs& co = ce->co;
   const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + 1) * ce->h;
   N_Vector* D = ce->D;
   N_Vector* Dn = ce->Dnew;
@@ -419,36 +484,10 @@ int TakeStep(CEodeMemRec* ce) {
   }
   if (flag != CE_SUCCESS) return flag;
 
-  // Build the update: z = (a - B_2)/c_2 (d = 3: z is a itself), the lower
-  // derivatives from the history and z, then the position increment.
-  UpdatePlan plan;
-  N_Vector z = Dn[d - 1];
-  if (d > 3) {
-    Combo& cb = plan.combos[plan.n++];
-    cb.Add(1 / co.c[2], a);
-    for (int j = 2; j < d; ++j) cb.Add(-co.T[2][j] / co.c[2], D[j]);
-    cb.out = z;
-  }
-  for (int k = 1; k <= d - 2; ++k) {
-    if (k == 2) continue;  // D_2(t) = a exactly
-    Combo& cb = plan.combos[plan.n++];
-    for (int j = k + 1; j < d; ++j) cb.Add(co.T[k][j], D[j]);
-    cb.Add(co.c[k], z);
-    cb.old = D[k];
-    cb.level = k;
-    cb.out = Dn[k];
-  }
-  {
-    Combo& cb = plan.combos[plan.n++];
-    for (int i = 1; i <= d - 2; ++i) cb.Add(co.w[i], Dn[i]);
-    cb.Add(co.wz_old, D[d - 1]);
-    cb.Add(co.wz_new, z);
-    cb.old = ce->xnext;
-    cb.level = 0;
-    cb.out = ce->xnew;
-  }
+  const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
   sunrealtype xl1 = 0;
-  if (!FusedUpdate(ce, plan, &xl1)) {
+  if (!FusedUpdate(ce, ce->fused_plans[ip], &xl1)) {
+    const UpdatePlan& plan = ce->plans[ip];
     for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
     xl1 = N_VL1Norm(ce->xnew);
   }
