@@ -730,34 +730,11 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
       const int q = m - 1;
       const int r = (q + 1) / 2;
       const int npts = 2 * r + 1;
-      // Central-difference weights of the q-th derivative on nodes -r..r (unit spacing).
-      sunrealtype wts[2 * kMaxDegree + 1] = {};
-      {
-        // Lagrange basis derivatives via the Fornberg recursion (unit spacing, scaled below).
-        sunrealtype C[2 * kMaxDegree + 1][kMaxDegree + 1] = {};
-        sunrealtype xs[2 * kMaxDegree + 1];
-        for (int j = 0; j < npts; ++j) xs[j] = j - r;
-        C[0][0] = 1;
-        sunrealtype c1 = 1;
-        for (int i = 1; i < npts; ++i) {
-          sunrealtype c2 = 1;
-          const int mn = std::min(i, q);
-          for (int j = 0; j < i; ++j) {
-            const sunrealtype c3 = xs[i] - xs[j];
-            c2 *= c3;
-            if (j == i - 1) {
-              for (int k = mn; k >= 0; --k) {
-                C[i][k] = c1 / c2 * ((k > 0 ? k * C[i - 1][k - 1] : 0) - xs[i - 1] * C[i - 1][k]);
-              }
-            }
-            for (int k = mn; k >= 0; --k) {
-              C[j][k] = (xs[i] * C[j][k] - (k > 0 ? k * C[j][k - 1] : 0)) / c3;
-            }
-          }
-          c1 = c2;
-        }
-        for (int j = 0; j < npts; ++j) wts[j] = C[j][q] / std::pow(h, q);
-      }
+      // Central-difference weights of the q-th derivative on the nodes -r h .. r h.
+      sunrealtype nodes[2 * kMaxDegree + 1];
+      sunrealtype wts[2 * kMaxDegree + 1];
+      for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
+      FornbergWeights(q, npts, nodes, wts);
       N_VScale(wts[r], ce->D[2], out);
       for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
         if (j == r || wts[j] == 0) continue;

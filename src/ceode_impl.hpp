@@ -44,6 +44,9 @@ struct StepCoeffs {
 };
 void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
 
+// Finite-difference weights w of the q-th derivative at 0 on the m nodes x (Fornberg).
+void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w);
+
 // One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
 // for a quantity that accumulates). Zero coefficients are dropped when the plan
 // is built, so they cost no memory pass.

@@ -29,31 +29,6 @@ sunrealtype Factorial(int n) {
   return r;
 }
 
-// Weights of the derivative of order q on the nodes x[0..m-1] at 0 (Fornberg 1988).
-void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
-  sunrealtype C[2 * kMaxDegree + 1][kMaxDegree] = {};
-  C[0][0] = 1;
-  sunrealtype c1 = 1;
-  for (int i = 1; i < m; ++i) {
-    sunrealtype c2 = 1;
-    const int mn = std::min(i, q);
-    for (int j = 0; j < i; ++j) {
-      const sunrealtype c3 = x[i] - x[j];
-      c2 *= c3;
-      for (int k = mn; k >= 0; --k) {
-        if (j == i - 1) {
-          C[i][k] = c1 / c2 * ((k > 0 ? k * C[i - 1][k - 1] : 0) - x[i - 1] * C[i - 1][k]);
-        }
-      }
-      for (int k = mn; k >= 0; --k) {
-        C[j][k] = (x[i] * C[j][k] - (k > 0 ? k * C[j][k - 1] : 0)) / c3;
-      }
-    }
-    c1 = c2;
-  }
-  for (int i = 0; i < m; ++i) w[i] = C[i][q];
-}
-
 // z = sum c_i X_i with exactly the rounding of N_VScale / N_VLinearSum /
 // N_VLinearCombination, so the fused kernel below can reproduce it bit for bit.
 void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
@@ -187,6 +162,31 @@ bool FusedUpdate(CEodeMemRec* ce, const FusedPlan& fp, sunrealtype* l1norm) {
 }
 
 }  // namespace
+
+// Weights of the derivative of order q on the nodes x[0..m-1] at 0 (Fornberg 1988).
+void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
+  sunrealtype C[2 * kMaxDegree + 1][kMaxDegree] = {};
+  C[0][0] = 1;
+  sunrealtype c1 = 1;
+  for (int i = 1; i < m; ++i) {
+    sunrealtype c2 = 1;
+    const int mn = std::min(i, q);
+    for (int j = 0; j < i; ++j) {
+      const sunrealtype c3 = x[i] - x[j];
+      c2 *= c3;
+      for (int k = mn; k >= 0; --k) {
+        if (j == i - 1) {
+          C[i][k] = c1 / c2 * ((k > 0 ? k * C[i - 1][k - 1] : 0) - x[i - 1] * C[i - 1][k]);
+        }
+      }
+      for (int k = mn; k >= 0; --k) {
+        C[j][k] = (x[i] * C[j][k] - (k > 0 ? k * C[j][k - 1] : 0)) / c3;
+      }
+    }
+    c1 = c2;
+  }
+  for (int i = 0; i < m; ++i) w[i] = C[i][q];
+}
 
 const MethodSet* FindMethodSet(const char* name) {
   if (name == nullptr) return nullptr;
