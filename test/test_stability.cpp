@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 #include <nvector/nvector_serial.h>
 
-#include <chrono>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -75,14 +74,6 @@ TEST(StabilityLimit, FindsTheFifthDegreeSetUnstableForEveryStepContraryToThePape
   EXPECT_EQ(Limit("G5"), 0.0);
   EXPECT_NEAR(Rho("G5", 0.01) - 1, 4.0 / 15.0 * 1e-4, 1e-7);
   EXPECT_GT(Rho("G5", 0.3), 1.02);
-}
-
-TEST(StabilityLimit, TakesWellUnderASecond) {
-  const auto start = std::chrono::steady_clock::now();
-  for (const char* name : {"G3_CD", "G4_A34", "G5_TOP"}) Limit(name);
-  const double secs =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_LT(secs, 3.0);  // three calls; generous for sanitizer builds
 }
 
 std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
