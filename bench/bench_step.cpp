@@ -66,8 +66,7 @@ void BM_CeodeStep(benchmark::State& state) {
   N_VConst(1.0, x);
   N_VConst(0.0, v);
   if (CEodeInit(mem, SpringRhs, 0.0, x, v) != CE_SUCCESS ||
-      CEodeSetUserData(mem, &sp) != CE_SUCCESS ||
-      CEodeSetMethodByName(mem, method) != CE_SUCCESS ||
+      CEodeSetUserData(mem, &sp) != CE_SUCCESS || CEodeSetMethodByName(mem, method) != CE_SUCCESS ||
       CEodeSetFixedStep(mem, kStep) != CE_SUCCESS ||
       CEodeSetMaxNumSteps(mem, 1L << 40) != CE_SUCCESS) {
     state.SkipWithError("CEODE setup failed");
@@ -84,9 +83,9 @@ void BM_CeodeStep(benchmark::State& state) {
     }
   }
   if (n > 1) {
-    state.counters["ns_per_dof"] = benchmark::Counter(
-        static_cast<double>(state.iterations()) * static_cast<double>(n),
-        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns_per_dof"] =
+        benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   }
   CEodeFree(&mem);
   N_VDestroy(x);
@@ -137,9 +136,9 @@ void BM_HandStep(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   if (n > 1) {
-    state.counters["ns_per_dof"] = benchmark::Counter(
-        static_cast<double>(state.iterations()) * static_cast<double>(n),
-        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns_per_dof"] =
+        benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   }
 }
 

@@ -128,8 +128,8 @@ class Table {
       }
       std::fprintf(csv_, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
     }
-    std::printf("%-16s %-14s %9s %12s %10s %10s %10s %11s %9s\n", "solver", "config",
-                "h_or_tol", "error", "drift", "steps", "rhs_evals", "seconds", "ns/step");
+    std::printf("%-16s %-14s %9s %12s %10s %10s %10s %11s %9s\n", "solver", "config", "h_or_tol",
+                "error", "drift", "steps", "rhs_evals", "seconds", "ns/step");
   }
   ~Table() {
     if (csv_ != nullptr) std::fclose(csv_);
@@ -144,9 +144,8 @@ class Table {
                 ns);
     std::fflush(stdout);
     if (csv_ != nullptr) {
-      std::fprintf(csv_, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene_.c_str(),
-                   r.solver.c_str(), r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps,
-                   r.rhs_evals, r.seconds);
+      std::fprintf(csv_, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene_.c_str(), r.solver.c_str(),
+                   r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds);
       std::fflush(csv_);
     }
   }
@@ -165,7 +164,7 @@ class Table {
 
 // ------------------------------------------------------- problem descriptions
 // Error of the state at one output instant; runners keep the maximum.
-using ErrFn1 = double (*)(double t, const double* y, void* user);                    // first order
+using ErrFn1 = double (*)(double t, const double* y, void* user);                   // first order
 using ErrFn2 = double (*)(double t, const double* x, const double* v, void* user);  // second order
 
 struct FirstOrder {
@@ -186,7 +185,7 @@ struct SecondOrder {
   ErrFn2 err = nullptr;
   bool vel_dependent = false;
   CEodeVelJacFn vjac = nullptr;  // nullptr: CEODE's difference quotients
-  int max_nonlin_iters = 0;       // 0: CEODE's default
+  int max_nonlin_iters = 0;      // 0: CEODE's default
 };
 
 // One integration's outcome (the timing is added by TimeMedian).
@@ -338,7 +337,8 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
       if (!bad && kind == Sun::kCvodeAdams) {
         // Adams is the non-stiff choice: functional (fixed-point) iteration.
         NLS = SUNNonlinSol_FixedPoint(y, 0, ctx);
-        bad = NLS == nullptr || Failed(CVodeSetNonlinearSolver(mem, NLS), "CVodeSetNonlinearSolver");
+        bad =
+            NLS == nullptr || Failed(CVodeSetNonlinearSolver(mem, NLS), "CVodeSetNonlinearSolver");
       } else if (!bad) {
         A = SUNDenseMatrix(p.n, p.n, ctx);
         LS = SUNLinSol_Dense(y, A, ctx);
@@ -401,8 +401,8 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
 // ------------------------------------------------------- measured + timed rows
 // Runs once for the numbers, then times the same call; adds a row or a failure.
 template <class F>
-void Measure(Table* table, const std::string& solver, const std::string& config,
-             double h_or_tol, F&& once) {
+void Measure(Table* table, const std::string& solver, const std::string& config, double h_or_tol,
+             F&& once) {
   Outcome o;
   if (once(&o) != 0) {
     table->Fail(solver, config, h_or_tol, "failed or unstable");
@@ -434,9 +434,8 @@ inline void MeasureCeode(Table* table, SUNContext ctx, const SecondOrder& p, con
 inline void MeasureSundials(Table* table, SUNContext ctx, const FirstOrder& p, Sun kind,
                             double h_or_rtol, double atol_factor, ARKodeButcherTable tab,
                             const std::string& config) {
-  Measure(table, SunName(kind), config, h_or_rtol, [&](Outcome* o) {
-    return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o);
-  });
+  Measure(table, SunName(kind), config, h_or_rtol,
+          [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); });
 }
 
 }  // namespace wp

@@ -179,11 +179,11 @@ static int dense_solve(int n, double* A, double* b) {
  *   [M G^T; G 0] (q'', lambda) = (f, -(dG/dt) q')   ->  acc[3], lam[2]. */
 static int index1_accel(const double* q, const double* v, double* acc, double* lam) {
   double c = cos(q[2]), s = sin(q[2]), w2 = v[2] * v[2];
-  double A[25] = {MASS, 0, 0,        1,        0,        /* */
-                  0,    MASS, 0,     0,        1,        /* */
-                  0,    0,  IZZ,     -LEN * c, -LEN * s, /* */
-                  1,    0,  -LEN * c, 0,       0,        /* */
-                  0,    1,  -LEN * s, 0,       0};
+  double A[25] = {MASS, 0,    0,        1,        0,        /* */
+                  0,    MASS, 0,        0,        1,        /* */
+                  0,    0,    IZZ,      -LEN * c, -LEN * s, /* */
+                  1,    0,    -LEN * c, 0,        0,        /* */
+                  0,    1,    -LEN * s, 0,        0};
   double b[5];
   b[0] = 0.0;
   b[1] = -MASS * GRAV;
@@ -577,14 +577,15 @@ static int run_ceode(SUNContext ctx, const char* method, int zero_start, double 
   }
   fail |= check_flag(CEodeInit(mem, ce_force, 0.0, x, v), "CEodeInit");
   if (!fail) fail |= check_flag(CEodeSetMethodByName(mem, method), "CEodeSetMethodByName");
-  if (!fail) fail |= check_flag(CEodeSetZeroStart(mem, zero_start ? SUNTRUE : SUNFALSE),
-                                "CEodeSetZeroStart");
+  if (!fail)
+    fail |=
+        check_flag(CEodeSetZeroStart(mem, zero_start ? SUNTRUE : SUNFALSE), "CEodeSetZeroStart");
   if (!fail) fail |= check_flag(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep");
   if (!fail) fail |= check_flag(CEodeSetMassFn(mem, ce_mass, M, SUNTRUE), "CEodeSetMassFn");
   if (!fail) fail |= check_flag(CEodeSetLinearSolver(mem, LS, A), "CEodeSetLinearSolver");
   if (!fail) fail |= check_flag(CEodeSetConstraints(mem, phi, ce_phi, ce_G), "CEodeSetConstraints");
-  if (!fail) fail |= check_flag(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0),
-                                "CEodeSetStabilityGuard");
+  if (!fail)
+    fail |= check_flag(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard");
   if (!fail) fail |= check_flag(CEodeSetStopTime(mem, TEND), "CEodeSetStopTime");
   if (!fail) fail |= check_flag(CEodeSetMaxNumSteps(mem, -1), "CEodeSetMaxNumSteps");
   r->secs = now();
@@ -627,10 +628,14 @@ struct config {
 
 static int run_any(SUNContext ctx, const struct config* c, double h, struct result* r) {
   switch (c->kind) {
-    case K_CEODE: return run_ceode(ctx, c->method, c->zero_start, h, r);
-    case K_RK3: return run_rk3(ctx, 0, h, r);
-    case K_RK3P: return run_rk3(ctx, 1, h, r);
-    case K_IDA: return run_ida(ctx, h, r);
+    case K_CEODE:
+      return run_ceode(ctx, c->method, c->zero_start, h, r);
+    case K_RK3:
+      return run_rk3(ctx, 0, h, r);
+    case K_RK3P:
+      return run_rk3(ctx, 1, h, r);
+    case K_IDA:
+      return run_ida(ctx, h, r);
   }
   return 1;
 }
@@ -724,7 +729,8 @@ int main(int argc, char** argv) {
   }
   hmin = full ? 1e-5 : 1e-4;
   if (SUNContext_Create(NULL, &ctx)) return 1;
-  printf("DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from theta = 90 deg at rest\n");
+  printf(
+      "DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from theta = 90 deg at rest\n");
   printf("error = max |E - E0|, drift = max |x^2 + y^2 - L^2|, vres = max |G q'|\n\n");
   printf("%-7s %-19s %8s %11s %11s %11s %9s %9s %10s  %s\n", "solver", "config", "h/tol", "error",
          "drift", "vres", "steps", "f evals", "seconds", "paper (err / drift)");
@@ -753,8 +759,7 @@ int main(int argc, char** argv) {
       for (m = 0; m < sizeof(refs) / sizeof(refs[0]); ++m) {
         if (refs[m].kind == c->kind && fabs(h / refs[m].h - 1) < 1e-9) ref = &refs[m];
       }
-      if (ref && !(c->kind == K_CEODE && !(c->zero_start && strcmp(c->method, "G5_ONES") == 0)))
-      {
+      if (ref && !(c->kind == K_CEODE && !(c->zero_start && strcmp(c->method, "G5_ONES") == 0))) {
         int bad = fabs(r.err / ref->err - 1) > 0.10;
         ++nchecked;
         if (ref->drift > 0) {
@@ -804,8 +809,8 @@ int main(int argc, char** argv) {
       double to[3];
       int a;
       if (tc <= 0) continue;
-      for (a = 0; a < 3; ++a) to[a] = time_at_error(npts[against[a]], errs[against[a]],
-                                                     secs[against[a]], levels[l]);
+      for (a = 0; a < 3; ++a)
+        to[a] = time_at_error(npts[against[a]], errs[against[a]], secs[against[a]], levels[l]);
       if (to[0] <= 0 && to[1] <= 0 && to[2] <= 0) continue;
       printf("%9.0e %14.3e", levels[l], tc);
       if (to[0] > 0) {

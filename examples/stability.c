@@ -76,9 +76,9 @@ static double forced_exact(const struct forced* p, double t) {
 
 /* Result of one forced run; err_window[k] = max error over [k*win, (k+1)*win). */
 struct forced_result {
-  int flag;           /* last CEodeEvolve flag */
-  double t_end;       /* time reached */
-  double max_err;     /* max |x - exact| over the steps */
+  int flag;       /* last CEodeEvolve flag */
+  double t_end;   /* time reached */
+  double max_err; /* max |x - exact| over the steps */
   long steps, nfe;
   double secs;
   double err_window[1000];
@@ -160,10 +160,11 @@ static void scene_forced(SUNContext ctx, FILE* csv, struct checks* c) {
       }
     }
   }
-  printf("   G3_CD at h = 2.0 = Omega_max: a double eigenvalue -1 (Jordan block) predicts linear\n"
-         "   growth of the homogeneous error; measured max error %.3e in [0,100) s and %.3e in\n"
-         "   [1900,2000) s (ratio %.3g).\n",
-         cd2_first, cd2_last, cd2_last / cd2_first);
+  printf(
+      "   G3_CD at h = 2.0 = Omega_max: a double eigenvalue -1 (Jordan block) predicts linear\n"
+      "   growth of the homogeneous error; measured max error %.3e in [0,100) s and %.3e in\n"
+      "   [1900,2000) s (ratio %.3g).\n",
+      cd2_first, cd2_last, cd2_last / cd2_first);
   check(c, agree, "every G3 run is stable/unstable exactly where the paper says");
 }
 
@@ -180,8 +181,8 @@ static void scene_a54(SUNContext ctx, FILE* csv, struct checks* c) {
   printf("\n2. G4_A54 (unstable for every h), x'' + x = sin(10 t), guard off\n");
   printf("   rate: slope of log(max error per window) over the second half of the run;\n");
   printf("   visible: first window whose error exceeds the solution's amplitude 1/99\n");
-  printf("%6s %12s %12s %12s %11s %11s %10s %8s\n", "h", "rho", "ln(rho)/h", "measured",
-         "err(0)", "err(1000)", "visible", "paper");
+  printf("%6s %12s %12s %12s %11s %11s %10s %8s\n", "h", "rho", "ln(rho)/h", "measured", "err(0)",
+         "err(1000)", "visible", "paper");
   for (j = 0; j < 2; ++j) {
     struct forced_result r;
     sunrealtype rho = 0;
@@ -201,13 +202,12 @@ static void scene_a54(SUNContext ctx, FILE* csv, struct checks* c) {
     t1 = (k1 + 0.5) * win;
     t2 = (k2 + 0.5) * win;
     measured = log(r.err_window[k2] / r.err_window[k1]) / (t2 - t1);
-    printf("%6.2g %12.9f %12.6e %12.6e %11.3e %11.3e %10.4g %8.4g\n", hs[j], (double)rho,
-           predicted, measured, r.err_window[0], err1000, visible, paper_visible[j]);
-    csv_row(csv, "g4_a54_long", "G4_A54", "unstable", hs[j], r.max_err, 0, r.steps, r.nfe,
-            r.secs);
+    printf("%6.2g %12.9f %12.6e %12.6e %11.3e %11.3e %10.4g %8.4g\n", hs[j], (double)rho, predicted,
+           measured, r.err_window[0], err1000, visible, paper_visible[j]);
+    csv_row(csv, "g4_a54_long", "G4_A54", "unstable", hs[j], r.max_err, 0, r.steps, r.nfe, r.secs);
     snprintf(what, sizeof(what),
-             "h = %g: measured growth rate %.6e within 1 %% of ln(rho)/h = %.6e", hs[j],
-             measured, predicted);
+             "h = %g: measured growth rate %.6e within 1 %% of ln(rho)/h = %.6e", hs[j], measured,
+             predicted);
     check(c, r.flag >= 0 && fabs(measured / predicted - 1) < 0.01, what);
     if (j == 0) {
       check(c, visible > 0 && visible < 1000,
@@ -218,10 +218,11 @@ static void scene_a54(SUNContext ctx, FILE* csv, struct checks* c) {
             "paper reports");
     }
   }
-  printf("   The rate is the analysis' ln(rho)/h to the digits shown. When the growth becomes\n"
-         "   visible depends on how large the growing mode starts: the paper's times (500 and\n"
-         "   5000 s) both mean growth by e^16.7. At h = 0.1 (forcing 10 h = 1 rad per step) the\n"
-         "   error is already 20 %% of the amplitude in the first window, so it shows earlier.\n");
+  printf(
+      "   The rate is the analysis' ln(rho)/h to the digits shown. When the growth becomes\n"
+      "   visible depends on how large the growing mode starts: the paper's times (500 and\n"
+      "   5000 s) both mean growth by e^16.7. At h = 0.1 (forcing 10 h = 1 rad per step) the\n"
+      "   error is already 20 %% of the amplitude in the first window, so it shows earlier.\n");
 }
 
 /* ------------------------------------------------------------------------- */
@@ -265,7 +266,10 @@ static double chain_eigenvalue(const struct chain* c, int j) {
   for (i = 0; i < c->n; ++i) hi = fmax(hi, 2 * (c->k[i] + c->k[i + 1]));
   for (it = 0; it < 300; ++it) {
     const double mid = 0.5 * (lo + hi);
-    if (chain_count_below(c, mid) >= j) hi = mid; else lo = mid;
+    if (chain_count_below(c, mid) >= j)
+      hi = mid;
+    else
+      lo = mid;
   }
   return 0.5 * (lo + hi);
 }
@@ -305,10 +309,13 @@ static void scene_chain(SUNContext ctx, FILE* csv, struct checks* c) {
   for (i = 0; i <= ch.n; ++i) ch.k[i] = pow(10.0, 8.0 * i / ch.n);
   wmax = sqrt(chain_eigenvalue(&ch, ch.n));
   wmin = sqrt(chain_eigenvalue(&ch, 1));
-  printf("\n3. Stiff spring chain: %d unit masses, springs 1 .. 1e8, omega %.4g .. %.4g "
-         "(ratio %.3g)\n", ch.n, wmin, wmax, wmax / wmin);
-  printf("   h* = Omega_max / omega_est (guard); h_div = smallest h whose run grows x1e6 within\n"
-         "   20000 steps (bisection, guard off)\n");
+  printf(
+      "\n3. Stiff spring chain: %d unit masses, springs 1 .. 1e8, omega %.4g .. %.4g "
+      "(ratio %.3g)\n",
+      ch.n, wmin, wmax, wmax / wmin);
+  printf(
+      "   h* = Omega_max / omega_est (guard); h_div = smallest h whose run grows x1e6 within\n"
+      "   20000 steps (bisection, guard off)\n");
   printf("%-8s %12s %12s %12s %12s %9s\n", "method", "omega_est", "omega exact", "h*", "h_div",
          "h*/h_div");
   for (s = 0; s < 3; ++s) {
@@ -331,14 +338,17 @@ static void scene_chain(SUNContext ctx, FILE* csv, struct checks* c) {
     }
     for (it = 0; it < 30; ++it) {
       const double mid = 0.5 * (lo + hi);
-      if (chain_diverges(ctx, &ch, sets[s], mid, 20000, CE_GUARD_OFF, NULL)) hi = mid; else lo = mid;
+      if (chain_diverges(ctx, &ch, sets[s], mid, 20000, CE_GUARD_OFF, NULL))
+        hi = mid;
+      else
+        lo = mid;
     }
     printf("%-8s %12.6g %12.6g %12.6e %12.6e %9.5f\n", sets[s], omega_est, wmax, hstar, hi,
            hstar / hi);
     csv_row(csv, "stiff_chain", sets[s], "h_div", hi, fabs(hstar / hi - 1), 0, 20000, 0,
             now() - t0);
-    snprintf(what, sizeof(what), "%s: guard estimate omega %.6g within 2 %% of exact %.6g",
-             sets[s], omega_est, wmax);
+    snprintf(what, sizeof(what), "%s: guard estimate omega %.6g within 2 %% of exact %.6g", sets[s],
+             omega_est, wmax);
     check(c, fabs(omega_est / wmax - 1) < 0.02, what);
     snprintf(what, sizeof(what), "%s: predicted h* within 5 %% of the diverging step", sets[s]);
     check(c, fabs(hstar / hi - 1) < 0.05, what);
@@ -413,11 +423,12 @@ static void scene_tiny(SUNContext ctx, FILE* csv, struct checks* c, int full) {
   const double hs[6] = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
   const double paper_classic[6] = {2.00492e-5, 2.00597e-7, 2.46675e-8,
                                    3.66886e-7, 6.22766e-4, 0.270486};
-  const double paper_ceode[6] = {2.00492e-5, 2.00492e-7, 2.00537e-9,
+  const double paper_ceode[6] = {2.00492e-5,  2.00492e-7,  2.00537e-9,
                                  1.90425e-11, 1.18776e-11, 3.17293e-11};
   int i;
   printf("\n4. Pendulum, max |E - E0|: classic CD (velocity by differences) against CEODE G3_CD\n");
-  if (!full) printf("   (h = 1e-7 over 1 s only, 1e-8 skipped: run with --full for 10 s at both)\n");
+  if (!full)
+    printf("   (h = 1e-7 over 1 s only, 1e-8 skipped: run with --full for 10 s at both)\n");
   printf("%7s %6s %13s %13s %13s %13s %9s %9s\n", "h", "span", "classic CD", "paper", "CEODE CD",
          "paper", "s classic", "s CEODE");
   for (i = 0; i < 6; ++i) {
@@ -439,8 +450,8 @@ static void scene_tiny(SUNContext ctx, FILE* csv, struct checks* c, int full) {
     }
     csv_row(csv, "pendulum_tiny_h", "classic_CD", tend == 10 ? "10s" : "1s", hs[i], e1, 0, n1, n1,
             s1);
-    csv_row(csv, "pendulum_tiny_h", "CEODE_G3_CD", tend == 10 ? "10s" : "1s", hs[i], e2, 0, n2,
-            n2, s2);
+    csv_row(csv, "pendulum_tiny_h", "CEODE_G3_CD", tend == 10 ? "10s" : "1s", hs[i], e2, 0, n2, n2,
+            s2);
     if (i <= 1) {
       snprintf(what, sizeof(what), "h = %g: both within 1 %% of the paper's %.6g", hs[i],
                paper_ceode[i]);

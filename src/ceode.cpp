@@ -16,8 +16,7 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
   std::vsnprintf(msg, sizeof(msg), fmt, ap);
   va_end(ap);
   if (ce == nullptr) {
-    std::fprintf(stderr, "\n[CEODE ERROR]  %s (%s)\n  %s\n\n", func, FlagName(flag),
-                 msg);
+    std::fprintf(stderr, "\n[CEODE ERROR]  %s (%s)\n  %s\n\n", func, FlagName(flag), msg);
     return flag;
   }
   ce->last_msg = msg;
@@ -25,8 +24,7 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
     ce->ehfun(flag, "CEODE", func, msg, ce->eh_data);
   } else if (ce->errfp != nullptr) {
     std::fprintf(ce->errfp, "\n[CEODE %s]  %s (%s)\n  %s\n\n",
-                 flag == CE_WARNING ? "WARNING" : "ERROR", func, FlagName(flag),
-                 msg);
+                 flag == CE_WARNING ? "WARNING" : "ERROR", func, FlagName(flag), msg);
   }
   return flag;
 }
@@ -52,7 +50,8 @@ namespace {
 
 int CheckInitialData(CEodeMemRec* ce, const char* func, N_Vector x0, N_Vector v0) {
   if (x0 == nullptr || v0 == nullptr) {
-    return ProcessError(ce, CE_ILL_INPUT, func, "x0 = NULL or v0 = NULL: pass both initial vectors.");
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "x0 = NULL or v0 = NULL: pass both initial vectors.");
   }
   if (N_VGetLength(x0) != N_VGetLength(v0)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -81,8 +80,9 @@ int CheckOutputVector(CEodeMemRec* ce, const char* func, N_Vector y, const char*
 // and the starting history; runs once per configuration change.
 int Prepare(CEodeMemRec* ce, const char* func) {
   if (ce->h <= 0) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
+    return ProcessError(
+        ce, CE_ILL_INPUT, func,
+        "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
   }
   if (ce->started) return CE_SUCCESS;
   int flag = LsInitialize(ce, func);
@@ -123,7 +123,8 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "f = NULL: pass the right-hand side function f(t, x, v, f, data).");
   }
-  if (!std::isfinite(t0)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
+  if (!std::isfinite(t0))
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
   flag = ceode::CheckInitialData(ce, __func__, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (ce->initialized) {
@@ -181,7 +182,8 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
   }
-  if (!std::isfinite(tout)) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
+  if (!std::isfinite(tout))
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
   flag = ceode::Prepare(ce, __func__);
   if (flag == CE_SUCCESS && ce->guard_pending) {
     ce->guard_pending = false;
@@ -221,10 +223,11 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   long int nsteps = 0;
   while (target - ce->tcur > h * (1 - 1e-8)) {
     if (nsteps >= ce->mxstep) {
-      flag = ceode::ProcessError(ce, CE_TOO_MUCH_WORK, __func__,
-                                 "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
-                                 "the limit with CEodeSetMaxNumSteps or use a larger h.",
-                                 nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
+      flag =
+          ceode::ProcessError(ce, CE_TOO_MUCH_WORK, __func__,
+                              "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
+                              "the limit with CEodeSetMaxNumSteps or use a larger h.",
+                              nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
       break;
     }
     flag = ceode::TakeStep(ce);

@@ -17,11 +17,11 @@
 // The residual is always exact (current G_t, current Phi); the matrix may be stale (simplified
 // Newton across iterations and steps) and is refreshed when the contraction slows. Convergence is
 // measured on delta, the change of x(t+h), down to round-off of x.
+#include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
-#include <nvector/nvector_serial.h>
 
 #include <algorithm>
 #include <cmath>
@@ -34,9 +34,9 @@ namespace ceode {
 
 namespace {
 
-constexpr int kMaxIters = 12;          // Newton iterations per solve, refreshes included
-constexpr sunrealtype kSlowRate = 0.2;  // refresh the matrix when the contraction is slower
-constexpr sunrealtype kTolUlps = 8;     // convergence: |delta| below this many ulps of |x|
+constexpr int kMaxIters = 12;            // Newton iterations per solve, refreshes included
+constexpr sunrealtype kSlowRate = 0.2;   // refresh the matrix when the contraction is slower
+constexpr sunrealtype kTolUlps = 8;      // convergence: |delta| below this many ulps of |x|
 constexpr sunrealtype kFloorUlps = 1e3;  // round-off stagnation is accepted below this
 
 struct Entry {
@@ -54,15 +54,15 @@ struct ConWork {
   bool own_ls = false;
   SUNLinearSolver LS = nullptr;
   SUNMatrix A = nullptr;
-  SUNMatrix Gt = nullptr;  // G(x(t), t): the direction of the constraint forces
-  SUNMatrix Gh = nullptr;  // G at the iterate of x(t+h): linearises Phi
-  SUNMatrix J = nullptr;   // df/dv from the user's CEodeVelJacFn
+  SUNMatrix Gt = nullptr;        // G(x(t), t): the direction of the constraint forces
+  SUNMatrix Gh = nullptr;        // G at the iterate of x(t+h): linearises Phi
+  SUNMatrix J = nullptr;         // df/dv from the user's CEodeVelJacFn
   std::vector<sunrealtype> Jdq;  // df/dv by difference quotients, dense column-major
-  N_Vector b = nullptr;    // serial saddle vectors of length n + nc
+  N_Vector b = nullptr;          // serial saddle vectors of length n + nc
   N_Vector sol = nullptr;
   N_Vector xtrial = nullptr, fval = nullptr, r1 = nullptr, delta = nullptr, vtmp = nullptr;
   N_Vector inc = nullptr, xpt = nullptr, vpt = nullptr, fpt = nullptr, a0 = nullptr;
-  N_Vector vbase = nullptr;  // velocity offset V0 of v(a) = V0 + kappa a
+  N_Vector vbase = nullptr;      // velocity offset V0 of v(a) = V0 + kappa a
   N_Vector Dn[kMaxDegree] = {};  // scratch for the replica of TakeStep's position update
   N_Vector lam = nullptr, lam_prev = nullptr, s = nullptr, gam = nullptr;
   std::vector<Entry> entries;
@@ -87,9 +87,9 @@ void Destroy(SUNMatrix* m) {
 void FreeWork(CEodeMemRec* ce) {
   ConWork* w = Work(ce);
   if (w == nullptr) return;
-  N_Vector* vecs[] = {&w->b,   &w->sol, &w->xtrial, &w->fval, &w->r1,       &w->delta, &w->vtmp,
-                      &w->inc, &w->xpt, &w->vpt,    &w->fpt, &w->a0, &w->vbase,   &w->lam,      &w->lam_prev,
-                      &w->s,   &w->gam};
+  N_Vector* vecs[] = {&w->b,     &w->sol, &w->xtrial,   &w->fval, &w->r1,  &w->delta,
+                      &w->vtmp,  &w->inc, &w->xpt,      &w->vpt,  &w->fpt, &w->a0,
+                      &w->vbase, &w->lam, &w->lam_prev, &w->s,    &w->gam};
   for (N_Vector* v : vecs) Destroy(v);
   for (N_Vector& v : w->Dn) Destroy(&v);
   if (w->own_ls) {
@@ -136,7 +136,8 @@ void ForEachEntry(SUNMatrix M, Fn fn) {
 
 // y += alpha G^T lam (G is nc x n); arrays of local data.
 void AddGTransposeTimes(SUNMatrix G, sunrealtype alpha, const sunrealtype* lam, sunrealtype* y) {
-  ForEachEntry(G, [&](sunindextype r, sunindextype c, sunrealtype v) { y[c] += alpha * v * lam[r]; });
+  ForEachEntry(G,
+               [&](sunindextype r, sunindextype c, sunrealtype v) { y[c] += alpha * v * lam[r]; });
 }
 
 bool AllFinite(N_Vector v) { return IsFinite(v); }
@@ -324,7 +325,9 @@ int SetupSaddle(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, bool with_jac, S
   std::vector<Entry>& e = w->entries;
   e.clear();
   if (ce->M != nullptr) {
-    ForEachEntry(ce->M, [&](sunindextype r, sunindextype c, sunrealtype v) { e.push_back({r, c, v}); });
+    ForEachEntry(ce->M, [&](sunindextype r, sunindextype c, sunrealtype v) {
+      e.push_back({r, c, v});
+    });
   }
   const sunrealtype diag = ce->M != nullptr ? 0 : 1;  // no mass function: M = I
   for (sunindextype i = 0; i < n; ++i) e.push_back({i, i, diag});
@@ -342,8 +345,12 @@ int SetupSaddle(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, bool with_jac, S
       }
     }
   }
-  ForEachEntry(w->Gt, [&](sunindextype r, sunindextype c, sunrealtype v) { e.push_back({c, n + r, v}); });
-  ForEachEntry(H, [&](sunindextype r, sunindextype c, sunrealtype v) { e.push_back({n + r, c, v}); });
+  ForEachEntry(w->Gt, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    e.push_back({c, n + r, v});
+  });
+  ForEachEntry(H, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    e.push_back({n + r, c, v});
+  });
 
   SUNMatrix A = w->A;
   if (!w->sparse) {
@@ -421,10 +428,11 @@ int SolveSaddle(CEodeMemRec* ce, ConWork* w, sunrealtype top_scale, N_Vector top
   ++ce->nls_solves;
   if (rv != 0 || !AllFinite(w->sol)) {
     w->factored = false;
-    return ProcessError(ce, rv != 0 ? CE_LSOLVE_FAIL : CE_LSETUP_FAIL, func,
-                        "The constraint saddle-point solve failed (returned %d%s) at t = %.17g: the "
-                        "matrix is singular or nearly so (redundant constraints?).",
-                        rv, rv == 0 ? ", non-finite solution" : "", static_cast<double>(t));
+    return ProcessError(
+        ce, rv != 0 ? CE_LSOLVE_FAIL : CE_LSETUP_FAIL, func,
+        "The constraint saddle-point solve failed (returned %d%s) at t = %.17g: the "
+        "matrix is singular or nearly so (redundant constraints?).",
+        rv, rv == 0 ? ", non-finite solution" : "", static_cast<double>(t));
   }
   return CE_SUCCESS;
 }
@@ -486,9 +494,9 @@ struct SolveSpec {
   sunrealtype mu;
   sunrealtype kappa;  // v(a) = V0 + kappa a when vdep
   bool vdep;
-  N_Vector V0;        // the velocity f sees when !vdep
-  bool start;         // position from StartPosition instead of StepPosition
-  bool reuse;         // a factored step matrix may be reused
+  N_Vector V0;  // the velocity f sees when !vdep
+  bool start;   // position from StartPosition instead of StepPosition
+  bool reuse;   // a factored step matrix may be reused
 };
 
 // Newton on (a, lam) for one step; a and lam hold the predictor on entry, the solution on exit;
@@ -505,8 +513,7 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
   // effect on x(t+h) is scaled by mu ~ h^2, while its effect on the velocity (kappa ~ h) is what
   // the energy sees. With G(x(t)) exact in the matrix and f independent of v, the force rows are
   // solved exactly by every iteration, and only the linearisation of Phi is approximate.
-  bool have_matrix = sp.reuse && w->factored && w->kappa_fact == sp.kappa &&
-                     w->nst_fact == ce->nst;
+  bool have_matrix = sp.reuse && w->factored && w->kappa_fact == sp.kappa && w->nst_fact == ce->nst;
   bool fresh = false;
   sunrealtype dprev = 0;
   sunrealtype dnorm = 0;
@@ -542,7 +549,8 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
 
     if (!have_matrix) {
       flag = EvalG(ce, sp.tc, w->xtrial, w->Gh, func);
-      if (flag == CE_SUCCESS && sp.vdep) flag = EvalVelJac(ce, w, sp.t, sp.xt, w->vtmp, w->fval, func);
+      if (flag == CE_SUCCESS && sp.vdep)
+        flag = EvalVelJac(ce, w, sp.t, sp.xt, w->vtmp, w->fval, func);
       if (flag == CE_SUCCESS) flag = SetupSaddle(ce, w, sp.kappa, sp.vdep, w->Gh, sp.t, func);
       if (flag != CE_SUCCESS) return flag;
       w->factored = true;
@@ -632,7 +640,8 @@ int ConstrInitialize(CEodeMemRec* ce, const char* func) {
     }
     w->A = SUNDenseMatrix(w->N, w->N, ce->sunctx);
     w->b = N_VNew_Serial(w->N, ce->sunctx);
-    if (w->A == nullptr || w->b == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+    if (w->A == nullptr || w->b == nullptr)
+      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
     w->LS = SUNLinSol_Dense(w->b, w->A, ce->sunctx);
     w->own_ls = true;
     if (w->LS == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
@@ -678,8 +687,8 @@ int ConstrInitialize(CEodeMemRec* ce, const char* func) {
   w->Gh = make(nc, n);
   if (ce->vel_dependent && ce->jac != nullptr) w->J = make(n, n);
   w->sol = N_VClone(w->b);
-  N_Vector* svecs[] = {&w->xtrial, &w->fval, &w->r1, &w->delta, &w->vtmp,
-                       &w->inc,    &w->xpt,  &w->vpt, &w->fpt, &w->a0, &w->vbase};
+  N_Vector* svecs[] = {&w->xtrial, &w->fval, &w->r1,  &w->delta, &w->vtmp, &w->inc,
+                       &w->xpt,    &w->vpt,  &w->fpt, &w->a0,    &w->vbase};
   for (N_Vector* v : svecs) *v = N_VClone(ce->xcur);
   for (int k = 1; k < ce->degree; ++k) w->Dn[k] = N_VClone(ce->xcur);
   N_Vector* lvecs[] = {&w->lam, &w->lam_prev, &w->s, &w->gam};
@@ -820,7 +829,7 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, cons
     N_VLinearCombination(d - 1, c, X, w->vbase);
     V0 = w->vbase;
   }
-  const SolveSpec sp{t, x, tc, co.mu, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
+  const SolveSpec sp{t,  x,     tc,  co.mu, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
                      V0, false, true};
   const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr, func);
   if (flag != CE_SUCCESS) return flag;

@@ -109,7 +109,7 @@ struct CEodeMemRec {
   std::string method_name = "G3_CD";
   bool zero_start = false;
   bool compensated = false;
-  bool fused = true;  // one-pass update kernel for serial vectors
+  bool fused = true;         // one-pass update kernel for serial vectors
   bool fused_ready = false;  // fused_plans are valid (serial vectors)
   std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
   std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;
@@ -140,7 +140,7 @@ struct CEodeMemRec {
   N_Vector tmp1 = nullptr;
   N_Vector tmp2 = nullptr;
   N_Vector tmp3 = nullptr;
-  N_Vector V0 = nullptr;   // velocity offset of the implicit system
+  N_Vector V0 = nullptr;  // velocity offset of the implicit system
   N_Vector apred = nullptr;
   N_Vector ycor = nullptr;
   N_Vector ewt = nullptr;

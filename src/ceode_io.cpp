@@ -46,9 +46,10 @@ int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
   }
   // p_1 (and p_2 for d >= 4) divide in kappa = c_1 / c_2 and z = (a - B_2)/c_2.
   if ((degree >= 4 && params[2] == 0) || params[1] == 0) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "beta%s must be nonzero: the velocity would not depend on the acceleration.",
-                        degree >= 4 ? " and gamma" : "");
+    return ProcessError(
+        ce, CE_ILL_INPUT, __func__,
+        "beta%s must be nonzero: the velocity would not depend on the acceleration.",
+        degree >= 4 ? " and gamma" : "");
   }
   ce->degree = degree;
   for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
@@ -126,7 +127,8 @@ int CEodeSetFixedStep(void* mem, sunrealtype h) {
   if (flag != CE_SUCCESS) return flag;
   if (!(h > 0) || !std::isfinite(h)) {
     return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "h = %g: the fixed step must be positive and finite.", static_cast<double>(h));
+                        "h = %g: the fixed step must be positive and finite.",
+                        static_cast<double>(h));
   }
   if (h != ce->h) Restart(ce);
   ce->h = h;
@@ -154,7 +156,8 @@ int CEodeSetStopTime(void* mem, sunrealtype tstop) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (!std::isfinite(tstop)) return ProcessError(ce, CE_ILL_INPUT, __func__, "tstop is not finite.");
+  if (!std::isfinite(tstop))
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "tstop is not finite.");
   ce->tstop = tstop;
   ce->tstop_set = true;
   return CE_SUCCESS;
@@ -182,7 +185,8 @@ int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (maxcor < 1) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__, "maxcor = %d: need at least 1 iteration.", maxcor);
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "maxcor = %d: need at least 1 iteration.",
+                        maxcor);
   }
   ce->maxcor = maxcor;
   if (ce->NLS != nullptr) SUNNonlinSolSetMaxIters(ce->NLS, maxcor);
@@ -238,7 +242,8 @@ int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
   }
   if (every < 0) {
     return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "every = %ld: use 0 (check at start only) or a positive step count.", every);
+                        "every = %ld: use 0 (check at start only) or a positive step count.",
+                        every);
   }
   ce->guard_mode = mode;
   ce->guard_every = every;
@@ -379,8 +384,9 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
     }
     std::fprintf(outfile, "\n");
   } else {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "Unknown output format: use SUN_OUTPUTFORMAT_TABLE or SUN_OUTPUTFORMAT_CSV.");
+    return ProcessError(
+        ce, CE_ILL_INPUT, __func__,
+        "Unknown output format: use SUN_OUTPUTFORMAT_TABLE or SUN_OUTPUTFORMAT_CSV.");
   }
   return CE_SUCCESS;
 }

@@ -122,14 +122,16 @@ int LsInitialize(CEodeMemRec* ce, const char* func) {
   }
   if (ce->LS == nullptr) return CE_SUCCESS;
   if (ce->A == nullptr && !ce->ls_matrix_free) {
-    return ProcessError(ce, CE_LINIT_FAIL, func,
-                        "The attached linear solver needs a matrix: pass A to CEodeSetLinearSolver.");
+    return ProcessError(
+        ce, CE_LINIT_FAIL, func,
+        "The attached linear solver needs a matrix: pass A to CEodeSetLinearSolver.");
   }
   if (ce->A != nullptr && SUNMatGetID(ce->A) != SUNMATRIX_DENSE &&
       SUNMatGetID(ce->A) != SUNMATRIX_BAND && ce->vel_dependent && ce->jac == nullptr) {
-    return ProcessError(ce, CE_LINIT_FAIL, func,
-                        "Difference-quotient Jacobians support dense and band matrices only: supply "
-                        "df/dv with CEodeSetVelJacFn for this matrix type (e.g. sparse/KLU).");
+    return ProcessError(
+        ce, CE_LINIT_FAIL, func,
+        "Difference-quotient Jacobians support dense and band matrices only: supply "
+        "df/dv with CEodeSetVelJacFn for this matrix type (e.g. sparse/KLU).");
   }
   if (ce->A != nullptr && ce->vel_dependent && ce->jac == nullptr && !HasLocalData(ce->xcur)) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
@@ -141,8 +143,9 @@ int LsInitialize(CEodeMemRec* ce, const char* func) {
     if (ce->Jsave == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   if (ce->ls_matrix_free && SUNLinSolSetATimes(ce->LS, ce, ATimes) != 0) {
-    return ProcessError(ce, CE_LINIT_FAIL, func,
-                        "The linear solver does not accept a matrix-free product: attach a matrix.");
+    return ProcessError(
+        ce, CE_LINIT_FAIL, func,
+        "The linear solver does not accept a matrix-free product: attach a matrix.");
   }
   const int rv = SUNLinSolInitialize(ce->LS);
   if (rv != 0) {

@@ -75,8 +75,8 @@ int LinearSolve(N_Vector b, void* mem) {
 }
 
 // CVODE-style test: the estimated remaining error del * min(1, crate) below tol.
-int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtype tol,
-             N_Vector ewt, void* mem) {
+int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtype tol, N_Vector ewt,
+             void* mem) {
   auto* ce = static_cast<CEodeMemRec*>(mem);
   int m = 0;
   SUNNonlinSolGetCurIter(nls, &m);
@@ -188,8 +188,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const 
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
     N_VConst(0, ce->ycor);
-    rv = SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1, setup ? SUNTRUE : SUNFALSE,
-                           ce);
+    rv = SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1, setup ? SUNTRUE : SUNFALSE, ce);
     if (rv == SUN_NLS_SUCCESS || rv < 0 || ce->cb_flag < 0) break;
     ++ce->nnf;
     if (!newton || setup) break;  // a fresh Jacobian was already used

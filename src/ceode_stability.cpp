@@ -50,7 +50,8 @@ class StepMap {
     CEodeSetErrFile(mem_, nullptr);
     ok_ = CEodeInit(mem_, TestRhs, 0, x_, v_) == CE_SUCCESS &&
           CEodeSetMethod(mem_, degree, params) == CE_SUCCESS &&
-          CEodeSetFixedStep(mem_, 1) == CE_SUCCESS && CEodeSetUserData(mem_, &prob_) == CE_SUCCESS &&
+          CEodeSetFixedStep(mem_, 1) == CE_SUCCESS &&
+          CEodeSetUserData(mem_, &prob_) == CE_SUCCESS &&
           CEodeSetStabilityGuard(mem_, CE_GUARD_OFF, 0) == CE_SUCCESS;
     if (ok_ && xi > 0) {
       A_ = SUNDenseMatrix(1, 1, ctx_);

@@ -225,10 +225,10 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
 }
 
 int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
-  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew,
-                     &ce->ftmp, &ce->vtmp,  &ce->atmp, &ce->tmp1,  &ce->tmp2,
-                     &ce->tmp3, &ce->V0,    &ce->apred, &ce->ycor, &ce->ewt,
-                     &ce->zero, &ce->lstmp, &ce->D[1],  &ce->D[2],  &ce->Dnew[1], &ce->Dnew[2]};
+  N_Vector* all[] = {&ce->xcur,  &ce->xnext, &ce->xnew,    &ce->ftmp,   &ce->vtmp,
+                     &ce->atmp,  &ce->tmp1,  &ce->tmp2,    &ce->tmp3,   &ce->V0,
+                     &ce->apred, &ce->ycor,  &ce->ewt,     &ce->zero,   &ce->lstmp,
+                     &ce->D[1],  &ce->D[2],  &ce->Dnew[1], &ce->Dnew[2]};
   for (N_Vector* v : all) {
     *v = N_VClone(tmpl);
     if (*v == nullptr) return CE_MEM_FAIL;
@@ -238,9 +238,9 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 }
 
 void FreeVectors(CEodeMemRec* ce) {
-  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->ftmp,
-                     &ce->vtmp, &ce->atmp,  &ce->tmp1,  &ce->tmp2,  &ce->tmp3,      &ce->V0,
-                     &ce->apred, &ce->ycor, &ce->ewt,   &ce->zero, &ce->lstmp};
+  N_Vector* all[] = {&ce->xcur,  &ce->xnext, &ce->xnew, &ce->ftmp, &ce->vtmp,
+                     &ce->atmp,  &ce->tmp1,  &ce->tmp2, &ce->tmp3, &ce->V0,
+                     &ce->apred, &ce->ycor,  &ce->ewt,  &ce->zero, &ce->lstmp};
   for (N_Vector* v : all) {
     if (*v != nullptr) N_VDestroy(*v);
     *v = nullptr;

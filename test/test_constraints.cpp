@@ -235,10 +235,11 @@ RunResult RunPendulum(const RunOptions& o) {
   if (CEodeGetMultipliers(mem.get(), lam.get()) == CE_SUCCESS) {
     res.lambda.assign(N_VGetArrayPointer(lam.get()), N_VGetArrayPointer(lam.get()) + nc);
   }
-  std::printf("  %-8s h = %g %s: error %.3e drift %.3e, %.2f Newton iterations/step, "
-              "%ld setups\n",
-              o.method, o.h, o.zero_start ? "(zero start)" : "(consistent)", res.error, res.drift,
-              res.steps > 0 ? static_cast<double>(res.iters) / res.steps : 0.0, res.setups);
+  std::printf(
+      "  %-8s h = %g %s: error %.3e drift %.3e, %.2f Newton iterations/step, "
+      "%ld setups\n",
+      o.method, o.h, o.zero_start ? "(zero start)" : "(consistent)", res.error, res.drift,
+      res.steps > 0 ? static_cast<double>(res.iters) / res.steps : 0.0, res.setups);
   return res;
 }
 

@@ -16,7 +16,6 @@ namespace {
 
 using ceode_test::PendulumEnergyError;
 
-
 struct Reference {
   std::string method;
   double h = 0;

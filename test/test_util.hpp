@@ -335,8 +335,7 @@ inline double PendulumEnergyError(const std::string& method, sunrealtype h, bool
   EXPECT_EQ(CEodeSetMethodByName(mem.get(), method.c_str()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem.get(), h), CE_SUCCESS);
   EXPECT_EQ(CEodeSetZeroStart(mem.get(), zero_start ? SUNTRUE : SUNFALSE), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetCompensatedSummation(mem.get(), compensated ? SUNTRUE : SUNFALSE),
-            CE_SUCCESS);
+  EXPECT_EQ(CEodeSetCompensatedSummation(mem.get(), compensated ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
   const sunrealtype e0 = pendulum::Energy(0, 0);
   const long int nsteps = std::lround(pendulum::kTend / h);
@@ -348,8 +347,8 @@ inline double PendulumEnergyError(const std::string& method, sunrealtype h, bool
       ADD_FAILURE() << method << " h = " << h << ": CEodeEvolve returned " << flag;
       return NAN;
     }
-    emax = std::max(
-        emax, std::fabs(pendulum::Energy(NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)) - e0));
+    emax = std::max(emax,
+                    std::fabs(pendulum::Energy(NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)) - e0));
   }
   return emax;
 }

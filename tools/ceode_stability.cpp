@@ -44,10 +44,11 @@ void Usage(FILE* out) {
   for (int i = 0; i < CEodeGetNumMethods(); ++i) {
     std::fprintf(out, "%s%s", i ? ", " : "", CEodeGetMethodName(i));
   }
-  std::fprintf(out,
-               ") or a comparison method (RK3, RK4, AB4, AB5, HHT = HHT:-0.05, HHT:<alpha>).\n"
-               "Prints Omega_max = largest omega*h with spectral radius <= 1 on (0, Omega_max] for\n"
-               "x'' + 2 xi omega x' + omega^2 x = 0, and writes Omega,rho rows to FILE.\n");
+  std::fprintf(
+      out,
+      ") or a comparison method (RK3, RK4, AB4, AB5, HHT = HHT:-0.05, HHT:<alpha>).\n"
+      "Prints Omega_max = largest omega*h with spectral radius <= 1 on (0, Omega_max] for\n"
+      "x'' + 2 xi omega x' + omega^2 x = 0, and writes Omega,rho rows to FILE.\n");
 }
 
 bool ParseParams(const char* text, std::vector<sunrealtype>* out) {
@@ -257,7 +258,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Omega_max %.10g%s\n", static_cast<double>(lim),
-              lim >= 20 ? "  (stable on the whole scanned range Omega <= 20)"
+              lim >= 20  ? "  (stable on the whole scanned range Omega <= 20)"
               : lim == 0 ? "  (rho > 1 arbitrarily close to Omega = 0: no stable interval)"
                          : "");
   for (sunrealtype Om : {0.1, 0.01, 0.001}) {
@@ -283,7 +284,8 @@ int main(int argc, char** argv) {
   }
   if (!opt.csv.empty()) {
     sunrealtype wmax = opt.omega_max;
-    if (wmax <= 0) wmax = m.classic ? 4 : std::max<sunrealtype>(1, std::min<sunrealtype>(20, 1.5 * lim));
+    if (wmax <= 0)
+      wmax = m.classic ? 4 : std::max<sunrealtype>(1, std::min<sunrealtype>(20, 1.5 * lim));
     FILE* f = std::fopen(opt.csv.c_str(), "w");
     if (f == nullptr) {
       std::fprintf(stderr, "ceode-stability: cannot write %s\n", opt.csv.c_str());
