@@ -146,7 +146,7 @@ Spectrum Analyse(const Eigen::MatrixXd& A) {
     s.rho = s.excess = std::numeric_limits<sunrealtype>::infinity();
     return s;
   }
-  const Eigen::VectorXcd lam = es.eigenvalues();
+  const Eigen::VectorXcd& lam = es.eigenvalues();
   const Eigen::MatrixXcd V = es.eigenvectors();
   Eigen::FullPivLU<Eigen::MatrixXcd> lu(V);
   const sunrealtype anorm = A.norm();
@@ -356,7 +356,7 @@ int CEodeStabilityLimit(int degree, const sunrealtype* params, sunrealtype xi,
       return failed ? CE_ILL_INPUT : CE_SUCCESS;
     }
   }
-  const int kmax = static_cast<int>(kScanMax / kScanStep + 0.5);
+  const int kmax = static_cast<int>(std::lround(kScanMax / kScanStep));
   int k = 1;
   while (k <= kmax && stable(k * kScanStep)) ++k;
   if (failed) return CE_ILL_INPUT;

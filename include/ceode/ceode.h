@@ -35,25 +35,25 @@ extern "C" {
 #define CE_TSTOP_RETURN 1
 #define CE_WARNING 99
 
-#define CE_MEM_NULL -1
-#define CE_ILL_INPUT -2
-#define CE_NO_MALLOC -3
-#define CE_MEM_FAIL -4
-#define CE_RHSFUNC_FAIL -5
-#define CE_FIRST_RHSFUNC_ERR -6
-#define CE_CONV_FAILURE -7
-#define CE_LSETUP_FAIL -8
-#define CE_LSOLVE_FAIL -9
-#define CE_LINIT_FAIL -10
-#define CE_NLS_INIT_FAIL -11
-#define CE_NLS_FAIL -12
-#define CE_CONSTR_FAIL -13
-#define CE_MASSFUNC_FAIL -14
-#define CE_JACFUNC_FAIL -15
-#define CE_UNSTABLE -16
-#define CE_TOO_MUCH_WORK -17
-#define CE_BAD_T -18
-#define CE_VECTOROP_ERR -19
+#define CE_MEM_NULL (-1)
+#define CE_ILL_INPUT (-2)
+#define CE_NO_MALLOC (-3)
+#define CE_MEM_FAIL (-4)
+#define CE_RHSFUNC_FAIL (-5)
+#define CE_FIRST_RHSFUNC_ERR (-6)
+#define CE_CONV_FAILURE (-7)
+#define CE_LSETUP_FAIL (-8)
+#define CE_LSOLVE_FAIL (-9)
+#define CE_LINIT_FAIL (-10)
+#define CE_NLS_INIT_FAIL (-11)
+#define CE_NLS_FAIL (-12)
+#define CE_CONSTR_FAIL (-13)
+#define CE_MASSFUNC_FAIL (-14)
+#define CE_JACFUNC_FAIL (-15)
+#define CE_UNSTABLE (-16)
+#define CE_TOO_MUCH_WORK (-17)
+#define CE_BAD_T (-18)
+#define CE_VECTOROP_ERR (-19)
 
 /* Stability guard modes (CEodeSetStabilityGuard) */
 #define CE_GUARD_OFF 0
