@@ -63,7 +63,6 @@ struct ConWork {
   N_Vector xtrial = nullptr, fval = nullptr, r1 = nullptr, delta = nullptr, vtmp = nullptr;
   N_Vector inc = nullptr, xpt = nullptr, vpt = nullptr, fpt = nullptr, a0 = nullptr;
   N_Vector vbase = nullptr;      // velocity offset V0 of v(a) = V0 + kappa a
-  N_Vector Dn[kMaxDegree] = {};  // scratch for the replica of TakeStep's position update
   N_Vector lam = nullptr, lam_prev = nullptr, s = nullptr, gam = nullptr;
   std::vector<Entry> entries;
   std::vector<sunindextype> pat_ptr, pat_idx;  // pattern of the last sparse factorization
@@ -91,7 +90,6 @@ void FreeWork(CEodeMemRec* ce) {
                       &w->vtmp,  &w->inc, &w->xpt,      &w->vpt,  &w->fpt, &w->a0,
                       &w->vbase, &w->lam, &w->lam_prev, &w->s,    &w->gam};
   for (N_Vector* v : vecs) Destroy(v);
-  for (N_Vector& v : w->Dn) Destroy(&v);
   if (w->own_ls) {
     if (w->LS != nullptr) SUNLinSolFree(w->LS);
     Destroy(&w->A);
@@ -142,71 +140,13 @@ void AddGTransposeTimes(SUNMatrix G, sunrealtype alpha, const sunrealtype* lam, 
 
 bool AllFinite(N_Vector v) { return IsFinite(v); }
 
-// out = sum c_i X_i over the nonzero coefficients.
-void Combine(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
-  int m = 0;
-  for (int i = 0; i < nvec; ++i) {
-    if (c[i] != 0) {
-      c[m] = c[i];
-      X[m] = X[i];
-      ++m;
-    }
-  }
-  if (m == 0) {
-    N_VConst(0, z);
-  } else if (m == 1) {
-    N_VScale(c[0], X[0], z);
-  } else if (m == 2) {
-    N_VLinearSum(c[0], X[0], c[1], X[1], z);
-  } else {
-    N_VLinearCombination(m, c, X, z);
-  }
-}
-
-// x(t+h) from the acceleration a by the formulas of TakeStep (method.md 2). Used once per step,
-// for the predictor; the iterates then move x(t+h) by the Newton increments themselves, so the
-// x(t+h) TakeStep forms from the final a agrees with the converged one to a few ulps.
-void StepPosition(CEodeMemRec* ce, ConWork* w, N_Vector xt, N_Vector a, N_Vector xout) {
-  const int d = ce->degree;
-  const StepCoeffs& co = ce->co;
-  N_Vector* D = ce->D;
-  N_Vector* Dn = w->Dn;
-  sunrealtype c[kMaxDegree + 1];
-  N_Vector X[kMaxDegree + 1];
-  N_Vector z = (d > 3) ? Dn[d - 1] : a;
-  if (d > 3) {
-    int m = 0;
-    c[m] = 1 / co.c[2];
-    X[m++] = a;
-    for (int j = 2; j < d; ++j) {
-      c[m] = -co.T[2][j] / co.c[2];
-      X[m++] = D[j];
-    }
-    Combine(m, c, X, z);
-  }
-  for (int k = 1; k <= d - 2; ++k) {
-    if (k == 2) continue;
-    int m = 0;
-    for (int j = k; j < d; ++j) {
-      c[m] = co.T[k][j];
-      X[m++] = D[j];
-    }
-    c[m] = co.c[k];
-    X[m++] = z;
-    Combine(m, c, X, Dn[k]);
-  }
-  int m = 0;
-  for (int i = 1; i <= d - 2; ++i) {
-    c[m] = co.w[i];
-    X[m++] = (i == 2) ? a : Dn[i];
-  }
-  c[m] = co.wz_old;
-  X[m++] = D[d - 1];
-  c[m] = co.wz_new;
-  X[m++] = z;
-  Combine(m, c, X, w->inc);
-  if (ce->compensated && ce->comp[0] != nullptr) N_VLinearSum(1, w->inc, -1, ce->comp[0], w->inc);
-  N_VLinearSum(1, xt, 1, w->inc, xout);
+// x(t+h) from the acceleration a = Dnew[2] by TakeStep's own update (FormUpdate), so
+// the predictor is exactly the position TakeStep will form. The iterates then move
+// x(t+h) by the Newton increments, and the final x agrees with TakeStep's to a few ulps.
+void StepPosition(CEodeMemRec* ce, N_Vector a, N_Vector xout) {
+  if (a != ce->Dnew[2]) N_VScale(1, a, ce->Dnew[2]);
+  FormUpdate(ce);
+  N_VScale(1, ce->xnew, xout);
 }
 
 // The first position of the method: the Taylor polynomial of the derivatives at t0 with the
@@ -222,7 +162,7 @@ void StartPosition(CEodeMemRec* ce, ConWork* w, N_Vector x0, N_Vector a, N_Vecto
     cw[i - 1] = hp;
     vw[i - 1] = (i == 2) ? a : ce->D[i];
   }
-  Combine(d - 1, cw, vw, w->inc);
+  N_VLinearCombination(d - 1, cw, vw, w->inc);
   N_VLinearSum(1, x0, 1, w->inc, xout);
 }
 
@@ -521,7 +461,7 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
   if (sp.start) {
     StartPosition(ce, w, sp.xt, a, w->xtrial);
   } else {
-    StepPosition(ce, w, sp.xt, a, w->xtrial);
+    StepPosition(ce, a, w->xtrial);
   }
   for (int it = 0; it < kMaxIters; ++it) {
     flag = EvalPhi(ce, sp.tc, w->xtrial, ce->phi, func);
@@ -690,13 +630,11 @@ int ConstrInitialize(CEodeMemRec* ce, const char* func) {
   N_Vector* svecs[] = {&w->xtrial, &w->fval, &w->r1,  &w->delta, &w->vtmp, &w->inc,
                        &w->xpt,    &w->vpt,  &w->fpt, &w->a0,    &w->vbase};
   for (N_Vector* v : svecs) *v = N_VClone(ce->xcur);
-  for (int k = 1; k < ce->degree; ++k) w->Dn[k] = N_VClone(ce->xcur);
   N_Vector* lvecs[] = {&w->lam, &w->lam_prev, &w->s, &w->gam};
   for (N_Vector* v : lvecs) *v = N_VClone(ce->lambda);
   bool ok = w->Gt && w->Gh && (w->J || !(ce->vel_dependent && ce->jac)) && w->sol && w->b;
   for (N_Vector* v : svecs) ok = ok && *v != nullptr;
   for (N_Vector* v : lvecs) ok = ok && *v != nullptr;
-  for (int k = 1; k < ce->degree; ++k) ok = ok && w->Dn[k] != nullptr;
   if (!ok) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   const int rv = SUNLinSolInitialize(w->LS);
   if (rv != 0) {

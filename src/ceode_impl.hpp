@@ -235,6 +235,9 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false
 
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);
+// The step's update from the acceleration in Dnew[2]: z and the new derivatives
+// into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
+sunrealtype FormUpdate(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
 void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,

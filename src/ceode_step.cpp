@@ -464,6 +464,17 @@ int StartMethod(CEodeMemRec* ce) {
   return CE_SUCCESS;
 }
 
+sunrealtype FormUpdate(CEodeMemRec* ce) {
+  const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
+  sunrealtype xl1 = 0;
+  if (!FusedUpdate(ce, ce->fused_plans[ip], &xl1)) {
+    const UpdatePlan& plan = ce->plans[ip];
+    for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
+    xl1 = N_VL1Norm(ce->xnew);
+  }
+  return xl1;
+}
+
 int TakeStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
@@ -484,13 +495,7 @@ int TakeStep(CEodeMemRec* ce) {
   }
   if (flag != CE_SUCCESS) return flag;
 
-  const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
-  sunrealtype xl1 = 0;
-  if (!FusedUpdate(ce, ce->fused_plans[ip], &xl1)) {
-    const UpdatePlan& plan = ce->plans[ip];
-    for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
-    xl1 = N_VL1Norm(ce->xnew);
-  }
+  const sunrealtype xl1 = FormUpdate(ce);
 
   // Explosive growth: stop long before overflow, while the state is still readable.
   constexpr sunrealtype kGrowthLimit = 1e15;
