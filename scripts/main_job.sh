@@ -138,7 +138,7 @@ echo
 for c in "${scenes[@]}"; do
   n=$(basename "$c" .csv)
   [ -e "$OUT/$n.txt" ] || continue  # chain_dae_wp's table is in chain_dae.txt
-  printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem|checks off|work-precision:' "$OUT/$n.txt" | tr '\n' ' ')"
+  printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem|checks off|[0-9]+ checks,|work-precision:' "$OUT/$n.txt" | tr '\n' ' ')"
 done
 step "total $(elapsed) s; results in docs/results/ (exit $status)"
 exit $status
