@@ -19,7 +19,11 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
     std::fprintf(stderr, "\n[CEODE ERROR]  %s (%s)\n  %s\n\n", func, FlagName(flag), msg);
     return flag;
   }
-  ce->last_msg = msg;
+  try {
+    ce->last_msg = msg;
+  } catch (...) {  // no exception crosses the C API, even out of memory
+    ce->last_msg.clear();
+  }
   if (ce->ehfun != nullptr) {
     ce->ehfun(flag, "CEODE", func, msg, ce->eh_data);
   } else if (ce->errfp != nullptr) {

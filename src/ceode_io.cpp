@@ -53,7 +53,11 @@ int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
   }
   ce->degree = degree;
   for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
-  ce->method_name = "custom G" + std::to_string(degree);
+  try {
+    ce->method_name = "custom G" + std::to_string(degree);
+  } catch (...) {
+    return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+  }
   ce->omega_limit = 0;
   Restart(ce);
   return CE_SUCCESS;
@@ -65,15 +69,16 @@ int CEodeSetMethodByName(void* mem, const char* name) {
   if (flag != CE_SUCCESS) return flag;
   const ceode::MethodSet* m = ceode::FindMethodSet(name);
   if (m == nullptr) {
-    std::string known;
+    char known[512] = "";
     for (int i = 0; i < ceode::NumMethodSets(); ++i) {
-      known += (i ? ", " : "") + std::string(ceode::MethodSetAt(i).name);
+      std::strncat(known, i ? ", " : "", sizeof(known) - std::strlen(known) - 1);
+      std::strncat(known, ceode::MethodSetAt(i).name, sizeof(known) - std::strlen(known) - 1);
     }
     return ProcessError(ce, CE_ILL_INPUT, __func__, "Unknown method name \"%s\"; known names: %s.",
-                        name ? name : "(null)", known.c_str());
+                        name ? name : "(null)", known);
   }
   flag = CEodeSetMethod(mem, m->degree, m->params.data());
-  if (flag == CE_SUCCESS) ce->method_name = m->name;
+  if (flag == CE_SUCCESS) ce->method_name = m->name;  // short names: no allocation (SSO)
   return flag;
 }
 

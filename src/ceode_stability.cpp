@@ -176,6 +176,16 @@ constexpr sunrealtype kScanMax = 20;
 
 }  // namespace
 
+// Eigen and the solver objects allocate: no exception may cross the C API.
+template <typename Fn>
+int NoThrow(Fn fn) {
+  try {
+    return fn();
+  } catch (...) {
+    return CE_MEM_FAIL;
+  }
+}
+
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max) {
   return CEodeStabilityLimit(degree, params, 0, Omega_max);
 }
@@ -302,8 +312,8 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
 
 extern "C" {
 
-int CEodeAmplificationMatrix(int degree, const sunrealtype* params, sunrealtype Omega,
-                             sunrealtype xi, sunrealtype* A) {
+static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, sunrealtype Omega,
+                                        sunrealtype xi, sunrealtype* A) {
   if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || A == nullptr || !(Omega >= 0) ||
       !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
@@ -317,8 +327,8 @@ int CEodeAmplificationMatrix(int degree, const sunrealtype* params, sunrealtype 
   return CE_SUCCESS;
 }
 
-int CEodeSpectralRadius(int degree, const sunrealtype* params, sunrealtype Omega, sunrealtype xi,
-                        sunrealtype* rho) {
+static int CEodeSpectralRadiusImpl(int degree, const sunrealtype* params, sunrealtype Omega,
+                                   sunrealtype xi, sunrealtype* rho) {
   if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || rho == nullptr || !(Omega >= 0) ||
       !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
@@ -330,8 +340,8 @@ int CEodeSpectralRadius(int degree, const sunrealtype* params, sunrealtype Omega
   return CE_SUCCESS;
 }
 
-int CEodeStabilityLimit(int degree, const sunrealtype* params, sunrealtype xi,
-                        sunrealtype* Omega_max) {
+static int CEodeStabilityLimitImpl(int degree, const sunrealtype* params, sunrealtype xi,
+                                   sunrealtype* Omega_max) {
   if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || Omega_max == nullptr) {
     return CE_ILL_INPUT;
   }
@@ -380,8 +390,8 @@ int CEodeStabilityLimit(int degree, const sunrealtype* params, sunrealtype xi,
   return CE_SUCCESS;
 }
 
-int CEodeSpectralRadii(int degree, const sunrealtype* params, sunrealtype xi, int n,
-                       const sunrealtype* Omega, sunrealtype* rho) {
+static int CEodeSpectralRadiiImpl(int degree, const sunrealtype* params, sunrealtype xi, int n,
+                                  const sunrealtype* Omega, sunrealtype* rho) {
   if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || n < 0 || (n > 0 && Omega == nullptr) ||
       (n > 0 && rho == nullptr)) {
     return CE_ILL_INPUT;
@@ -398,6 +408,26 @@ int CEodeSpectralRadii(int degree, const sunrealtype* params, sunrealtype xi, in
     rho[i] = ceode::Analyse(M).rho;
   }
   return CE_SUCCESS;
+}
+
+int CEodeAmplificationMatrix(int degree, const sunrealtype* params, sunrealtype Omega,
+                             sunrealtype xi, sunrealtype* A) {
+  return ceode::NoThrow([&] { return CEodeAmplificationMatrixImpl(degree, params, Omega, xi, A); });
+}
+
+int CEodeSpectralRadius(int degree, const sunrealtype* params, sunrealtype Omega, sunrealtype xi,
+                        sunrealtype* rho) {
+  return ceode::NoThrow([&] { return CEodeSpectralRadiusImpl(degree, params, Omega, xi, rho); });
+}
+
+int CEodeStabilityLimit(int degree, const sunrealtype* params, sunrealtype xi,
+                        sunrealtype* Omega_max) {
+  return ceode::NoThrow([&] { return CEodeStabilityLimitImpl(degree, params, xi, Omega_max); });
+}
+
+int CEodeSpectralRadii(int degree, const sunrealtype* params, sunrealtype xi, int n,
+                       const sunrealtype* Omega, sunrealtype* rho) {
+  return ceode::NoThrow([&] { return CEodeSpectralRadiiImpl(degree, params, xi, n, Omega, rho); });
 }
 
 }  // extern "C"
