@@ -62,7 +62,7 @@ struct ConWork {
   N_Vector sol = nullptr;
   N_Vector xtrial = nullptr, fval = nullptr, r1 = nullptr, delta = nullptr, vtmp = nullptr;
   N_Vector inc = nullptr, xpt = nullptr, vpt = nullptr, fpt = nullptr, a0 = nullptr;
-  N_Vector vbase = nullptr;      // velocity offset V0 of v(a) = V0 + kappa a
+  N_Vector vbase = nullptr;  // velocity offset V0 of v(a) = V0 + kappa a
   N_Vector lam = nullptr, lam_prev = nullptr, s = nullptr, gam = nullptr;
   std::vector<Entry> entries;
   std::vector<sunindextype> pat_ptr, pat_idx;  // pattern of the last sparse factorization
@@ -672,39 +672,11 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
     flag = Index1Accel(ce, w, t0, x0, v0, ce->D[2], w->lam, func);
     if (flag != CE_SUCCESS) return flag;
     N_VScale(1, w->lam, w->lam_prev);  // lambda0, kept while the differences reuse w->lam
-    for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {
-      N_Vector out = ce->D[m + 1];
-      const int q = m - 1;
-      const int r = (q + 1) / 2;
-      const int npts = 2 * r + 1;
-      // Central-difference weights of the q-th derivative on the nodes -r h .. r h.
-      sunrealtype nodes[2 * kMaxDegree + 1];
-      sunrealtype wts[2 * kMaxDegree + 1];
-      for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
-      FornbergWeights(q, npts, nodes, wts);
-      N_VScale(wts[r], ce->D[2], out);
-      for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
-        if (j == r || wts[j] == 0) continue;
-        const sunrealtype s = (j - r) * h;
-        sunrealtype cx[kMaxDegree + 1];
-        N_Vector vx[kMaxDegree + 1];
-        sunrealtype sp = 1;
-        for (int i = 0; i <= m; ++i) {
-          cx[i] = sp;
-          vx[i] = (i == 0) ? x0 : ce->D[i];
-          sp *= s / (i + 1);
-        }
-        N_VLinearCombination(m + 1, cx, vx, w->xtrial);
-        sp = 1;
-        for (int i = 0; i < m; ++i) {
-          cx[i] = sp;
-          vx[i] = ce->D[i + 1];
-          sp *= s / (i + 1);
-        }
-        N_VLinearCombination(m, cx, vx, w->r1);
-        flag = Index1Accel(ce, w, t0 + s, w->xtrial, w->r1, w->a0, w->lam, func);
-        if (flag == CE_SUCCESS) N_VLinearSum(1, out, wts[j], w->a0, out);
-      }
+    if (flag == CE_SUCCESS) {
+      flag = StartDerivatives(ce, t0, w->xtrial, w->r1, w->a0,
+                              [&](sunrealtype ts, N_Vector xs, N_Vector vs, N_Vector as) {
+                                return Index1Accel(ce, w, ts, xs, vs, as, w->lam, func);
+                              });
     }
     if (flag != CE_SUCCESS) return flag;
     N_VScale(1, w->lam_prev, w->lam);

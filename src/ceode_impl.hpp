@@ -5,6 +5,7 @@
 #include <ceode/ceode.h>
 
 #include <array>
+#include <functional>
 #include <string>
 
 namespace ceode {
@@ -239,6 +240,11 @@ int TakeStep(CEodeMemRec* ce);
 // into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
 sunrealtype FormUpdate(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+// Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
+// the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
+// (the symmetric stencil cancels the curve's own error). xs, vs, as: scratch vectors.
+int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+                     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
 void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func);  // a = M^{-1} f(t, x, v)

@@ -3,6 +3,7 @@
 // serves every degree: the parameter sets are data in kMethodSets.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "ceode_impl.hpp"
 
@@ -370,6 +371,41 @@ void BuildPlans(CEodeMemRec* ce) {
   }
 }
 
+int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+                     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  int flag = CE_SUCCESS;
+  for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {
+    N_Vector out = ce->D[m + 1];
+    const int q = m - 1;  // D_{m+1} is the q-th derivative of the acceleration
+    const int r = (q + 1) / 2;
+    const int npts = 2 * r + 1;
+    sunrealtype nodes[2 * kMaxDegree + 1];
+    sunrealtype wts[2 * kMaxDegree + 1];
+    for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
+    FornbergWeights(q, npts, nodes, wts);
+    N_VScale(wts[r], ce->D[2], out);
+    for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
+      if (j == r || wts[j] == 0) continue;
+      const sunrealtype s = nodes[j];
+      sunrealtype cx[kMaxDegree + 1];
+      N_Vector vx[kMaxDegree + 1];
+      sunrealtype sp = 1;  // s^i / i!
+      for (int i = 0; i <= m; ++i) {
+        cx[i] = sp;
+        vx[i] = (i == 0) ? ce->xcur : ce->D[i];
+        sp *= s / (i + 1);
+      }
+      N_VLinearCombination(m + 1, cx, vx, xs);
+      N_VLinearCombination(m, cx, vx + 1, vs);  // the curve's derivative: same weights, shifted
+      flag = accel(t0 + s, xs, vs, as);
+      if (flag == CE_SUCCESS) N_VLinearSum(1, out, wts[j], as, out);
+    }
+  }
+  return flag;
+}
+
 int StartMethod(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
@@ -411,44 +447,13 @@ int StartMethod(CEodeMemRec* ce) {
                         "non-finite values at t0 = %.17g.",
                         static_cast<double>(t));
   }
-  // Higher derivatives D_{m+1}, m = 2..d-2: central differences of the
-  // acceleration along the Taylor curve of the derivatives already known.
-  // The stencil is symmetric, so the curve's own O(s^m) error cancels exactly.
-  for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {
-    N_Vector out = ce->D[m + 1];
-    if (ce->zero_start) {
-      N_VConst(0, out);
-      continue;
-    }
-    const int q = m - 1;
-    const int r = (q + 1) / 2;
-    const int npts = 2 * r + 1;
-    sunrealtype nodes[2 * kMaxDegree + 1];
-    sunrealtype wts[2 * kMaxDegree + 1];
-    for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
-    FornbergWeights(q, npts, nodes, wts);
-    N_VScale(wts[r], ce->D[2], out);
-    for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
-      if (j == r || wts[j] == 0) continue;
-      const sunrealtype s = nodes[j];
-      sunrealtype cx[kMaxDegree + 1];
-      N_Vector vx[kMaxDegree + 1];
-      vx[0] = ce->xcur;
-      cx[0] = 1;
-      for (int i = 1; i <= m; ++i) {
-        cx[i] = std::pow(s, i) / Factorial(i);
-        vx[i] = ce->D[i];
-      }
-      N_VLinearCombination(m + 1, cx, vx, ce->xnew);
-      for (int i = 0; i < m; ++i) {
-        cx[i] = std::pow(s, i) / Factorial(i);
-        vx[i] = ce->D[i + 1];
-      }
-      N_VLinearCombination(m, cx, vx, ce->vtmp);
-      flag = EvalAccel(ce, t + s, ce->xnew, ce->vtmp, ce->atmp, func);
-      if (flag == CE_SUCCESS) N_VLinearSum(1, out, wts[j], ce->atmp, out);
-    }
+  if (flag == CE_SUCCESS && !ce->zero_start) {
+    flag = StartDerivatives(ce, t, ce->xnew, ce->vtmp, ce->atmp,
+                            [&](sunrealtype ts, N_Vector xs, N_Vector vs, N_Vector as) {
+                              return EvalAccel(ce, ts, xs, vs, as, func);
+                            });
   }
+  for (int k = 3; flag == CE_SUCCESS && ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
   ce->nfe_start += ce->nfe - nfe0;
   if (flag != CE_SUCCESS) return flag;
   // First position step: the Taylor polynomial of every derivative known at t0.
