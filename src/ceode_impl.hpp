@@ -19,7 +19,6 @@ struct MethodSet {
   const char* name;
   int degree;
   std::array<sunrealtype, kMaxDegree - 1> params;
-  const char* summary;
 };
 const MethodSet* FindMethodSet(const char* name);
 int NumMethodSets();
