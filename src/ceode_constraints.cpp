@@ -203,14 +203,8 @@ int EvalG(CEodeMemRec* ce, sunrealtype t, N_Vector x, SUNMatrix G, const char* f
 }
 
 int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
-  const int rv = ce->f(t, x, v, f, ce->user_data);
-  ++ce->nfe;
-  if (rv != 0) {
-    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                        "The right-hand side function failed (returned %d) at t = %.17g. A fixed "
-                        "step cannot retry with a smaller h: fix f or reduce h.",
-                        rv, static_cast<double>(t));
-  }
+  const int flag = EvalRhs(ce, t, x, v, f, func);
+  if (flag != CE_SUCCESS) return flag;
   if (!AllFinite(f)) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                         "The right-hand side returned NaN or Inf at t = %.17g.",

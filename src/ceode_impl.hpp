@@ -245,6 +245,8 @@ int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
 int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
                      const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
 void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
+int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
+            const char* func);  // f(t, x, v), counted, failures reported
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func);  // a = M^{-1} f(t, x, v)
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);

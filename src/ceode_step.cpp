@@ -256,11 +256,8 @@ void FreeVectors(CEodeMemRec* ce) {
   ce->initialized = false;
 }
 
-int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
-              const char* func) {
-  int flag = MassUpdate(ce, t, x, func);
-  if (flag != CE_SUCCESS) return flag;
-  const int rv = ce->f(t, x, v, a, ce->user_data);
+int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
+  const int rv = ce->f(t, x, v, f, ce->user_data);
   ++ce->nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -268,7 +265,14 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
                         "step cannot retry with a smaller h: fix f or reduce h.",
                         rv, static_cast<double>(t));
   }
-  return MassSolve(ce, a, func);
+  return CE_SUCCESS;
+}
+
+int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+              const char* func) {
+  int flag = MassUpdate(ce, t, x, func);
+  if (flag == CE_SUCCESS) flag = EvalRhs(ce, t, x, v, a, func);
+  return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
 }
 
 namespace {
