@@ -108,8 +108,9 @@ void ForEachEntry(SUNMatrix M, Fn fn) {
   if (SUNMatGetID(M) == SUNMATRIX_DENSE) {
     const sunindextype m = SUNDenseMatrix_Rows(M);
     const sunindextype n = SUNDenseMatrix_Columns(M);
+    const sunrealtype* data = SUNDenseMatrix_Data(M);  // column-major, leading dimension m
     for (sunindextype j = 0; j < n; ++j) {
-      const sunrealtype* col = SUNDenseMatrix_Column(M, j);
+      const sunrealtype* col = data + j * m;
       for (sunindextype i = 0; i < m; ++i) {
         if (col[i] != 0 || i == j) fn(i, j, col[i]);
       }
@@ -289,7 +290,8 @@ int SetupSaddle(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, bool with_jac, S
   SUNMatrix A = w->A;
   if (!w->sparse) {
     SUNMatZero(A);
-    for (const Entry& x : e) SUNDenseMatrix_Column(A, x.c)[x.r] += x.v;
+    sunrealtype* data = SUNDenseMatrix_Data(A);  // column-major, leading dimension w->N
+    for (const Entry& x : e) data[x.c * w->N + x.r] += x.v;
   } else {
     const bool csr = w->csr;
     std::sort(e.begin(), e.end(), [csr](const Entry& p, const Entry& q) {
