@@ -265,6 +265,15 @@ struct result {
   long steps, nfe, nni;
 };
 
+static void initial_state(const struct chain* c, double* X, double* V) {
+  long i;
+  for (i = 0; i < c->N; ++i) {
+    X[2 * i] = (double)(i + 1) * c->l * sin(ANGLE0);
+    X[2 * i + 1] = -(double)(i + 1) * c->l * cos(ANGLE0);
+    V[2 * i] = V[2 * i + 1] = 0.0;
+  }
+}
+
 static int run(SUNContext ctx, long N, struct result* r) {
   struct chain c;
   N_Vector x = NULL, v = NULL, phi = NULL, b = NULL;
@@ -296,11 +305,7 @@ static int run(SUNContext ctx, long N, struct result* r) {
   }
   X = N_VGetArrayPointer(x);
   V = N_VGetArrayPointer(v);
-  for (i = 0; i < N; ++i) {
-    X[2 * i] = (double)(i + 1) * c.l * sin(ANGLE0);
-    X[2 * i + 1] = -(double)(i + 1) * c.l * cos(ANGLE0);
-    V[2 * i] = V[2 * i + 1] = 0.0;
-  }
+  initial_state(&c, X, V);
   e0 = energy(N, X, V);
   mem = CEodeCreate(ctx);
   if (check_ptr(mem, "CEodeCreate")) {
@@ -398,15 +403,6 @@ struct wpres {
 };
 
 /* The chain at rest, straight at ANGLE0. */
-static void initial_state(const struct chain* c, double* X, double* V) {
-  long i;
-  for (i = 0; i < c->N; ++i) {
-    X[2 * i] = (double)(i + 1) * c->l * sin(ANGLE0);
-    X[2 * i + 1] = -(double)(i + 1) * c->l * cos(ANGLE0);
-    V[2 * i] = V[2 * i + 1] = 0.0;
-  }
-}
-
 static void wp_track(const struct chain* c, const double* X, const double* V, double e0,
                      struct wpres* r) {
   double de = fabs(energy(c->N, X, V) - e0), dr, vr;
