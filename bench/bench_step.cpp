@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+
 namespace {
 
 constexpr double kStep = 1e-3;
@@ -52,7 +54,7 @@ void BM_CeodeStep(benchmark::State& state) {
   const char* method = state.range(1) == 0 ? "G3_CD" : "G5";
   state.SetLabel(method);
   SUNContext ctx = nullptr;
-  if (SUNContext_Create(nullptr, &ctx) != 0) {
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) {
     state.SkipWithError("SUNContext_Create failed");
     return;
   }

@@ -38,6 +38,8 @@
 #include <string>
 #include <vector>
 
+#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+
 namespace wp {
 
 // ---------------------------------------------------------------- arguments

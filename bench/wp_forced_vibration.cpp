@@ -63,7 +63,7 @@ double Err1(double t, const double* y, void* user) {
 int main(int argc, char** argv) {
   const wp::Args args = wp::ParseArgs(argc, argv);
   SUNContext ctx = nullptr;
-  if (wp::Failed(SUNContext_Create(nullptr, &ctx), "SUNContext_Create")) return 1;
+  if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
   Forced fv;
   const double tend = 1000.0;
   std::printf("Forced vibration x'' + x = sin(0.01 t), 1000 s, error = max |x - x_exact|\n");

@@ -141,7 +141,7 @@ bool CheckRk3(SUNContext ctx, ARKodeButcherTable rk3) {
 int main(int argc, char** argv) {
   const wp::Args args = wp::ParseArgs(argc, argv);
   SUNContext ctx = nullptr;
-  if (wp::Failed(SUNContext_Create(nullptr, &ctx), "SUNContext_Create")) return 1;
+  if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
   std::printf("IFToMM simple pendulum, 10 s, error = max |E - E0| (J)\n");
   wp::Table table("pendulum_ode", args.csv);
 

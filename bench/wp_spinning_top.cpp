@@ -144,7 +144,7 @@ bool CheckVelJac(SUNContext ctx, Top* top) {
 int main(int argc, char** argv) {
   const wp::Args args = wp::ParseArgs(argc, argv);
   SUNContext ctx = nullptr;
-  if (wp::Failed(SUNContext_Create(nullptr, &ctx), "SUNContext_Create")) return 1;
+  if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
   Top top;
   const double pi = std::acos(-1.0);
   const std::vector<double> q0 = {0.0, pi / 6, 0.0}, w0 = {0.0, 0.0, 4 * pi};

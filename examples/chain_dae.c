@@ -112,6 +112,8 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <time.h>
 
+#include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
+
 #define GRAV 9.81
 #define LTOT 1.0
 #define HSTEP 1e-4
@@ -1126,7 +1128,7 @@ int main(int argc, char** argv) {
     }
   }
   nsizes = scaling ? (full ? 6 : 5) : 0;
-  if (SUNContext_Create(NULL, &ctx)) return 1;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx)) return 1;
   if (scaling) {
     printf("Planar chain of N unit point masses, links L/N, index-3 DAE, CEODE %s + KLU\n", METHOD);
     printf("%d steps of h = %g s from rest at 60 deg; error = max |E - E0|, drift = max |Phi_i|\n\n",

@@ -90,6 +90,8 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <time.h>
 
+#include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
+
 #define GRAV 9.81
 #define LEN 1.0
 #define MASS 1.0
@@ -728,7 +730,7 @@ int main(int argc, char** argv) {
     }
   }
   hmin = full ? 1e-5 : 1e-4;
-  if (SUNContext_Create(NULL, &ctx)) return 1;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx)) return 1;
   printf(
       "DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from theta = 90 deg at rest\n");
   printf("error = max |E - E0|, drift = max |x^2 + y^2 - L^2|, vres = max |G q'|\n\n");

@@ -26,6 +26,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
+
 #define GRAV 9.81
 #define LEN 1.0
 #define MASS 1.0
@@ -123,7 +125,7 @@ int main(int argc, char** argv) {
       only = argv[++i];
     }
   }
-  if (SUNContext_Create(NULL, &ctx)) return 1;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx)) return 1;
   printf("IFToMM simple pendulum, 10 s: max |E - E0| for every CEODE set\n");
   printf("%-8s %8s %13s %13s %7s %10s %10s\n", "method", "h", "error", "paper", "ratio", "steps",
          "seconds");

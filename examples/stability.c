@@ -31,6 +31,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
+
 static double now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -485,7 +487,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (SUNContext_Create(NULL, &ctx)) return 1;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx)) return 1;
   scene_forced(ctx, csv, &c);
   scene_a54(ctx, csv, &c);
   scene_chain(ctx, csv, &c);

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds CEODE and runs every test: once optimised, once
-# under AddressSanitizer + UndefinedBehaviorSanitizer.
+# under AddressSanitizer + UndefinedBehaviorSanitizer (Debian's SUNDIALS 6.4), then
+# optimised against SUNDIALS 7.5.0 (scripts/test_sundials7.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
@@ -12,3 +13,5 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCEODE_SANITIZE=ON -DCEODE_BU
 cmake --build build-asan -j"$jobs"
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
    ctest --output-on-failure -j"$jobs" -LE slow)
+# Second leg: the same suite against SUNDIALS 7.5.0 built from ../shared/third_party.
+bash scripts/test_sundials7.sh

@@ -26,6 +26,8 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
   }
   if (ce->ehfun != nullptr) {
     ce->ehfun(flag, "CEODE", func, msg, ce->eh_data);
+  } else if (ce->to_context) {
+    sun::ReportToContext(ce->sunctx, flag, FlagName(flag), func, msg);
   } else if (ce->errfp != nullptr) {
     std::fprintf(ce->errfp, "\n[CEODE %s]  %s (%s)\n  %s\n\n",
                  flag == CE_WARNING ? "WARNING" : "ERROR", func, FlagName(flag), msg);

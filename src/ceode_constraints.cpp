@@ -540,9 +540,7 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
                       static_cast<double>(tol), kMaxIters);
 }
 
-bool LocalData(N_Vector v) {
-  return N_VGetArrayPointer(v) != nullptr && N_VGetCommunicator(v) == nullptr;
-}
+bool LocalData(N_Vector v) { return N_VGetArrayPointer(v) != nullptr && sun::IsLocal(v); }
 
 }  // namespace
 

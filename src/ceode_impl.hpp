@@ -8,6 +8,8 @@
 #include <functional>
 #include <string>
 
+#include "ceode_sundials.hpp"
+
 namespace ceode {
 
 // Degree d carries D_0 .. D_{d-1}; d = 3 .. kMaxDegree.
@@ -219,6 +221,7 @@ struct CEodeMemRec {
   CEodeErrHandlerFn ehfun = nullptr;
   void* eh_data = nullptr;
   FILE* errfp = nullptr;
+  bool to_context = ceode::sun::kContextErrors;  // SUNDIALS 7: through the SUNContext
   std::string last_msg;
 };
 

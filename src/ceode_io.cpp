@@ -234,6 +234,7 @@ int CEodeSetErrFile(void* mem, FILE* errfp) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->errfp = errfp;
+  ce->to_context = false;  // SUNDIALS 7: this memory's messages leave the context's path
   return CE_SUCCESS;
 }
 

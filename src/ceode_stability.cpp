@@ -41,7 +41,7 @@ int TestJac(sunrealtype /*t*/, N_Vector /*x*/, N_Vector /*v*/, N_Vector /*f*/, S
 class StepMap {
  public:
   StepMap(int degree, const sunrealtype* params, sunrealtype xi) : prob_{0, xi} {
-    SUNContext_Create(nullptr, &ctx_);
+    sun::ContextCreate(&ctx_);
     x_ = N_VNew_Serial(1, ctx_);
     v_ = N_VNew_Serial(1, ctx_);
     N_VConst(0, x_);
@@ -208,7 +208,7 @@ int EstimateMaxFrequency(CEodeMemRec* ce, const char* func, sunrealtype* omega) 
   // A pseudo-random start avoids a start vector orthogonal to the top mode (a
   // uniform chain's top mode sums to zero); vectors without one local array (MPI)
   // start from ones.
-  if (wd != nullptr && N_VGetCommunicator(w) == nullptr) {
+  if (wd != nullptr && sun::IsLocal(w)) {
     std::uint64_t seed = 12345;
     const sunindextype nl = N_VGetLength(w);
     for (sunindextype i = 0; i < nl; ++i) {

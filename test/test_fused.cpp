@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+
 namespace {
 
 // A chain of unit masses with cubic springs, fixed at both ends.
@@ -31,7 +33,7 @@ struct RunResult {
 RunResult RunChain(const std::string& method, bool fused, bool compensated) {
   constexpr sunindextype kN = 64;
   SUNContext ctx = nullptr;
-  SUNContext_Create(nullptr, &ctx);
+  SUNContext_Create(SUN_COMM_NULL, &ctx);
   N_Vector x = N_VNew_Serial(kN, ctx);
   N_Vector v = N_VNew_Serial(kN, ctx);
   for (sunindextype i = 0; i < kN; ++i) {

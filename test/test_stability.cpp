@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+
 namespace {
 
 struct Set {
@@ -193,7 +195,7 @@ void Capture(int flag, const char*, const char*, char* msg, void* data) {
 class GuardRun : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_EQ(SUNContext_Create(nullptr, &ctx_), 0);
+    ASSERT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx_), 0);
     x_ = N_VNew_Serial(1, ctx_);
     v_ = N_VNew_Serial(1, ctx_);
     NV_Ith_S(x_, 0) = 1;
@@ -320,7 +322,7 @@ TEST(StabilityGuard, EstimatesTheTopFrequencyOfASpringChainWithinTwoPercent) {
   for (int i = 0; i <= c.n; ++i) c.k.push_back(std::pow(1e4, static_cast<double>(i) / c.n));
   const double omega_exact = std::sqrt(TopEigenvalue(c));
   SUNContext ctx = nullptr;
-  ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  ASSERT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx), 0);
   N_Vector x = N_VNew_Serial(c.n, ctx);
   N_Vector v = N_VNew_Serial(c.n, ctx);
   for (int i = 0; i < c.n; ++i) NV_Ith_S(x, i) = std::sin(0.3 * i);
@@ -365,7 +367,7 @@ TEST(StabilityApi, RejectsBadArgumentsWithIllInput) {
   EXPECT_EQ(CEodeSpectralRadii(3, s.p, 0, -1, Om, &r), CE_ILL_INPUT);
 
   SUNContext ctx = nullptr;
-  ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  ASSERT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx), 0);
   void* mem = CEodeCreate(ctx);
   CEodeSetErrFile(mem, nullptr);
   EXPECT_EQ(CEodeSetStabilityGuard(mem, 7, 0), CE_ILL_INPUT);

@@ -21,6 +21,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+
 namespace ceode_test {
 
 // ---------------------------------------------------------------------------
@@ -28,13 +30,7 @@ namespace ceode_test {
 
 class Context {
  public:
-  Context() {
-#if SUNDIALS_VERSION_MAJOR >= 7
-    SUNContext_Create(SUN_COMM_NULL, &ctx_);
-#else
-    SUNContext_Create(nullptr, &ctx_);
-#endif
-  }
+  Context() { SUNContext_Create(SUN_COMM_NULL, &ctx_); }
   ~Context() { SUNContext_Free(&ctx_); }
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;

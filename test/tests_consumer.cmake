@@ -14,6 +14,7 @@ add_test(NAME package_installed_consumer
     -DBUILD_TYPE=$<IF:$<CONFIG:>,${CMAKE_BUILD_TYPE},$<CONFIG>>
     -DC_COMPILER=${CMAKE_C_COMPILER}
     "-DEXTRA_FLAGS=${CEODE_CONSUMER_FLAGS}"
+    -DSUNDIALS_DIR_BUILT=${CEODE_SUNDIALS_DIR} -DSUNDIALS_VERSION_BUILT=${CEODE_SUNDIALS_VERSION}
     -P ${CMAKE_CURRENT_SOURCE_DIR}/consumer/run_consumer.cmake)
 # Configures and builds a project: seconds, not milliseconds.
 set_tests_properties(package_installed_consumer PROPERTIES LABELS "packaging;slow" TIMEOUT 600)

@@ -22,6 +22,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
+
 #define NGLOBAL 64
 
 struct lengths {
@@ -76,7 +78,7 @@ int main(int argc, char** argv) {
   MPI_Comm_size(comm, &size);
   nlocal = NGLOBAL / size + (rank < NGLOBAL % size ? 1 : 0);
   first = rank * (NGLOBAL / size) + (rank < NGLOBAL % size ? rank : NGLOBAL % size);
-  if (SUNContext_Create(&comm, &ctx)) MPI_Abort(comm, 1);
+  if (SUNContext_Create(CEODE_SUN_COMM_ARG(comm), &ctx)) MPI_Abort(comm, 1);
   x = N_VNew_Parallel(comm, nlocal, NGLOBAL, ctx);
   v = N_VNew_Parallel(comm, nlocal, NGLOBAL, ctx);
   p.first = first;
@@ -102,7 +104,7 @@ int main(int argc, char** argv) {
     struct lengths ps;
     int ndiff = 0;
     double maxdiff = 0;
-    if (SUNContext_Create(NULL, &sctx)) MPI_Abort(comm, 1);
+    if (SUNContext_Create(SUN_COMM_NULL, &sctx)) MPI_Abort(comm, 1);
     xs = N_VNew_Serial(NGLOBAL, sctx);
     vs = N_VNew_Serial(NGLOBAL, sctx);
     ps.first = 0;
