@@ -151,9 +151,16 @@ struct CEodeMemRec {
   bool tstop_set = false;
   long int mxstep = 500000000L;
   int maxcor = 6;
+  bool maxcor_set = false;  // the constrained solve keeps its own default until set
   sunrealtype nls_reltol = 1e-12;
   sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
+  bool nls_tol_set = false;    // the constrained solve keeps its own default until set
   long int msbj = 20;
+
+  // The acceleration solve of every step, chosen when the run starts (StartMethod):
+  // explicit, implicit (velocity dependent) or constrained.
+  int (*solve_accel)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                     const char* func) = nullptr;
 
   // Velocity dependence, nonlinear solver
   bool vel_dependent = false;
@@ -239,6 +246,15 @@ int TakeStep(CEodeMemRec* ce);
 // into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
 sunrealtype FormUpdate(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+// w[i] = s^i / i!, i = 0 .. m-1, by the recurrence w[i] = w[i-1] * (s / i).
+void TaylorWeights(sunrealtype s, int m, sunrealtype* w);
+// The predicted acceleration at t: the Taylor polynomial of the history from t - h.
+void PredictAccel(const CEodeMemRec* ce, N_Vector a);
+// V0 of v(a) = V0 + kappa a: the part of the velocity at t the history fixes.
+void VelocityOffset(const CEodeMemRec* ce, N_Vector V0);
+// The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
+int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
 // Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
 // the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
 // (the symmetric stencil cancels the curve's own error). xs, vs, as: scratch vectors.
@@ -259,19 +275,25 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func);  // b <- M^{-1} b
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func);
 int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
+// df/dv at (t, x, v) with f(t, x, v) = fv into J: the user's CEodeVelJacFn, or difference
+// quotients (dense or band J, local data). Counted in nje; failures reported.
+int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
+                const char* func);
 int LsInitialize(CEodeMemRec* ce, const char* func);
 void LsFree(CEodeMemRec* ce);
 
 // ceode_nls.cpp
 int NlsInitialize(CEodeMemRec* ce, const char* func);
-int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
 void NlsFree(CEodeMemRec* ce);
 
 // ceode_constraints.cpp
 bool HasConstraints(const CEodeMemRec* ce);
 int ConstrInitialize(CEodeMemRec* ce, const char* func);
 int ConstrStart(CEodeMemRec* ce, const char* func);  // a0, lambda0 at t0, constrained x(t0+h)
-int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                    const char* func);
 void ConstrFree(CEodeMemRec* ce);
 
 // ceode_stability.cpp

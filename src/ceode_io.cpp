@@ -180,7 +180,8 @@ int CEodeSetMaxNumSteps(void* mem, long int mxsteps) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  // As in CVODE: a non-positive value restores the default.
+  // CEODE's own rule: a non-positive value restores the default (CVODE restores it for 0 and
+  // disables the test for a negative value).
   ce->mxstep = mxsteps > 0 ? mxsteps : 500000000L;
   return CE_SUCCESS;
 }
@@ -194,6 +195,7 @@ int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
                         maxcor);
   }
   ce->maxcor = maxcor;
+  ce->maxcor_set = true;
   if (ce->NLS != nullptr) SUNNonlinSolSetMaxIters(ce->NLS, maxcor);
   return CE_SUCCESS;
 }
@@ -209,6 +211,7 @@ int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol) 
   }
   ce->nls_reltol = reltol;
   ce->nls_abstol = abstol;
+  ce->nls_tol_set = true;
   return CE_SUCCESS;
 }
 

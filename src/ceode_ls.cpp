@@ -212,28 +212,38 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
   return CE_SUCCESS;
 }
 
+int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
+                const char* func) {
+  int rv;
+  if (ce->jac != nullptr) {
+    SUNMatZero(J);
+    rv = ce->jac(t, x, v, fv, J, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
+  } else if (SUNMatGetID(J) == SUNMATRIX_DENSE) {
+    rv = DenseDqJac(ce, t, x, v, fv, J);
+  } else {
+    rv = BandDqJac(ce, t, x, v, fv, J);
+  }
+  ++ce->nje;
+  if (rv != 0) {
+    // A fixed step cannot retry with a smaller h, so every failure is final.
+    return ProcessError(ce, CE_JACFUNC_FAIL, func,
+                        "The velocity Jacobian df/dv could not be evaluated (f or the Jacobian "
+                        "function returned %d) at t = %.17g.",
+                        rv, static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func) {
   ce->kappa_setup = kappa;
   if (ce->A != nullptr) {
-    int rv;
-    if (ce->jac != nullptr) {
-      SUNMatZero(ce->Jsave);
-      rv = ce->jac(t, x, v, fv, ce->Jsave, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
-    } else if (SUNMatGetID(ce->Jsave) == SUNMATRIX_DENSE) {
-      rv = DenseDqJac(ce, t, x, v, fv, ce->Jsave);
-    } else {
-      rv = BandDqJac(ce, t, x, v, fv, ce->Jsave);
-    }
-    ++ce->nje;
-    if (rv != 0) {
-      // A fixed step cannot retry with a smaller h, so every failure is final.
-      ce->cb_flag = ProcessError(ce, CE_JACFUNC_FAIL, func,
-                                 "The velocity Jacobian df/dv could not be evaluated (f or the "
-                                 "Jacobian function returned %d) at t = %.17g.",
-                                 rv, static_cast<double>(t));
+    const int flag = VelJacobian(ce, t, x, v, fv, ce->Jsave, func);
+    if (flag != CE_SUCCESS) {
+      ce->cb_flag = flag;
       return -1;
     }
+    int rv;
     rv = SUNMatCopy(ce->Jsave, ce->A);
     if (rv == 0) rv = ce->M ? SUNMatScaleAdd(-kappa, ce->A, ce->M) : SUNMatScaleAddI(-kappa, ce->A);
     if (rv != 0) {

@@ -275,6 +275,33 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
 }
 
+void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
+  sunrealtype p = 1;
+  for (int i = 0; i < m; ++i) {
+    w[i] = p;
+    p *= s / (i + 1);
+  }
+}
+
+void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
+  const int d = ce->degree;
+  sunrealtype c[kMaxDegree];
+  TaylorWeights(ce->co.h, d - 2, c);
+  N_VLinearCombination(d - 2, c, const_cast<N_Vector*>(ce->D + 2), a);
+}
+
+void VelocityOffset(const CEodeMemRec* ce, N_Vector V0) {
+  const int d = ce->degree;
+  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(ce->co.V0 + 1),
+                       const_cast<N_Vector*>(ce->D + 1), V0);
+}
+
+int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
+                  const char* func) {
+  // No velocity dependence declared: f sees the last velocity, D_1(t - h).
+  return EvalAccel(ce, t, x, ce->D[1], a, func);
+}
+
 namespace {
 
 // The update after the solve: z = (a - B_2)/c_2 (d = 3: z is a itself), the
@@ -395,12 +422,8 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
       const sunrealtype s = nodes[j];
       sunrealtype cx[kMaxDegree + 1];
       N_Vector vx[kMaxDegree + 1];
-      sunrealtype sp = 1;  // s^i / i!
-      for (int i = 0; i <= m; ++i) {
-        cx[i] = sp;
-        vx[i] = (i == 0) ? ce->xcur : ce->D[i];
-        sp *= s / (i + 1);
-      }
+      TaylorWeights(s, m + 1, cx);
+      for (int i = 0; i <= m; ++i) vx[i] = (i == 0) ? ce->xcur : ce->D[i];
       N_VLinearCombination(m + 1, cx, vx, xs);
       N_VLinearCombination(m, cx, vx + 1, vs);  // the curve's derivative: same weights, shifted
       flag = accel(t0 + s, xs, vs, as);
@@ -435,6 +458,9 @@ int StartMethod(CEodeMemRec* ce) {
   ce->guard_pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
   BuildPlans(ce);
+  ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
+                    : ce->vel_dependent ? SolveImplicit
+                                        : SolveExplicit;
   if (HasConstraints(ce)) {
     const long int nfe0 = ce->nfe;
     const int flag = ConstrStart(ce, func);
@@ -473,6 +499,15 @@ int StartMethod(CEodeMemRec* ce) {
   return CE_SUCCESS;
 }
 
+namespace {
+
+// Time k steps after tcur, from the last (re)start, so that rounding does not accumulate.
+sunrealtype StepTime(const CEodeMemRec* ce, int k) {
+  return ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + k) * ce->h;
+}
+
+}  // namespace
+
 sunrealtype FormUpdate(CEodeMemRec* ce) {
   const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
   sunrealtype xl1 = 0;
@@ -487,21 +522,14 @@ sunrealtype FormUpdate(CEodeMemRec* ce) {
 int TakeStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
-  const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + 1) * ce->h;
+  const sunrealtype t = StepTime(ce, 1);
+  const sunrealtype tnext = StepTime(ce, 2);  // the constraint holds at the new position's time
   N_Vector* D = ce->D;
   N_Vector* Dn = ce->Dnew;
   N_Vector a = Dn[2];
 
   // The only solve of the step: the acceleration at t (and multipliers).
-  int flag;
-  if (HasConstraints(ce)) {
-    flag = ConstrSolveStep(ce, t, ce->xnext, a, func);
-  } else if (ce->vel_dependent) {
-    flag = SolveImplicit(ce, t, ce->xnext, a, func);
-  } else {
-    // No velocity dependence declared: f sees the last velocity, D_1(t - h).
-    flag = EvalAccel(ce, t, ce->xnext, D[1], a, func);
-  }
+  const int flag = ce->solve_accel(ce, t, tnext, ce->xnext, a, func);
   if (flag != CE_SUCCESS) return flag;
 
   const sunrealtype xl1 = FormUpdate(ce);
