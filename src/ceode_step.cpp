@@ -6,7 +6,7 @@
 #include <cstring>
 #include <functional>
 
-#include "ceode_impl.hpp"
+#include "ceode_fused.hpp"
 
 namespace ceode {
 
@@ -30,136 +30,6 @@ sunrealtype Factorial(int n) {
   sunrealtype r = 1;
   for (int i = 2; i <= n; ++i) r *= i;
   return r;
-}
-
-// z = sum c_i X_i with exactly the rounding of N_VScale / N_VLinearSum /
-// N_VLinearCombination, so the fused kernel below can reproduce it bit for bit.
-void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
-  if (m == 0) {
-    N_VConst(0, z);
-  } else if (m == 1) {
-    N_VScale(c[0], X[0], z);
-  } else if (m == 2) {
-    N_VLinearSum(c[0], X[0], c[1], X[1], z);
-  } else {
-    N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, z);
-  }
-}
-
-// The increment is summed first and the large accumulated term last, so that
-// quantity is rounded once per step; with compensated summation its rounding
-// error is carried forward in comp -> compnew (Kahan).
-void RunCombo(CEodeMemRec* ce, const Combo& cb) {
-  if (cb.old == nullptr) {
-    Combine(cb.m, cb.c, const_cast<N_Vector*>(cb.X), cb.out);
-    return;
-  }
-  sunrealtype c[kMaxDegree + 3];
-  N_Vector X[kMaxDegree + 3];
-  std::copy(cb.c, cb.c + cb.m, c);
-  std::copy(cb.X, cb.X + cb.m, X);
-  int m = cb.m;
-  if (!ce->compensated) {
-    c[m] = 1;
-    X[m++] = cb.old;
-    Combine(m, c, X, cb.out);
-    return;
-  }
-  N_Vector y = ce->tmp1;
-  c[m] = -1;
-  X[m++] = ce->comp[cb.level];
-  Combine(m, c, X, y);  // y = increment - comp
-  N_Vector comp_new = ce->compnew[cb.level];
-  N_VLinearSum(1, cb.old, 1, y, cb.out);
-  N_VLinearSum(1, cb.out, -1, cb.old, comp_new);
-  N_VLinearSum(1, comp_new, -1, y, comp_new);
-}
-
-// out[0..len) = sum_j c[j] X[j][0..len) with the rounding of Combine: a
-// two-term sum follows N_VLinearSum's shortcuts (a = +-b is computed as
-// a * (x +- y)); longer sums add term by term in order, as N_VLinearCombination.
-// The branch is taken once per block, so the inner loops vectorise.
-void CombineBlock(int m, const sunrealtype* c, sunrealtype* const* X, sunindextype off,
-                  sunindextype len, sunrealtype* out) {
-  if (m == 0) {
-    std::fill(out, out + len, SUN_RCONST(0.0));
-    return;
-  }
-  const sunrealtype* x0 = X[0] + off;
-  if (len <= 4) {  // tiny systems: plain scalar code, without the vector loops' set-up
-    for (sunindextype i = 0; i < len; ++i) {
-      sunrealtype acc;
-      if (m == 2) {
-        const sunrealtype a = c[0];
-        const sunrealtype b = c[1];
-        const sunrealtype y = X[1][off + i];
-        const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
-        acc = (!unit && a == b)    ? a * (x0[i] + y)
-              : (!unit && a == -b) ? a * (x0[i] - y)
-                                   : a * x0[i] + b * y;
-      } else {
-        acc = c[0] * x0[i];
-        for (int j = 1; j < m; ++j) acc += c[j] * X[j][off + i];
-      }
-      out[i] = acc;
-    }
-    return;
-  }
-  if (m == 2) {
-    const sunrealtype a = c[0];
-    const sunrealtype b = c[1];
-    const sunrealtype* y = X[1] + off;
-    const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
-    if (!unit && a == b) {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] + y[i]);
-    } else if (!unit && a == -b) {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] - y[i]);
-    } else {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * x0[i] + b * y[i];
-    }
-    return;
-  }
-  for (sunindextype i = 0; i < len; ++i) out[i] = c[0] * x0[i];
-  for (int j = 1; j < m; ++j) {
-    const sunrealtype cj = c[j];
-    const sunrealtype* xj = X[j] + off;
-    for (sunindextype i = 0; i < len; ++i) out[i] += cj * xj[i];
-  }
-}
-
-// Serial vectors: the whole update in one sweep through memory, block by block
-// (each block stays in cache while every combination of the plan runs on it),
-// instead of one pass over the vectors per term. Same operations in the same
-// order as RunCombo, so the numbers are the same to the bit.
-// Returns false when the vectors are not serial (the generic path runs).
-bool FusedUpdate(CEodeMemRec* ce, const FusedPlan& fp, sunrealtype* l1norm) {
-  if (!ce->fused || !ce->fused_ready) return false;
-  constexpr sunindextype kBlock = 256;
-  sunrealtype y[kBlock];
-  const sunindextype n = N_VGetLength(ce->xnext);
-  const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
-  sunrealtype sum = 0;
-  for (sunindextype off = 0; off < n; off += kBlock) {
-    const sunindextype len = std::min(kBlock, n - off);
-    for (int k = 0; k < fp.n; ++k) {
-      const FusedTerms& tk = fp.terms[k];
-      if (tk.old == nullptr) {
-        CombineBlock(tk.m, tk.c, tk.X, off, len, tk.out + off);
-        continue;
-      }
-      CombineBlock(tk.m, tk.c, tk.X, off, len, y);  // y = increment - comp
-      const sunrealtype* o = tk.old + off;
-      sunrealtype* nw = tk.out + off;
-      sunrealtype* cn = tk.compnew + off;
-      for (sunindextype i = 0; i < len; ++i) {
-        nw[i] = o[i] + y[i];
-        cn[i] = (nw[i] - o[i]) - y[i];
-      }
-    }
-    for (sunindextype i = 0; i < len; ++i) sum += std::fabs(xout[off + i]);
-  }
-  *l1norm = sum;
-  return true;
 }
 
 }  // namespace
@@ -340,35 +210,6 @@ void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext,
   cb.out = xnew;
 }
 
-// Raw-pointer form of a plan: each combination with its accumulated term (or,
-// compensated, minus its compensation) appended, exactly as RunCombo hands it
-// to Combine.
-void BuildFusedPlan(const CEodeMemRec* ce, const UpdatePlan& plan, N_Vector* comp,
-                    N_Vector* compnew, FusedPlan* fp) {
-  fp->n = plan.n;
-  for (int k = 0; k < plan.n; ++k) {
-    const Combo& cb = plan.combos[k];
-    FusedTerms& tk = fp->terms[k];
-    tk.m = cb.m;
-    for (int j = 0; j < cb.m; ++j) {
-      tk.c[j] = cb.c[j];
-      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
-    }
-    tk.old = nullptr;
-    tk.compnew = nullptr;
-    if (cb.old != nullptr && !ce->compensated) {
-      tk.c[tk.m] = 1;
-      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
-    } else if (cb.old != nullptr) {
-      tk.c[tk.m] = -1;
-      tk.X[tk.m++] = N_VGetArrayPointer(comp[cb.level]);
-      tk.old = N_VGetArrayPointer(cb.old);
-      tk.compnew = N_VGetArrayPointer(compnew[cb.level]);
-    }
-    tk.out = N_VGetArrayPointer(cb.out);
-  }
-}
-
 }  // namespace
 
 // The vectors only trade places from step to step (history <-> new every step,
@@ -392,7 +233,9 @@ void BuildPlans(CEodeMemRec* ce) {
   ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
   for (int i = 0; i < kNumPlans; ++i) {
     BuildPlan(ce, D, Dn, xnext, xnew, &ce->plans[i]);
-    if (ce->fused_ready) BuildFusedPlan(ce, ce->plans[i], comp, compnew, &ce->fused_plans[i]);
+    if (ce->fused_ready) {
+      BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr}, &ce->fused_plans[i]);
+    }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
     N_Vector old = xcur;
@@ -510,13 +353,9 @@ sunrealtype StepTime(const CEodeMemRec* ce, int k) {
 
 sunrealtype FormUpdate(CEodeMemRec* ce) {
   const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
-  sunrealtype xl1 = 0;
-  if (!FusedUpdate(ce, ce->fused_plans[ip], &xl1)) {
-    const UpdatePlan& plan = ce->plans[ip];
-    for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
-    xl1 = N_VL1Norm(ce->xnew);
-  }
-  return xl1;
+  if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
+  UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
+  return N_VL1Norm(ce->xnew);
 }
 
 int TakeStep(CEodeMemRec* ce) {

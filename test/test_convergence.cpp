@@ -28,6 +28,9 @@ struct SetCase {
   const char* label;  // test-name sentence
 };
 
+// Printable parameter (gtest prints it in test listings).
+void PrintTo(const SetCase& c, std::ostream* os) { *os << c.method << ", order " << c.claimed; }
+
 std::ostream& operator<<(std::ostream& os, const SetCase& c) { return os << c.method; }
 
 // G4_A54 is weakly unstable for every h (rho - 1 ~ 0.33 Omega^2 per step): over
