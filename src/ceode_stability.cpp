@@ -240,6 +240,8 @@ int EstimateMaxFrequency(CEodeMemRec* ce, const char* func, sunrealtype* omega) 
 
 }  // namespace
 
+// The guard is being split on its own branch (guard-o3); the marker below goes with that change.
+// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
 int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (ce->guard_mode == CE_GUARD_OFF) return CE_SUCCESS;
   if (ce->omega_user > 0) {

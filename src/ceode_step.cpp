@@ -276,42 +276,32 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
   return flag;
 }
 
-int StartMethod(CEodeMemRec* ce) {
-  static const char* func = "CEodeEvolve";
+namespace {
+
+bool CloneIfMissing(N_Vector* v, N_Vector tmpl) {
+  if (*v == nullptr) *v = N_VClone(tmpl);
+  return *v != nullptr;
+}
+
+// The derivative vectors of the degree (and their compensations) exist once per degree.
+int AllocHistory(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
-  const sunrealtype h = ce->h;
+  bool ok = true;
   for (int k = 1; k < d; ++k) {
-    if (ce->D[k] == nullptr) ce->D[k] = N_VClone(ce->xcur);
-    if (ce->Dnew[k] == nullptr) ce->Dnew[k] = N_VClone(ce->xcur);
-    if (ce->D[k] == nullptr || ce->Dnew[k] == nullptr) {
-      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-    }
+    ok = ok && CloneIfMissing(&ce->D[k], ce->xcur) && CloneIfMissing(&ce->Dnew[k], ce->xcur);
   }
   for (int k = 0; ce->compensated && k <= d - 2; ++k) {
-    if (ce->comp[k] == nullptr) ce->comp[k] = N_VClone(ce->xcur);
-    if (ce->compnew[k] == nullptr) ce->compnew[k] = N_VClone(ce->xcur);
-    if (ce->comp[k] == nullptr || ce->compnew[k] == nullptr) {
-      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-    }
-    N_VConst(0, ce->comp[k]);
+    ok = ok && CloneIfMissing(&ce->comp[k], ce->xcur) && CloneIfMissing(&ce->compnew[k], ce->xcur);
+    if (ok) N_VConst(0, ce->comp[k]);
   }
-  ComputeStepCoeffs(d, ce->params, h, &ce->co);
-  ce->t_start_h = ce->tcur;
-  ce->nsteps_h = 0;
-  ce->guard_pending = true;
-  ce->xl1_start = N_VL1Norm(ce->xcur);
-  BuildPlans(ce);
-  ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
-                    : ce->vel_dependent ? SolveImplicit
-                                        : SolveExplicit;
-  if (HasConstraints(ce)) {
-    const long int nfe0 = ce->nfe;
-    const int flag = ConstrStart(ce, func);
-    ce->nfe_start += ce->nfe - nfe0;
-    if (flag == CE_SUCCESS) ce->started = true;
-    return flag;
-  }
-  const long int nfe0 = ce->nfe;
+  return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+// The unconstrained start: a0 = M^{-1} f(t0, x0, v0), the higher derivatives (consistent start)
+// or zeros (the paper's zero start), then the first position step: the Taylor polynomial of
+// every derivative known at t0.
+int OdeStart(CEodeMemRec* ce, const char* func) {
+  const int d = ce->degree;
   const sunrealtype t = ce->tcur;
   int flag = EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
@@ -326,20 +316,39 @@ int StartMethod(CEodeMemRec* ce) {
                               return EvalAccel(ce, ts, xs, vs, as, func);
                             });
   }
-  for (int k = 3; flag == CE_SUCCESS && ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
-  ce->nfe_start += ce->nfe - nfe0;
   if (flag != CE_SUCCESS) return flag;
-  // First position step: the Taylor polynomial of every derivative known at t0.
+  for (int k = 3; ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
   sunrealtype cw[kMaxDegree];
   N_Vector vw[kMaxDegree];
   for (int i = 1; i < d; ++i) {
-    cw[i - 1] = std::pow(h, i) / Factorial(i);
+    cw[i - 1] = std::pow(ce->h, i) / Factorial(i);
     vw[i - 1] = ce->D[i];
   }
   N_VLinearCombination(d - 1, cw, vw, ce->tmp1);
   N_VLinearSum(1, ce->xcur, 1, ce->tmp1, ce->xnext);
-  ce->started = true;
   return CE_SUCCESS;
+}
+
+}  // namespace
+
+int StartMethod(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  int flag = AllocHistory(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
+  ce->t_start_h = ce->tcur;
+  ce->nsteps_h = 0;
+  ce->guard_pending = true;
+  ce->xl1_start = N_VL1Norm(ce->xcur);
+  BuildPlans(ce);
+  ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
+                    : ce->vel_dependent ? SolveImplicit
+                                        : SolveExplicit;
+  const long int nfe0 = ce->nfe;
+  flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
+  ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
+  if (flag == CE_SUCCESS) ce->started = true;
+  return flag;
 }
 
 namespace {
