@@ -48,6 +48,8 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   return CE_SUCCESS;
 }
 
+void Restart(CEodeMemRec* ce) { ce->started = false; }
+
 bool IsFinite(N_Vector v) { return std::isfinite(N_VL1Norm(v)); }
 
 namespace {
@@ -222,13 +224,12 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   }
   N_VScale(1.0, x0, ce->xcur);
   N_VScale(1.0, v0, ce->D[1]);
-  ce->t0 = t0;
   ce->tcur = t0;
   ce->tretlast = t0;
-  ce->started = false;
+  ceode::Restart(ce);
   ce->mass_evaluated = false;
   ce->mass_dirty = true;
-  ce->a_holds = 0;
+  ce->a_holds = ceode::Holds::kNothing;
   ce->jac_current = false;
   ce->nst_lastsetup = -1;
   ce->guard_warned = false;

@@ -1,4 +1,4 @@
-// Index-3 constraints without index reduction (docs/theory.md, constraints): the constrained
+// Index-3 constraints without index reduction (docs/theory.md section 8): the constrained
 // acceleration solve as a nonlinear system, with the same parts as the velocity-dependent one
 // (ceode_nls.cpp): residual, linear setup, linear solve, convergence test.
 //
@@ -527,7 +527,7 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
   if (flag != CE_SUCCESS) return flag;
   if (phi == nullptr && G == nullptr) {  // remove the constraints
     ceode::ConstrFree(ce);
-    ce->started = false;
+    ceode::Restart(ce);
     return CE_SUCCESS;
   }
   if (phi == nullptr || G == nullptr || phi_template == nullptr) {
@@ -552,7 +552,7 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
   ce->phifn = phi;
   ce->Gfn = G;
   ce->nc = nc;
-  ce->started = false;
+  ceode::Restart(ce);
   return CE_SUCCESS;
 }
 

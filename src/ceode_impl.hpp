@@ -14,7 +14,7 @@ namespace ceode {
 constexpr int kMaxDegree = 8;
 constexpr int kMinDegree = 3;
 
-// One named parameter set of method.md section 5 (table in ceode_step.cpp).
+// One named parameter set of docs/theory.md section 5 (table in ceode_step.cpp).
 struct MethodSet {
   const char* name;
   int degree;
@@ -86,6 +86,13 @@ struct FusedPlan {
   FusedTerms terms[kMaxDegree];
 };
 
+// What the factored matrix of the attached linear solver holds.
+enum class Holds { kNothing, kMass, kNewton };
+
+// Defaults of the options, written once (CEodeMemRec and the setters that restore them).
+constexpr long int kDefaultMaxSteps = 500000000L;
+constexpr long int kDefaultJacEvalFrequency = 20;
+
 // History and new derivatives swap every step and the three position buffers
 // rotate with period 3: six configurations in all.
 constexpr int kNumPlans = 6;
@@ -117,7 +124,6 @@ struct CEodeMemRec {
   ceode::StepCoeffs co;
 
   // State: derivatives D_1..D_{d-1} at tcur, x at tcur and at tcur + h.
-  sunrealtype t0 = 0;
   sunrealtype tcur = 0;
   sunrealtype tretlast = 0;
   sunrealtype t_start_h = 0;  // time of the last (re)start; tcur = t_start_h + nsteps_h * h
@@ -149,13 +155,13 @@ struct CEodeMemRec {
   // Options
   sunrealtype tstop = 0;
   bool tstop_set = false;
-  long int mxstep = 500000000L;
+  long int mxstep = ceode::kDefaultMaxSteps;
   int maxcor = 6;
   bool maxcor_set = false;  // the constrained solve keeps its own default until set
   sunrealtype nls_reltol = 1e-12;
   sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
   bool nls_tol_set = false;    // the constrained solve keeps its own default until set
-  long int msbj = 20;
+  long int msbj = ceode::kDefaultJacEvalFrequency;
 
   // The acceleration solve of every step, chosen when the run starts (StartMethod):
   // explicit, implicit (velocity dependent) or constrained.
@@ -166,7 +172,6 @@ struct CEodeMemRec {
   bool vel_dependent = false;
   SUNNonlinearSolver NLS = nullptr;
   bool own_nls = false;
-  bool nls_attached_by_user = false;
   sunrealtype crate = 1;
   sunrealtype delp = 0;
   sunrealtype kappa_setup = 0;  // kappa of the last Newton matrix setup
@@ -180,10 +185,10 @@ struct CEodeMemRec {
   CEodeMassFn mfn = nullptr;
   SUNMatrix M = nullptr;
   bool mass_constant = true;
-  bool mass_evaluated = false;  // M holds M(x, t) at least once
-  bool mass_dirty = true;       // M changed since A was last factored from it
-  int a_holds = 0;              // what the factored A is: 0 nothing, 1 M, 2 Newton matrix
-  N_Vector lstmp = nullptr;     // solution vector of linear solves
+  bool mass_evaluated = false;                    // M holds M(x, t) at least once
+  bool mass_dirty = true;                         // M changed since A was last factored from it
+  ceode::Holds a_holds = ceode::Holds::kNothing;  // what the factored A is
+  N_Vector lstmp = nullptr;                       // solution vector of linear solves
   SUNLinearSolver LS = nullptr;
   SUNMatrix A = nullptr;
   SUNMatrix Jsave = nullptr;
@@ -237,6 +242,9 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
+// The restart rule: after a change of the method, the problem or a solver, the next CEodeEvolve
+// rebuilds the solvers and the history at the current time.
+void Restart(CEodeMemRec* ce);
 // The access guard every exported function starts with.
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
 

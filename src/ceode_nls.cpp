@@ -170,9 +170,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   ce->cb_flag = 0;
   ce->delp = 0;
   const bool newton = SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
-  bool setup = newton && (ce->a_holds != 2 || !ce->jac_current || ce->nst_lastsetup < 0 ||
-                          ce->nst - ce->nst_lastsetup >= ce->msbj || ce->mass_dirty ||
-                          ce->kappa_setup != co.kappa);
+  bool setup = newton && (ce->a_holds != Holds::kNewton || !ce->jac_current ||
+                          ce->nst_lastsetup < 0 || ce->nst - ce->nst_lastsetup >= ce->msbj ||
+                          ce->mass_dirty || ce->kappa_setup != co.kappa);
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
     N_VConst(0, ce->ycor);
@@ -213,6 +213,6 @@ extern "C" int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS) {
   ceode::NlsFree(ce);
   ce->NLS = NLS;
   ce->own_nls = false;
-  ce->started = false;
+  ceode::Restart(ce);
   return CE_SUCCESS;
 }

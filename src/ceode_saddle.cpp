@@ -1,4 +1,4 @@
-// The saddle-point linear system of the constrained step (docs/theory.md, constraints):
+// The saddle-point linear system of the constrained step (docs/theory.md section 8):
 // assembly of [[M - kappa J, Gt^T], [H, 0]] into the matrix of a SUNLinearSolver, its
 // factorisation and its solves. The integrator sees only SaddleSetup and SaddleSolve.
 #include "ceode_saddle.hpp"

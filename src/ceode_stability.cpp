@@ -1,4 +1,4 @@
-// Linear stability from the integrator's own step map (method.md section 4),
+// Linear stability from the integrator's own step map (docs/theory.md section 9),
 // and the runtime guard that compares h * omega_max with the method's limit.
 #include <ceode/ceode_stability.h>
 #include <nvector/nvector_serial.h>

@@ -1,4 +1,4 @@
-// The degree-generic conditionally explicit step (method.md section 2), its
+// The degree-generic conditionally explicit step (docs/theory.md section 2), its
 // coefficients, the start of the method and the dense output. One code path
 // serves every degree: the parameter sets are data in kMethodSets.
 #include <algorithm>
@@ -12,7 +12,7 @@ namespace ceode {
 
 namespace {
 
-// Named parameter sets (method.md section 5): alpha, beta, gamma, zeta. Measured
+// Named parameter sets (docs/theory.md section 5): alpha, beta, gamma, zeta. Measured
 // properties (orders, stability limits) are in docs/stability.md and the tests.
 const MethodSet kMethodSets[] = {
     {"G3_CD", 3, {1.0, 0.5}},
