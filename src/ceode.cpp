@@ -50,6 +50,8 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   return CE_SUCCESS;
 }
 
+void Restart(CEodeMemRec* ce) { ce->started = false; }
+
 bool IsFinite(N_Vector v) { return std::isfinite(N_VL1Norm(v)); }
 
 namespace {
@@ -98,6 +100,69 @@ int Prepare(CEodeMemRec* ce, const char* func) {
   flag = ConstrInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   return StartMethod(ce);
+}
+
+int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                    N_Vector vout, const sunrealtype* tret, int itask) {
+  int flag = CheckOutputVector(ce, func, xout, "xout");
+  if (flag == CE_SUCCESS) flag = CheckOutputVector(ce, func, vout, "vout");
+  if (flag != CE_SUCCESS) return flag;
+  if (tret == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "tret = NULL.");
+  if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
+    return ProcessError(ce, CE_ILL_INPUT, func, "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
+  }
+  if (!std::isfinite(tout)) return ProcessError(ce, CE_ILL_INPUT, func, "tout is not finite.");
+  return CE_SUCCESS;
+}
+
+void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
+  N_VScale(1.0, ce->xcur, xout);
+  N_VScale(1.0, ce->D[1], vout);
+  *tret = ce->tcur;
+}
+
+// Where this call ends: tout (CE_NORMAL) or one step on (CE_ONE_STEP), cut at the stop time.
+int EvolveTarget(CEodeMemRec* ce, const char* func, sunrealtype tout, int itask,
+                 sunrealtype* target, bool* hit_tstop) {
+  const sunrealtype h = ce->h;
+  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + h);
+  if (itask == CE_NORMAL && tout < ce->tcur - troundoff) {
+    return ProcessError(ce, CE_BAD_T, func,
+                        "tout = %.17g is behind the current time %.17g: CEODE integrates "
+                        "forward only; call CEodeReInit to go back.",
+                        static_cast<double>(tout), static_cast<double>(ce->tcur));
+  }
+  *target = (itask == CE_NORMAL) ? tout : ce->tcur + h;
+  *hit_tstop = false;
+  if (!ce->tstop_set) return CE_SUCCESS;
+  if (ce->tstop < ce->tcur - troundoff) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The stop time %.17g is behind the current time %.17g.",
+                        static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
+  }
+  if (*target >= ce->tstop - troundoff) {
+    *target = ce->tstop;
+    *hit_tstop = true;
+  }
+  return CE_SUCCESS;
+}
+
+// Steps while the target lies beyond the current interval [tcur, tcur + h].
+int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
+  const sunrealtype h = ce->h;
+  long int nsteps = 0;
+  while (target - ce->tcur > h * (1 - 1e-8)) {
+    if (nsteps >= ce->mxstep) {
+      return ProcessError(ce, CE_TOO_MUCH_WORK, func,
+                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
+                          "the limit with CEodeSetMaxNumSteps or use a larger h.",
+                          nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
+    }
+    const int flag = TakeStep(ce);
+    if (flag != CE_SUCCESS) return flag;
+    ++nsteps;
+  }
+  return CE_SUCCESS;
 }
 
 }  // namespace
@@ -161,13 +226,12 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   }
   N_VScale(1.0, x0, ce->xcur);
   N_VScale(1.0, v0, ce->D[1]);
-  ce->t0 = t0;
   ce->tcur = t0;
   ce->tretlast = t0;
-  ce->started = false;
+  ceode::Restart(ce);
   ce->mass_evaluated = false;
   ce->mass_dirty = true;
-  ce->a_holds = 0;
+  ce->a_holds = ceode::Holds::kNothing;
   ce->jac_current = false;
   ce->nst_lastsetup = -1;
   ce->guard_warned = false;
@@ -180,16 +244,9 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
                 int itask) {
   CEodeMemRec* ce = nullptr;
   int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag == CE_SUCCESS)
+    flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
-  if ((flag = ceode::CheckOutputVector(ce, __func__, xout, "xout")) != CE_SUCCESS) return flag;
-  if ((flag = ceode::CheckOutputVector(ce, __func__, vout, "vout")) != CE_SUCCESS) return flag;
-  if (tret == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tret = NULL.");
-  if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                               "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
-  }
-  if (!std::isfinite(tout))
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "tout is not finite.");
   flag = ceode::Prepare(ce, __func__);
   if (flag == CE_SUCCESS && ce->guard_pending) {
     ce->guard_pending = false;
@@ -197,58 +254,21 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   }
   if (flag < 0) {
     // Nothing was integrated: hand back the current state, never garbage.
-    N_VScale(1.0, ce->xcur, xout);
-    N_VScale(1.0, ce->D[1], vout);
-    *tret = ce->tcur;
+    ceode::ReturnCurrentState(ce, xout, vout, tret);
     return flag;
   }
-
-  const sunrealtype h = ce->h;
-  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + h);
-  if (itask == CE_NORMAL && tout < ce->tcur - troundoff) {
-    return ceode::ProcessError(ce, CE_BAD_T, __func__,
-                               "tout = %.17g is behind the current time %.17g: CEODE integrates "
-                               "forward only; call CEodeReInit to go back.",
-                               static_cast<double>(tout), static_cast<double>(ce->tcur));
-  }
-  sunrealtype target = (itask == CE_NORMAL) ? tout : ce->tcur + h;
+  sunrealtype target = 0;
   bool hit_tstop = false;
-  if (ce->tstop_set) {
-    if (ce->tstop < ce->tcur - troundoff) {
-      return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                                 "The stop time %.17g is behind the current time %.17g.",
-                                 static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
-    }
-    if (target >= ce->tstop - troundoff) {
-      target = ce->tstop;
-      hit_tstop = true;
-    }
-  }
-
-  // Step while the target lies beyond the current interval [tcur, tcur + h].
-  long int nsteps = 0;
-  while (target - ce->tcur > h * (1 - 1e-8)) {
-    if (nsteps >= ce->mxstep) {
-      flag =
-          ceode::ProcessError(ce, CE_TOO_MUCH_WORK, __func__,
-                              "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
-                              "the limit with CEodeSetMaxNumSteps or use a larger h.",
-                              nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
-      break;
-    }
-    flag = ceode::TakeStep(ce);
-    if (flag != CE_SUCCESS) break;
-    ++nsteps;
-  }
+  flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
+  if (flag != CE_SUCCESS) return flag;
+  flag = ceode::StepTo(ce, __func__, target);
   if (flag != CE_SUCCESS) {
     // The last good state is returned; the memory stays usable.
-    N_VScale(1.0, ce->xcur, xout);
-    N_VScale(1.0, ce->D[1], vout);
-    *tret = ce->tcur;
+    ceode::ReturnCurrentState(ce, xout, vout, tret);
     ce->tretlast = ce->tcur;
     return flag;
   }
-  if (std::fabs(target - ce->tcur) <= 1e-8 * h) target = ce->tcur;
+  if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
   ceode::Interpolate(ce, target - ce->tcur, 0, xout);
   ceode::Interpolate(ce, target - ce->tcur, 1, vout);
   *tret = target;

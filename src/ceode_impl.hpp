@@ -16,7 +16,7 @@ namespace ceode {
 constexpr int kMaxDegree = 8;
 constexpr int kMinDegree = 3;
 
-// One named parameter set of method.md section 5 (table in ceode_step.cpp).
+// One named parameter set of docs/theory.md section 5 (table in ceode_step.cpp).
 struct MethodSet {
   const char* name;
   int degree;
@@ -88,6 +88,13 @@ struct FusedPlan {
   FusedTerms terms[kMaxDegree];
 };
 
+// What the factored matrix of the attached linear solver holds.
+enum class Holds { kNothing, kMass, kNewton };
+
+// Defaults of the options, written once (CEodeMemRec and the setters that restore them).
+constexpr long int kDefaultMaxSteps = 500000000L;
+constexpr long int kDefaultJacEvalFrequency = 20;
+
 // History and new derivatives swap every step and the three position buffers
 // rotate with period 3: six configurations in all.
 constexpr int kNumPlans = 6;
@@ -119,7 +126,6 @@ struct CEodeMemRec {
   ceode::StepCoeffs co;
 
   // State: derivatives D_1..D_{d-1} at tcur, x at tcur and at tcur + h.
-  sunrealtype t0 = 0;
   sunrealtype tcur = 0;
   sunrealtype tretlast = 0;
   sunrealtype t_start_h = 0;  // time of the last (re)start; tcur = t_start_h + nsteps_h * h
@@ -151,17 +157,23 @@ struct CEodeMemRec {
   // Options
   sunrealtype tstop = 0;
   bool tstop_set = false;
-  long int mxstep = 500000000L;
+  long int mxstep = ceode::kDefaultMaxSteps;
   int maxcor = 6;
+  bool maxcor_set = false;  // the constrained solve keeps its own default until set
   sunrealtype nls_reltol = 1e-12;
   sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
-  long int msbj = 20;
+  bool nls_tol_set = false;    // the constrained solve keeps its own default until set
+  long int msbj = ceode::kDefaultJacEvalFrequency;
+
+  // The acceleration solve of every step, chosen when the run starts (StartMethod):
+  // explicit, implicit (velocity dependent) or constrained.
+  int (*solve_accel)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                     const char* func) = nullptr;
 
   // Velocity dependence, nonlinear solver
   bool vel_dependent = false;
   SUNNonlinearSolver NLS = nullptr;
   bool own_nls = false;
-  bool nls_attached_by_user = false;
   sunrealtype crate = 1;
   sunrealtype delp = 0;
   sunrealtype kappa_setup = 0;  // kappa of the last Newton matrix setup
@@ -175,10 +187,10 @@ struct CEodeMemRec {
   CEodeMassFn mfn = nullptr;
   SUNMatrix M = nullptr;
   bool mass_constant = true;
-  bool mass_evaluated = false;  // M holds M(x, t) at least once
-  bool mass_dirty = true;       // M changed since A was last factored from it
-  int a_holds = 0;              // what the factored A is: 0 nothing, 1 M, 2 Newton matrix
-  N_Vector lstmp = nullptr;     // solution vector of linear solves
+  bool mass_evaluated = false;                    // M holds M(x, t) at least once
+  bool mass_dirty = true;                         // M changed since A was last factored from it
+  ceode::Holds a_holds = ceode::Holds::kNothing;  // what the factored A is
+  N_Vector lstmp = nullptr;                       // solution vector of linear solves
   SUNLinearSolver LS = nullptr;
   SUNMatrix A = nullptr;
   SUNMatrix Jsave = nullptr;
@@ -233,6 +245,9 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
+// The restart rule: after a change of the method, the problem or a solver, the next CEodeEvolve
+// rebuilds the solvers and the history at the current time.
+void Restart(CEodeMemRec* ce);
 // The access guard every exported function starts with.
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
 
@@ -242,6 +257,15 @@ int TakeStep(CEodeMemRec* ce);
 // into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
 sunrealtype FormUpdate(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+// w[i] = s^i / i!, i = 0 .. m-1, by the recurrence w[i] = w[i-1] * (s / i).
+void TaylorWeights(sunrealtype s, int m, sunrealtype* w);
+// The predicted acceleration at t: the Taylor polynomial of the history from t - h.
+void PredictAccel(const CEodeMemRec* ce, N_Vector a);
+// V0 of v(a) = V0 + kappa a: the part of the velocity at t the history fixes.
+void VelocityOffset(const CEodeMemRec* ce, N_Vector V0);
+// The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
+int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
 // Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
 // the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
 // (the symmetric stencil cancels the curve's own error). xs, vs, as: scratch vectors.
@@ -262,19 +286,25 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func);  // b <- M^{-1} b
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func);
 int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
+// df/dv at (t, x, v) with f(t, x, v) = fv into J: the user's CEodeVelJacFn, or difference
+// quotients (dense or band J, local data). Counted in nje; failures reported.
+int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
+                const char* func);
 int LsInitialize(CEodeMemRec* ce, const char* func);
 void LsFree(CEodeMemRec* ce);
 
 // ceode_nls.cpp
 int NlsInitialize(CEodeMemRec* ce, const char* func);
-int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
 void NlsFree(CEodeMemRec* ce);
 
 // ceode_constraints.cpp
 bool HasConstraints(const CEodeMemRec* ce);
 int ConstrInitialize(CEodeMemRec* ce, const char* func);
 int ConstrStart(CEodeMemRec* ce, const char* func);  // a0, lambda0 at t0, constrained x(t0+h)
-int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func);
+int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                    const char* func);
 void ConstrFree(CEodeMemRec* ce);
 
 // ceode_stability.cpp

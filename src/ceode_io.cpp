@@ -7,11 +7,9 @@
 
 using ceode::Access;
 using ceode::ProcessError;
+using ceode::Restart;
 
 namespace {
-
-// Every setter that changes the method or the problem forces a fresh start.
-void Restart(CEodeMemRec* ce) { ce->started = false; }
 
 template <typename T>
 int GetCounter(void* mem, const char* func, T* out, T CEodeMemRec::*field) {
@@ -180,8 +178,9 @@ int CEodeSetMaxNumSteps(void* mem, long int mxsteps) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  // As in CVODE: a non-positive value restores the default.
-  ce->mxstep = mxsteps > 0 ? mxsteps : 500000000L;
+  // CEODE's own rule: a non-positive value restores the default (CVODE restores it for 0 and
+  // disables the test for a negative value).
+  ce->mxstep = mxsteps > 0 ? mxsteps : ceode::kDefaultMaxSteps;
   return CE_SUCCESS;
 }
 
@@ -194,6 +193,7 @@ int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
                         maxcor);
   }
   ce->maxcor = maxcor;
+  ce->maxcor_set = true;
   if (ce->NLS != nullptr) SUNNonlinSolSetMaxIters(ce->NLS, maxcor);
   return CE_SUCCESS;
 }
@@ -209,6 +209,7 @@ int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol) 
   }
   ce->nls_reltol = reltol;
   ce->nls_abstol = abstol;
+  ce->nls_tol_set = true;
   return CE_SUCCESS;
 }
 
@@ -216,7 +217,7 @@ int CEodeSetJacEvalFrequency(void* mem, long int msbj) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->msbj = msbj > 0 ? msbj : 20;
+  ce->msbj = msbj > 0 ? msbj : ceode::kDefaultJacEvalFrequency;
   return CE_SUCCESS;
 }
 

@@ -13,10 +13,6 @@ namespace ceode {
 
 namespace {
 
-constexpr int kHoldsNothing = 0;
-constexpr int kHoldsMass = 1;
-constexpr int kHoldsNewton = 2;
-
 // Matrix-free product for iterative solvers: M w, or (M - kappa df/dv) w with
 // df/dv w from one difference quotient at the current Newton iterate.
 int ATimes(void* data, N_Vector w, N_Vector z) {
@@ -26,7 +22,7 @@ int ATimes(void* data, N_Vector w, N_Vector z) {
   } else {
     N_VScale(1, w, z);
   }
-  if (ce->a_holds != kHoldsNewton) return 0;
+  if (ce->a_holds != Holds::kNewton) return 0;
   // The increment perturbs the velocity, so it is scaled by |v| (as the dense
   // difference quotients are), not by the acceleration's error weights: those
   // carry the 1e-12 Newton tolerance and would put sig*w below v's round-off.
@@ -109,7 +105,7 @@ bool HasLocalData(N_Vector v) { return N_VGetArrayPointer(v) != nullptr; }
 }  // namespace
 
 int LsInitialize(CEodeMemRec* ce, const char* func) {
-  ce->a_holds = kHoldsNothing;
+  ce->a_holds = Holds::kNothing;
   ce->mass_dirty = true;
   ce->mass_evaluated = false;
   ce->nst_lastsetup = -1;
@@ -177,14 +173,14 @@ int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func) {
 
 int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
   if (ce->M == nullptr) return CE_SUCCESS;
-  if (ce->a_holds != kHoldsMass || ce->mass_dirty) {
+  if (ce->a_holds != Holds::kMass || ce->mass_dirty) {
     int rv = 0;
     if (ce->A != nullptr) rv = SUNMatCopy(ce->M, ce->A);
-    ce->a_holds = kHoldsMass;
+    ce->a_holds = Holds::kMass;
     if (rv == 0) rv = SUNLinSolSetup(ce->LS, ce->A);
     ++ce->nsetups;
     if (rv != 0) {
-      ce->a_holds = kHoldsNothing;
+      ce->a_holds = Holds::kNothing;
       return ProcessError(ce, CE_LSETUP_FAIL, func,
                           "The mass matrix could not be factored (linear solver setup returned "
                           "%d): M is singular. Check CEodeMassFn; a system with massless "
@@ -212,28 +208,38 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
   return CE_SUCCESS;
 }
 
+int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
+                const char* func) {
+  int rv;
+  if (ce->jac != nullptr) {
+    SUNMatZero(J);
+    rv = ce->jac(t, x, v, fv, J, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
+  } else if (SUNMatGetID(J) == SUNMATRIX_DENSE) {
+    rv = DenseDqJac(ce, t, x, v, fv, J);
+  } else {
+    rv = BandDqJac(ce, t, x, v, fv, J);
+  }
+  ++ce->nje;
+  if (rv != 0) {
+    // A fixed step cannot retry with a smaller h, so every failure is final.
+    return ProcessError(ce, CE_JACFUNC_FAIL, func,
+                        "The velocity Jacobian df/dv could not be evaluated (f or the Jacobian "
+                        "function returned %d) at t = %.17g.",
+                        rv, static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func) {
   ce->kappa_setup = kappa;
   if (ce->A != nullptr) {
-    int rv;
-    if (ce->jac != nullptr) {
-      SUNMatZero(ce->Jsave);
-      rv = ce->jac(t, x, v, fv, ce->Jsave, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
-    } else if (SUNMatGetID(ce->Jsave) == SUNMATRIX_DENSE) {
-      rv = DenseDqJac(ce, t, x, v, fv, ce->Jsave);
-    } else {
-      rv = BandDqJac(ce, t, x, v, fv, ce->Jsave);
-    }
-    ++ce->nje;
-    if (rv != 0) {
-      // A fixed step cannot retry with a smaller h, so every failure is final.
-      ce->cb_flag = ProcessError(ce, CE_JACFUNC_FAIL, func,
-                                 "The velocity Jacobian df/dv could not be evaluated (f or the "
-                                 "Jacobian function returned %d) at t = %.17g.",
-                                 rv, static_cast<double>(t));
+    const int flag = VelJacobian(ce, t, x, v, fv, ce->Jsave, func);
+    if (flag != CE_SUCCESS) {
+      ce->cb_flag = flag;
       return -1;
     }
+    int rv;
     rv = SUNMatCopy(ce->Jsave, ce->A);
     if (rv == 0) rv = ce->M ? SUNMatScaleAdd(-kappa, ce->A, ce->M) : SUNMatScaleAddI(-kappa, ce->A);
     if (rv != 0) {
@@ -245,13 +251,13 @@ int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector
     }
   }
   ce->mass_dirty = false;  // A is built from the current M
-  ce->a_holds = kHoldsNewton;
+  ce->a_holds = Holds::kNewton;
   const int rv = SUNLinSolSetup(ce->LS, ce->A);
   ++ce->nsetups;
   ce->nst_lastsetup = ce->nst;
   ce->jac_current = true;
   if (rv != 0) {
-    ce->a_holds = kHoldsNothing;
+    ce->a_holds = Holds::kNothing;
     ce->cb_flag = ProcessError(ce, CE_LSETUP_FAIL, func,
                                "The Newton matrix M - kappa df/dv is singular or could not be "
                                "factored (linear solver setup returned %d) at t = %.17g: check "
@@ -294,7 +300,7 @@ int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M, sunbooleantype const
   ce->mfn = mfn;
   ce->M = M;
   ce->mass_constant = constant != SUNFALSE;
-  ce->started = false;
+  ceode::Restart(ce);
   return CE_SUCCESS;
 }
 
@@ -318,7 +324,7 @@ int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A) {
     SUNMatDestroy(ce->Jsave);
     ce->Jsave = nullptr;
   }
-  ce->started = false;
+  ceode::Restart(ce);
   return CE_SUCCESS;
 }
 
@@ -328,7 +334,7 @@ int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac) {
   if (flag != CE_SUCCESS) return flag;
   ce->jac = jac;
   ce->jac_current = false;
-  ce->started = false;  // solver workspaces (e.g. the constrained Jacobian) are sized at start
+  ceode::Restart(ce);  // solver workspaces (e.g. the constrained Jacobian) are sized at start
   return CE_SUCCESS;
 }
 

@@ -146,27 +146,15 @@ void NlsFree(CEodeMemRec* ce) {
   ce->own_nls = false;
 }
 
-int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func) {
-  const int d = ce->degree;
+int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
+                  const char* func) {
   const StepCoeffs& co = ce->co;
   int flag = MassUpdate(ce, t, x, func);
   if (flag != CE_SUCCESS) return flag;
 
   // Velocity offset and predictor: v(a) = V0 + kappa a; a0 = Taylor of a from t - h.
-  sunrealtype c[kMaxDegree];
-  N_Vector X[kMaxDegree];
-  for (int j = 1; j < d; ++j) {
-    c[j - 1] = co.V0[j];
-    X[j - 1] = ce->D[j];
-  }
-  N_VLinearCombination(d - 1, c, X, ce->V0);
-  sunrealtype hp = 1;
-  for (int i = 0; i + 2 < d; ++i) {
-    c[i] = hp;
-    X[i] = ce->D[2 + i];
-    hp *= co.h / (i + 1);
-  }
-  N_VLinearCombination(d - 2, c, X, ce->apred);
+  VelocityOffset(ce, ce->V0);
+  PredictAccel(ce, ce->apred);
 
   // Weights: relative to the predicted acceleration, floored by its largest entry.
   const sunrealtype amax = N_VMaxNorm(ce->apred);
@@ -182,9 +170,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const 
   ce->cb_flag = 0;
   ce->delp = 0;
   const bool newton = SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
-  bool setup = newton && (ce->a_holds != 2 || !ce->jac_current || ce->nst_lastsetup < 0 ||
-                          ce->nst - ce->nst_lastsetup >= ce->msbj || ce->mass_dirty ||
-                          ce->kappa_setup != co.kappa);
+  bool setup = newton && (ce->a_holds != Holds::kNewton || !ce->jac_current ||
+                          ce->nst_lastsetup < 0 || ce->nst - ce->nst_lastsetup >= ce->msbj ||
+                          ce->mass_dirty || ce->kappa_setup != co.kappa);
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
     N_VConst(0, ce->ycor);
@@ -225,6 +213,6 @@ extern "C" int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS) {
   ceode::NlsFree(ce);
   ce->NLS = NLS;
   ce->own_nls = false;
-  ce->started = false;
+  ceode::Restart(ce);
   return CE_SUCCESS;
 }

@@ -1,4 +1,4 @@
-// Linear stability from the integrator's own step map (method.md section 4),
+// Linear stability from the integrator's own step map (docs/theory.md section 9),
 // and the runtime guard that compares h * omega_max with the method's limit.
 #include <ceode/ceode_stability.h>
 #include <nvector/nvector_serial.h>
@@ -240,6 +240,8 @@ int EstimateMaxFrequency(CEodeMemRec* ce, const char* func, sunrealtype* omega) 
 
 }  // namespace
 
+// The guard is being split on its own branch (guard-o3); the marker below goes with that change.
+// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
 int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (ce->guard_mode == CE_GUARD_OFF) return CE_SUCCESS;
   if (ce->omega_user > 0) {

@@ -1,4 +1,4 @@
-// The degree-generic conditionally explicit step (method.md section 2), its
+// The degree-generic conditionally explicit step (docs/theory.md section 2), its
 // coefficients, the start of the method and the dense output. One code path
 // serves every degree: the parameter sets are data in kMethodSets.
 #include <algorithm>
@@ -6,13 +6,13 @@
 #include <cstring>
 #include <functional>
 
-#include "ceode_impl.hpp"
+#include "ceode_fused.hpp"
 
 namespace ceode {
 
 namespace {
 
-// Named parameter sets (method.md section 5): alpha, beta, gamma, zeta. Measured
+// Named parameter sets (docs/theory.md section 5): alpha, beta, gamma, zeta. Measured
 // properties (orders, stability limits) are in docs/stability.md and the tests.
 const MethodSet kMethodSets[] = {
     {"G3_CD", 3, {1.0, 0.5}},
@@ -30,136 +30,6 @@ sunrealtype Factorial(int n) {
   sunrealtype r = 1;
   for (int i = 2; i <= n; ++i) r *= i;
   return r;
-}
-
-// z = sum c_i X_i with exactly the rounding of N_VScale / N_VLinearSum /
-// N_VLinearCombination, so the fused kernel below can reproduce it bit for bit.
-void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
-  if (m == 0) {
-    N_VConst(0, z);
-  } else if (m == 1) {
-    N_VScale(c[0], X[0], z);
-  } else if (m == 2) {
-    N_VLinearSum(c[0], X[0], c[1], X[1], z);
-  } else {
-    N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, z);
-  }
-}
-
-// The increment is summed first and the large accumulated term last, so that
-// quantity is rounded once per step; with compensated summation its rounding
-// error is carried forward in comp -> compnew (Kahan).
-void RunCombo(CEodeMemRec* ce, const Combo& cb) {
-  if (cb.old == nullptr) {
-    Combine(cb.m, cb.c, const_cast<N_Vector*>(cb.X), cb.out);
-    return;
-  }
-  sunrealtype c[kMaxDegree + 3];
-  N_Vector X[kMaxDegree + 3];
-  std::copy(cb.c, cb.c + cb.m, c);
-  std::copy(cb.X, cb.X + cb.m, X);
-  int m = cb.m;
-  if (!ce->compensated) {
-    c[m] = 1;
-    X[m++] = cb.old;
-    Combine(m, c, X, cb.out);
-    return;
-  }
-  N_Vector y = ce->tmp1;
-  c[m] = -1;
-  X[m++] = ce->comp[cb.level];
-  Combine(m, c, X, y);  // y = increment - comp
-  N_Vector comp_new = ce->compnew[cb.level];
-  N_VLinearSum(1, cb.old, 1, y, cb.out);
-  N_VLinearSum(1, cb.out, -1, cb.old, comp_new);
-  N_VLinearSum(1, comp_new, -1, y, comp_new);
-}
-
-// out[0..len) = sum_j c[j] X[j][0..len) with the rounding of Combine: a
-// two-term sum follows N_VLinearSum's shortcuts (a = +-b is computed as
-// a * (x +- y)); longer sums add term by term in order, as N_VLinearCombination.
-// The branch is taken once per block, so the inner loops vectorise.
-void CombineBlock(int m, const sunrealtype* c, sunrealtype* const* X, sunindextype off,
-                  sunindextype len, sunrealtype* out) {
-  if (m == 0) {
-    std::fill(out, out + len, SUN_RCONST(0.0));
-    return;
-  }
-  const sunrealtype* x0 = X[0] + off;
-  if (len <= 4) {  // tiny systems: plain scalar code, without the vector loops' set-up
-    for (sunindextype i = 0; i < len; ++i) {
-      sunrealtype acc;
-      if (m == 2) {
-        const sunrealtype a = c[0];
-        const sunrealtype b = c[1];
-        const sunrealtype y = X[1][off + i];
-        const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
-        acc = (!unit && a == b)    ? a * (x0[i] + y)
-              : (!unit && a == -b) ? a * (x0[i] - y)
-                                   : a * x0[i] + b * y;
-      } else {
-        acc = c[0] * x0[i];
-        for (int j = 1; j < m; ++j) acc += c[j] * X[j][off + i];
-      }
-      out[i] = acc;
-    }
-    return;
-  }
-  if (m == 2) {
-    const sunrealtype a = c[0];
-    const sunrealtype b = c[1];
-    const sunrealtype* y = X[1] + off;
-    const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
-    if (!unit && a == b) {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] + y[i]);
-    } else if (!unit && a == -b) {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] - y[i]);
-    } else {
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * x0[i] + b * y[i];
-    }
-    return;
-  }
-  for (sunindextype i = 0; i < len; ++i) out[i] = c[0] * x0[i];
-  for (int j = 1; j < m; ++j) {
-    const sunrealtype cj = c[j];
-    const sunrealtype* xj = X[j] + off;
-    for (sunindextype i = 0; i < len; ++i) out[i] += cj * xj[i];
-  }
-}
-
-// Serial vectors: the whole update in one sweep through memory, block by block
-// (each block stays in cache while every combination of the plan runs on it),
-// instead of one pass over the vectors per term. Same operations in the same
-// order as RunCombo, so the numbers are the same to the bit.
-// Returns false when the vectors are not serial (the generic path runs).
-bool FusedUpdate(CEodeMemRec* ce, const FusedPlan& fp, sunrealtype* l1norm) {
-  if (!ce->fused || !ce->fused_ready) return false;
-  constexpr sunindextype kBlock = 256;
-  sunrealtype y[kBlock];
-  const sunindextype n = N_VGetLength(ce->xnext);
-  const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
-  sunrealtype sum = 0;
-  for (sunindextype off = 0; off < n; off += kBlock) {
-    const sunindextype len = std::min(kBlock, n - off);
-    for (int k = 0; k < fp.n; ++k) {
-      const FusedTerms& tk = fp.terms[k];
-      if (tk.old == nullptr) {
-        CombineBlock(tk.m, tk.c, tk.X, off, len, tk.out + off);
-        continue;
-      }
-      CombineBlock(tk.m, tk.c, tk.X, off, len, y);  // y = increment - comp
-      const sunrealtype* o = tk.old + off;
-      sunrealtype* nw = tk.out + off;
-      sunrealtype* cn = tk.compnew + off;
-      for (sunindextype i = 0; i < len; ++i) {
-        nw[i] = o[i] + y[i];
-        cn[i] = (nw[i] - o[i]) - y[i];
-      }
-    }
-    for (sunindextype i = 0; i < len; ++i) sum += std::fabs(xout[off + i]);
-  }
-  *l1norm = sum;
-  return true;
 }
 
 }  // namespace
@@ -275,6 +145,33 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
 }
 
+void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
+  sunrealtype p = 1;
+  for (int i = 0; i < m; ++i) {
+    w[i] = p;
+    p *= s / (i + 1);
+  }
+}
+
+void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
+  const int d = ce->degree;
+  sunrealtype c[kMaxDegree];
+  TaylorWeights(ce->co.h, d - 2, c);
+  N_VLinearCombination(d - 2, c, const_cast<N_Vector*>(ce->D + 2), a);
+}
+
+void VelocityOffset(const CEodeMemRec* ce, N_Vector V0) {
+  const int d = ce->degree;
+  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(ce->co.V0 + 1),
+                       const_cast<N_Vector*>(ce->D + 1), V0);
+}
+
+int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
+                  const char* func) {
+  // No velocity dependence declared: f sees the last velocity, D_1(t - h).
+  return EvalAccel(ce, t, x, ce->D[1], a, func);
+}
+
 namespace {
 
 // The update after the solve: z = (a - B_2)/c_2 (d = 3: z is a itself), the
@@ -313,35 +210,6 @@ void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext,
   cb.out = xnew;
 }
 
-// Raw-pointer form of a plan: each combination with its accumulated term (or,
-// compensated, minus its compensation) appended, exactly as RunCombo hands it
-// to Combine.
-void BuildFusedPlan(const CEodeMemRec* ce, const UpdatePlan& plan, N_Vector* comp,
-                    N_Vector* compnew, FusedPlan* fp) {
-  fp->n = plan.n;
-  for (int k = 0; k < plan.n; ++k) {
-    const Combo& cb = plan.combos[k];
-    FusedTerms& tk = fp->terms[k];
-    tk.m = cb.m;
-    for (int j = 0; j < cb.m; ++j) {
-      tk.c[j] = cb.c[j];
-      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
-    }
-    tk.old = nullptr;
-    tk.compnew = nullptr;
-    if (cb.old != nullptr && !ce->compensated) {
-      tk.c[tk.m] = 1;
-      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
-    } else if (cb.old != nullptr) {
-      tk.c[tk.m] = -1;
-      tk.X[tk.m++] = N_VGetArrayPointer(comp[cb.level]);
-      tk.old = N_VGetArrayPointer(cb.old);
-      tk.compnew = N_VGetArrayPointer(compnew[cb.level]);
-    }
-    tk.out = N_VGetArrayPointer(cb.out);
-  }
-}
-
 }  // namespace
 
 // The vectors only trade places from step to step (history <-> new every step,
@@ -365,7 +233,9 @@ void BuildPlans(CEodeMemRec* ce) {
   ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
   for (int i = 0; i < kNumPlans; ++i) {
     BuildPlan(ce, D, Dn, xnext, xnew, &ce->plans[i]);
-    if (ce->fused_ready) BuildFusedPlan(ce, ce->plans[i], comp, compnew, &ce->fused_plans[i]);
+    if (ce->fused_ready) {
+      BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr}, &ce->fused_plans[i]);
+    }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
     N_Vector old = xcur;
@@ -395,12 +265,8 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
       const sunrealtype s = nodes[j];
       sunrealtype cx[kMaxDegree + 1];
       N_Vector vx[kMaxDegree + 1];
-      sunrealtype sp = 1;  // s^i / i!
-      for (int i = 0; i <= m; ++i) {
-        cx[i] = sp;
-        vx[i] = (i == 0) ? ce->xcur : ce->D[i];
-        sp *= s / (i + 1);
-      }
+      TaylorWeights(s, m + 1, cx);
+      for (int i = 0; i <= m; ++i) vx[i] = (i == 0) ? ce->xcur : ce->D[i];
       N_VLinearCombination(m + 1, cx, vx, xs);
       N_VLinearCombination(m, cx, vx + 1, vs);  // the curve's derivative: same weights, shifted
       flag = accel(t0 + s, xs, vs, as);
@@ -410,39 +276,32 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
   return flag;
 }
 
-int StartMethod(CEodeMemRec* ce) {
-  static const char* func = "CEodeEvolve";
+namespace {
+
+bool CloneIfMissing(N_Vector* v, N_Vector tmpl) {
+  if (*v == nullptr) *v = N_VClone(tmpl);
+  return *v != nullptr;
+}
+
+// The derivative vectors of the degree (and their compensations) exist once per degree.
+int AllocHistory(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
-  const sunrealtype h = ce->h;
+  bool ok = true;
   for (int k = 1; k < d; ++k) {
-    if (ce->D[k] == nullptr) ce->D[k] = N_VClone(ce->xcur);
-    if (ce->Dnew[k] == nullptr) ce->Dnew[k] = N_VClone(ce->xcur);
-    if (ce->D[k] == nullptr || ce->Dnew[k] == nullptr) {
-      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-    }
+    ok = ok && CloneIfMissing(&ce->D[k], ce->xcur) && CloneIfMissing(&ce->Dnew[k], ce->xcur);
   }
   for (int k = 0; ce->compensated && k <= d - 2; ++k) {
-    if (ce->comp[k] == nullptr) ce->comp[k] = N_VClone(ce->xcur);
-    if (ce->compnew[k] == nullptr) ce->compnew[k] = N_VClone(ce->xcur);
-    if (ce->comp[k] == nullptr || ce->compnew[k] == nullptr) {
-      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-    }
-    N_VConst(0, ce->comp[k]);
+    ok = ok && CloneIfMissing(&ce->comp[k], ce->xcur) && CloneIfMissing(&ce->compnew[k], ce->xcur);
+    if (ok) N_VConst(0, ce->comp[k]);
   }
-  ComputeStepCoeffs(d, ce->params, h, &ce->co);
-  ce->t_start_h = ce->tcur;
-  ce->nsteps_h = 0;
-  ce->guard_pending = true;
-  ce->xl1_start = N_VL1Norm(ce->xcur);
-  BuildPlans(ce);
-  if (HasConstraints(ce)) {
-    const long int nfe0 = ce->nfe;
-    const int flag = ConstrStart(ce, func);
-    ce->nfe_start += ce->nfe - nfe0;
-    if (flag == CE_SUCCESS) ce->started = true;
-    return flag;
-  }
-  const long int nfe0 = ce->nfe;
+  return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+// The unconstrained start: a0 = M^{-1} f(t0, x0, v0), the higher derivatives (consistent start)
+// or zeros (the paper's zero start), then the first position step: the Taylor polynomial of
+// every derivative known at t0.
+int OdeStart(CEodeMemRec* ce, const char* func) {
+  const int d = ce->degree;
   const sunrealtype t = ce->tcur;
   int flag = EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
@@ -457,51 +316,68 @@ int StartMethod(CEodeMemRec* ce) {
                               return EvalAccel(ce, ts, xs, vs, as, func);
                             });
   }
-  for (int k = 3; flag == CE_SUCCESS && ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
-  ce->nfe_start += ce->nfe - nfe0;
   if (flag != CE_SUCCESS) return flag;
-  // First position step: the Taylor polynomial of every derivative known at t0.
+  for (int k = 3; ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
   sunrealtype cw[kMaxDegree];
   N_Vector vw[kMaxDegree];
   for (int i = 1; i < d; ++i) {
-    cw[i - 1] = std::pow(h, i) / Factorial(i);
+    cw[i - 1] = std::pow(ce->h, i) / Factorial(i);
     vw[i - 1] = ce->D[i];
   }
   N_VLinearCombination(d - 1, cw, vw, ce->tmp1);
   N_VLinearSum(1, ce->xcur, 1, ce->tmp1, ce->xnext);
-  ce->started = true;
   return CE_SUCCESS;
 }
 
+}  // namespace
+
+int StartMethod(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  int flag = AllocHistory(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
+  ce->t_start_h = ce->tcur;
+  ce->nsteps_h = 0;
+  ce->guard_pending = true;
+  ce->xl1_start = N_VL1Norm(ce->xcur);
+  BuildPlans(ce);
+  ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
+                    : ce->vel_dependent ? SolveImplicit
+                                        : SolveExplicit;
+  const long int nfe0 = ce->nfe;
+  flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
+  ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
+  if (flag == CE_SUCCESS) ce->started = true;
+  return flag;
+}
+
+namespace {
+
+// Time k steps after tcur, from the last (re)start, so that rounding does not accumulate.
+sunrealtype StepTime(const CEodeMemRec* ce, int k) {
+  return ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + k) * ce->h;
+}
+
+}  // namespace
+
 sunrealtype FormUpdate(CEodeMemRec* ce) {
   const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
-  sunrealtype xl1 = 0;
-  if (!FusedUpdate(ce, ce->fused_plans[ip], &xl1)) {
-    const UpdatePlan& plan = ce->plans[ip];
-    for (int k = 0; k < plan.n; ++k) RunCombo(ce, plan.combos[k]);
-    xl1 = N_VL1Norm(ce->xnew);
-  }
-  return xl1;
+  if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
+  UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
+  return N_VL1Norm(ce->xnew);
 }
 
 int TakeStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   const int d = ce->degree;
-  const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + 1) * ce->h;
+  const sunrealtype t = StepTime(ce, 1);
+  const sunrealtype tnext = StepTime(ce, 2);  // the constraint holds at the new position's time
   N_Vector* D = ce->D;
   N_Vector* Dn = ce->Dnew;
   N_Vector a = Dn[2];
 
   // The only solve of the step: the acceleration at t (and multipliers).
-  int flag;
-  if (HasConstraints(ce)) {
-    flag = ConstrSolveStep(ce, t, ce->xnext, a, func);
-  } else if (ce->vel_dependent) {
-    flag = SolveImplicit(ce, t, ce->xnext, a, func);
-  } else {
-    // No velocity dependence declared: f sees the last velocity, D_1(t - h).
-    flag = EvalAccel(ce, t, ce->xnext, D[1], a, func);
-  }
+  const int flag = ce->solve_accel(ce, t, tnext, ce->xnext, a, func);
   if (flag != CE_SUCCESS) return flag;
 
   const sunrealtype xl1 = FormUpdate(ce);

@@ -1,4 +1,4 @@
-// Index-3 constraints without index reduction (method.md section 3): the DAE pendulum of the
+// Index-3 constraints without index reduction (docs/theory.md section 8): the DAE pendulum of the
 // paper's Table 11, multipliers, velocity-dependent forces, error paths, dense versus KLU.
 #include <ceode/ceode.h>
 #include <gtest/gtest.h>
@@ -156,6 +156,8 @@ struct RunOptions {
   bool sparse = false;  // KLU with CSR matrices instead of the default dense path
   bool vel_dependent = false;
   bool user_jac = false;
+  int maxcor = 0;         // > 0: CEodeSetMaxNonlinIters
+  double nls_reltol = 0;  // > 0: CEodeSetNonlinTolerances(reltol, 0)
   Pendulum* problem = nullptr;
 };
 
@@ -198,6 +200,10 @@ RunResult RunPendulum(const RunOptions& o) {
   EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
   if (o.vel_dependent) CEodeSetVelocityDependence(mem.get(), SUNTRUE);
   if (o.user_jac) CEodeSetVelJacFn(mem.get(), VelJac);
+  if (o.maxcor > 0) EXPECT_EQ(CEodeSetMaxNonlinIters(mem.get(), o.maxcor), CE_SUCCESS);
+  if (o.nls_reltol > 0) {
+    EXPECT_EQ(CEodeSetNonlinTolerances(mem.get(), o.nls_reltol, 0), CE_SUCCESS);
+  }
 
   Vector q = SerialVector(3, ctx);
   Vector v = SerialVector(3, ctx);
@@ -360,6 +366,32 @@ TEST(Constraints, LinearDampingConvergesAndDissipatesTheRightEnergy) {
     // E + dissipated work (trapezoid, O(h^2)) stays constant.
     EXPECT_LE(r.error, 1e-5);
   }
+}
+
+// The constrained Newton iteration is bounded by CEodeSetMaxNonlinIters: one iteration cannot
+// bring x(t + h) to round-off, so the first step fails with a convergence failure.
+TEST(Constraints, TheConstrainedIterationObeysTheMaximumOfNonlinearIterations) {
+  RunOptions o;
+  o.tend = 0.01;
+  o.maxcor = 1;
+  EXPECT_EQ(RunPendulum(o).flag, CE_CONV_FAILURE);
+  o.maxcor = 12;  // the constrained default, set explicitly
+  EXPECT_EQ(RunPendulum(o).flag, CE_SUCCESS);
+}
+
+// CEodeSetNonlinTolerances replaces the round-off target of the constrained test (relative to
+// |x(t + h)|): a loose tolerance takes fewer iterations (measured: 1 per step instead of 2) and
+// keeps the drift below it.
+TEST(Constraints, TheConstrainedIterationObeysTheNonlinearTolerances) {
+  RunOptions o;
+  o.tend = 1;
+  const RunResult tight = RunPendulum(o);
+  o.nls_reltol = 1e-6;
+  const RunResult loose = RunPendulum(o);
+  ASSERT_EQ(tight.flag, CE_SUCCESS);
+  ASSERT_EQ(loose.flag, CE_SUCCESS);
+  EXPECT_LT(loose.iters, tight.iters);
+  EXPECT_LT(loose.drift, 1e-5);
 }
 
 TEST(Constraints, ARedundantConstraintGivesAClearSetupError) {

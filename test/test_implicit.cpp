@@ -54,6 +54,9 @@ const char* SolverName(Solver s) {
   return "?";
 }
 
+// Printable parameter (gtest prints it in test listings).
+void PrintTo(Solver s, std::ostream* os) { *os << SolverName(s); }
+
 int DenseJac(sunrealtype /*t*/, N_Vector /*x*/, N_Vector v, N_Vector /*f*/, SUNMatrix J, void* data,
              N_Vector, N_Vector, N_Vector) {
   static_cast<const DampedChain*>(data)->VelJacobian(

@@ -30,6 +30,9 @@ struct InterpCase {
   const char* label;
 };
 
+// Printable parameter (gtest prints it in test listings).
+void PrintTo(const InterpCase& c, std::ostream* os) { *os << c.method << ", order " << c.order; }
+
 class DenseOutput : public ::testing::TestWithParam<InterpCase> {};
 
 // Output times 0.1234 k never fall on a step for any h of the fit, so every

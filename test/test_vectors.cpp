@@ -112,6 +112,11 @@ struct Case {
   const char* label;
 };
 
+// Printable parameter (gtest prints it in test listings).
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.method << (c.implicit ? ", implicit (Newton, dense)" : ", explicit");
+}
+
 class SerialAndOpenMP : public ::testing::TestWithParam<Case> {};
 
 TEST_P(SerialAndOpenMP, GiveTheSameNumbers) {

@@ -1,0 +1,240 @@
+// The saddle-point linear system of the constrained step (docs/theory.md section 8):
+// assembly of [[M - kappa J, Gt^T], [H, 0]] into the matrix of a SUNLinearSolver, its
+// factorisation and its solves. The integrator sees only SaddleSetup and SaddleSolve.
+#include "ceode_saddle.hpp"
+
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+
+#include <algorithm>
+
+namespace ceode {
+
+namespace {
+
+sunindextype Rows(SUNMatrix A) {
+  return SUNMatGetID(A) == SUNMATRIX_SPARSE ? SUNSparseMatrix_Rows(A) : SUNDenseMatrix_Rows(A);
+}
+sunindextype Cols(SUNMatrix A) {
+  return SUNMatGetID(A) == SUNMATRIX_SPARSE ? SUNSparseMatrix_Columns(A)
+                                            : SUNDenseMatrix_Columns(A);
+}
+
+// No linear solver attached: a dense one of size n + nc, owned by CEODE.
+int CreateDenseSolver(CEodeMemRec* ce, Saddle* s, const char* func) {
+  if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_DENSE) {
+    return ProcessError(ce, CE_LINIT_FAIL, func,
+                        "A sparse mass matrix with constraints needs a sparse saddle-point "
+                        "solver: attach SUNLinSol_KLU with an (n+nc) x (n+nc) CSR "
+                        "SUNSparseMatrix via CEodeSetLinearSolver.");
+  }
+  s->own_ls = true;
+  s->A = SUNDenseMatrix(s->N, s->N, ce->sunctx);
+  s->b = N_VNew_Serial(s->N, ce->sunctx);
+  if (s->A == nullptr || s->b == nullptr) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
+  s->LS = SUNLinSol_Dense(s->b, s->A, ce->sunctx);
+  if (s->LS == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  return CE_SUCCESS;
+}
+
+// The user's solver and matrix factor the saddle-point matrix: dense or sparse, size n + nc.
+int AdoptUserSolver(CEodeMemRec* ce, Saddle* s, const char* func) {
+  s->LS = ce->LS;
+  s->A = ce->A;
+  if (s->A == nullptr ||
+      (SUNMatGetID(s->A) != SUNMATRIX_DENSE && SUNMatGetID(s->A) != SUNMATRIX_SPARSE)) {
+    return ProcessError(ce, CE_LINIT_FAIL, func,
+                        "With constraints the linear solver factors the saddle-point matrix "
+                        "[[M, G^T], [G, 0]]: attach a dense (SUNLinSol_Dense) or sparse "
+                        "(SUNLinSol_KLU) solver with its (n+nc) x (n+nc) matrix.");
+  }
+  if (Rows(s->A) != s->N || Cols(s->A) != s->N) {
+    return ProcessError(ce, CE_LINIT_FAIL, func,
+                        "The linear solver's matrix is %ld x %ld, but with constraints it must "
+                        "hold the saddle-point matrix of size n + nc = %ld.",
+                        static_cast<long>(Rows(s->A)), static_cast<long>(Cols(s->A)),
+                        static_cast<long>(s->N));
+  }
+  s->sparse = SUNMatGetID(s->A) == SUNMATRIX_SPARSE;
+  if (s->sparse) s->csr = SUNSparseMatrix_SparseType(s->A) == CSR_MAT;
+  s->b = N_VNew_Serial(s->N, ce->sunctx);
+  return s->b != nullptr ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+// Every entry of the saddle-point matrix, in assembly order (duplicates are summed later).
+void CollectEntries(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
+                    SUNMatrix H) {
+  const sunindextype n = s->n;
+  std::vector<SaddleEntry>& e = s->entries;
+  e.clear();
+  if (ce->M != nullptr) {
+    ForEachEntry(ce->M, [&](sunindextype r, sunindextype c, sunrealtype v) {
+      e.push_back({r, c, v});
+    });
+  }
+  const sunrealtype diag = ce->M != nullptr ? 0 : 1;  // no mass function: M = I
+  for (sunindextype i = 0; i < n; ++i) e.push_back({i, i, diag});
+  if (J != nullptr && kappa != 0) {
+    ForEachEntry(J, [&](sunindextype r, sunindextype c, sunrealtype v) {
+      e.push_back({r, c, -kappa * v});
+    });
+  }
+  ForEachEntry(Gt, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    e.push_back({c, n + r, v});
+  });
+  ForEachEntry(H, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    e.push_back({n + r, c, v});
+  });
+}
+
+void AssembleDense(Saddle* s) {
+  SUNMatZero(s->A);
+  sunrealtype* data = SUNDenseMatrix_Data(s->A);  // column-major, leading dimension N
+  for (const SaddleEntry& x : s->entries) data[x.c * s->N + x.r] += x.v;
+}
+
+// Sorts the entries in the matrix's storage order and sums duplicates in place.
+void SortAndMerge(Saddle* s) {
+  std::vector<SaddleEntry>& e = s->entries;
+  const bool csr = s->csr;
+  std::sort(e.begin(), e.end(), [csr](const SaddleEntry& p, const SaddleEntry& q) {
+    const sunindextype pm = csr ? p.r : p.c, qm = csr ? q.r : q.c;
+    const sunindextype pn = csr ? p.c : p.r, qn = csr ? q.c : q.r;
+    return pm != qm ? pm < qm : pn < qn;
+  });
+  size_t m = 0;
+  for (size_t k = 0; k < e.size(); ++k) {
+    if (m > 0 && e[m - 1].r == e[k].r && e[m - 1].c == e[k].c) {
+      e[m - 1].v += e[k].v;
+    } else {
+      e[m++] = e[k];
+    }
+  }
+  e.resize(m);
+}
+
+// KLU keeps its symbolic analysis between setups: it must be redone when the pattern moves.
+// The only solver-specific call of the library.
+void PatternChanged(Saddle* s) {
+  if (SUNLinSolGetID(s->LS) == SUNLINEARSOLVER_KLU && !s->pat_ptr.empty()) {
+    SUNLinSol_KLUReInit(s->LS, s->A, SUNSparseMatrix_NNZ(s->A), SUNKLU_REINIT_PARTIAL);
+  }
+}
+
+int AssembleSparse(CEodeMemRec* ce, Saddle* s, const char* func) {
+  SortAndMerge(s);
+  const std::vector<SaddleEntry>& e = s->entries;
+  const size_t m = e.size();
+  SUNMatrix A = s->A;
+  if (SUNSparseMatrix_NNZ(A) < static_cast<sunindextype>(m) &&
+      SUNSparseMatrix_Reallocate(A, static_cast<sunindextype>(m)) != 0) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (saddle-point matrix).");
+  }
+  sunindextype* ptr = SUNSparseMatrix_IndexPointers(A);
+  sunindextype* idx = SUNSparseMatrix_IndexValues(A);
+  sunrealtype* val = SUNSparseMatrix_Data(A);
+  std::fill(ptr, ptr + s->N + 1, 0);
+  for (size_t k = 0; k < m; ++k) {
+    idx[k] = s->csr ? e[k].c : e[k].r;
+    val[k] = e[k].v;
+    ++ptr[(s->csr ? e[k].r : e[k].c) + 1];
+  }
+  for (sunindextype p = 0; p < s->N; ++p) ptr[p + 1] += ptr[p];
+  const bool same = s->pat_ptr.size() == static_cast<size_t>(s->N + 1) &&
+                    std::equal(ptr, ptr + s->N + 1, s->pat_ptr.begin()) && s->pat_idx.size() == m &&
+                    std::equal(idx, idx + m, s->pat_idx.begin());
+  if (!same) {
+    PatternChanged(s);
+    s->pat_ptr.assign(ptr, ptr + s->N + 1);
+    s->pat_idx.assign(idx, idx + m);
+  }
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
+  s->n = ce->n;
+  s->nc = ce->nc;
+  s->N = ce->n + ce->nc;
+  int flag = ce->LS == nullptr ? CreateDenseSolver(ce, s, func) : AdoptUserSolver(ce, s, func);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_SPARSE &&
+      SUNMatGetID(ce->M) != SUNMATRIX_DENSE) {
+    return ProcessError(ce, CE_LINIT_FAIL, func,
+                        "With constraints the mass matrix must be dense or sparse.");
+  }
+  s->sol = N_VClone(s->b);
+  if (s->sol == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  const int rv = SUNLinSolInitialize(s->LS);
+  if (rv != 0) {
+    return ProcessError(ce, CE_LINIT_FAIL, func, "SUNLinSolInitialize failed (returned %d).", rv);
+  }
+  return CE_SUCCESS;
+}
+
+void SaddleFree(Saddle* s) {
+  if (s->b != nullptr) N_VDestroy(s->b);
+  if (s->sol != nullptr) N_VDestroy(s->sol);
+  s->b = s->sol = nullptr;
+  if (s->own_ls) {
+    if (s->LS != nullptr) SUNLinSolFree(s->LS);
+    if (s->A != nullptr) SUNMatDestroy(s->A);
+  }
+  s->LS = nullptr;
+  s->A = nullptr;
+}
+
+int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
+                SUNMatrix H, sunrealtype t, const char* func) {
+  CollectEntries(ce, s, kappa, J, Gt, H);
+  if (!s->sparse) {
+    AssembleDense(s);
+  } else {
+    const int flag = AssembleSparse(ce, s, func);
+    if (flag != CE_SUCCESS) return flag;
+  }
+  const int rv = SUNLinSolSetup(s->LS, s->A);
+  ++ce->nsetups;
+  if (rv != 0) {
+    return ProcessError(ce, CE_LSETUP_FAIL, func,
+                        "The constraint saddle-point matrix [[M - kappa df/dv, G^T], [G, 0]] is "
+                        "singular (linear solver setup returned %d) at t = %.17g. Either the "
+                        "constraints are redundant or G lost rank (remove duplicate or dependent "
+                        "constraints; check CEodeConstrJacFn), or M is singular on the motions the "
+                        "constraints leave free (a massless coordinate no constraint fixes).",
+                        rv, static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
+int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
+                sunrealtype bot_scale, N_Vector bottom, sunrealtype t, const char* func) {
+  sunrealtype* bd = N_VGetArrayPointer(s->b);
+  const sunrealtype* td = N_VGetArrayPointer(top);
+  const sunrealtype* pd = N_VGetArrayPointer(bottom);
+  for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
+  for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
+  N_VConst(0, s->sol);
+  const int rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
+  ++ce->nls_solves;
+  if (rv != 0 || !IsFinite(s->sol)) {
+    return ProcessError(
+        ce, rv != 0 ? CE_LSOLVE_FAIL : CE_LSETUP_FAIL, func,
+        "The constraint saddle-point solve failed (returned %d%s) at t = %.17g: the "
+        "matrix is singular or nearly so (redundant constraints?).",
+        rv, rv == 0 ? ", non-finite solution" : "", static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
+void SaddleSplit(const Saddle& s, N_Vector xs, N_Vector ls) {
+  const sunrealtype* sd = N_VGetArrayPointer(s.sol);
+  std::copy(sd, sd + s.n, N_VGetArrayPointer(xs));
+  std::copy(sd + s.n, sd + s.N, N_VGetArrayPointer(ls));
+}
+
+}  // namespace ceode

@@ -1,0 +1,79 @@
+// The saddle-point linear system of the constrained step (ceode_saddle.cpp), private:
+//   [ M - kappa J   Gt^T ] [ delta ]   [ top    ]
+//   [ H             0    ] [   s   ] = [ bottom ]
+// assembled into a dense or sparse (CSR/CSC) matrix and factored by a SUNLinearSolver.
+#ifndef CEODE_SRC_CEODE_SADDLE_HPP_
+#define CEODE_SRC_CEODE_SADDLE_HPP_
+
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <vector>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+// Calls fn(row, col, value) for every stored entry; dense matrices give their nonzeros (and the
+// diagonal, so that a sparse pattern does not change when a diagonal value passes through 0).
+template <class Fn>
+void ForEachEntry(SUNMatrix M, Fn fn) {
+  if (SUNMatGetID(M) == SUNMATRIX_DENSE) {
+    const sunindextype m = SUNDenseMatrix_Rows(M);
+    const sunindextype n = SUNDenseMatrix_Columns(M);
+    const sunrealtype* data = SUNDenseMatrix_Data(M);  // column-major, leading dimension m
+    for (sunindextype j = 0; j < n; ++j) {
+      const sunrealtype* col = data + j * m;
+      for (sunindextype i = 0; i < m; ++i) {
+        if (col[i] != 0 || i == j) fn(i, j, col[i]);
+      }
+    }
+    return;
+  }
+  const sunindextype np = SUNSparseMatrix_NP(M);
+  const sunindextype* ptr = SUNSparseMatrix_IndexPointers(M);
+  const sunindextype* idx = SUNSparseMatrix_IndexValues(M);
+  const sunrealtype* val = SUNSparseMatrix_Data(M);
+  const bool csr = SUNSparseMatrix_SparseType(M) == CSR_MAT;
+  for (sunindextype p = 0; p < np; ++p) {
+    for (sunindextype k = ptr[p]; k < ptr[p + 1]; ++k) {
+      fn(csr ? p : idx[k], csr ? idx[k] : p, val[k]);
+    }
+  }
+}
+
+struct SaddleEntry {
+  sunindextype r, c;
+  sunrealtype v;
+};
+
+// The saddle-point solver: its matrix, its linear solver (the user's, or a dense one CEODE
+// owns) and the serial right-hand side and solution of length N = n + nc.
+struct Saddle {
+  sunindextype n = 0, nc = 0, N = 0;
+  bool sparse = false;  // A is a SUNSparseMatrix
+  bool csr = true;
+  bool own_ls = false;
+  SUNLinearSolver LS = nullptr;
+  SUNMatrix A = nullptr;
+  N_Vector b = nullptr;
+  N_Vector sol = nullptr;
+  std::vector<SaddleEntry> entries;
+  std::vector<sunindextype> pat_ptr, pat_idx;  // pattern of the last sparse factorization
+};
+
+// Validates or creates the solver for the configuration in ce (LS, A, M); sizes from ce.
+int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func);
+void SaddleFree(Saddle* s);
+// Assembles [[M - kappa J, Gt^T], [H, 0]] (J = NULL: no damping term) and factors it.
+int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
+                SUNMatrix H, sunrealtype t, const char* func);
+// s->sol = A^{-1} [top_scale top; bot_scale bottom]; local-data vectors of length n and nc.
+int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
+                sunrealtype bot_scale, N_Vector bottom, sunrealtype t, const char* func);
+// The state part of the solution into xs, the multiplier part into ls.
+void SaddleSplit(const Saddle& s, N_Vector xs, N_Vector ls);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_SADDLE_HPP_
