@@ -103,7 +103,7 @@ static int make_inner(SUNContext ctx, const char* kind, double hin, const char* 
   if (!flag) flag = ARKStepSetUserData(*mem, nfast);
   if (!flag && strcmp(kind, "erk4") == 0) flag = ARKStepSetFixedStep(*mem, hin);
   if (!flag && strcmp(kind, "erk4") != 0)
-    flag = ARKStepSetTableNum(*mem, -1, ARKODE_ZONNEVELD_5_3_4);
+    flag = ARKStepSetTableNum(*mem, ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4);
   if (!flag && strcmp(kind, "erk4") != 0) flag = ARKStepSStolerances(*mem, hin, 1e-3 * hin);
   if (!flag) flag = ARKStepSetMaxNumSteps(*mem, 1000000);
   if (!flag) flag = ARKStepCreateMRIStepInnerStepper(*mem, inner);
