@@ -333,15 +333,27 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   return flag;
 }
 
+// Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's
+// x0, v0 at t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
+int StateFromMemory(Stepper* st, N_Vector y, const char* func) {
+  Halves in, own;
+  int flag = SplitVector(st, y, &st->io_view, &in, func);
+  if (flag == CE_SUCCESS && st->y_own == nullptr) flag = Allocate(st, y, func);
+  if (flag == CE_SUCCESS) flag = SplitVector(st, st->y_own, &st->own_view, &own, func);
+  if (flag != CE_SUCCESS) return flag;
+  N_VScale(1, st->ce->xcur, own.x);
+  N_VScale(1, st->ce->D[1], own.v);
+  st->t_own = st->ce->tcur;
+  st->have_state = true;
+  return CE_SUCCESS;
+}
+
 // Integrates the owned state from t_own to tout (> t_own) and copies it to y.
 int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
-  if (!st->have_state) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The inner stepper has no state: reset it first (MRIStep does).");
-  }
   int flag = StepperCheckMemory(ce, func);
   if (flag != CE_SUCCESS) return flag;
+  if (!st->have_state && (flag = StateFromMemory(st, y, func)) != CE_SUCCESS) return flag;
   if (st->tstop_set && tout > st->tstop) tout = st->tstop;
   const sunrealtype t0 = st->t_own;
   const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(t0) + std::fabs(tout));

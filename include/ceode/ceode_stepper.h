@@ -12,7 +12,9 @@
  * the largest inner step) before the stepper is created. From then on the
  * stepper drives that memory: do not call CEodeSetUserData or CEodeEvolve on
  * it until the stepper is freed. Counters (CEodeGetNumSteps, ...) of the CEODE
- * memory accumulate over all inner integrations.
+ * memory accumulate over all inner integrations. Until its first reset the
+ * stepper's state is the CEODE memory's (x0, v0 at t0 of CEodeInit); a reset
+ * copies the state it is given (the stepper owns its start state).
  * ---------------------------------------------------------------------------*/
 #ifndef CEODE_CEODE_STEPPER_H_
 #define CEODE_CEODE_STEPPER_H_
