@@ -207,6 +207,16 @@ TEST(MriInnerStepper, MatchesAnRk4InnerStepperWhenBothHalvesAreForcedAndFDepends
 // ---------------------------------------------------------------------------
 // Bad input: a flag and a message naming the cause, nothing crashes.
 
+// ARKODE's own report of the failure is noise here (SUNDIALS 7 logs it through
+// the SUNContext's logger and has no per-integrator error file).
+void QuietArkode(void* arkode_mem) {
+#if SUNDIALS_VERSION_MAJOR < 7
+  MRIStepSetErrFile(arkode_mem, nullptr);
+#else
+  (void)arkode_mem;
+#endif
+}
+
 std::string LastMessage(void* ce) {
   const char* msg = nullptr;
   CEodeGetLastErrorMessage(ce, &msg);
@@ -283,7 +293,7 @@ TEST_F(MriInnerStepperBadInput, ABackwardInnerStepIsRefusedAsForwardOnly) {
   Vector y = SerialVector(4, ctx_, 0.5);
   std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
   ASSERT_TRUE(mri);
-  MRIStepSetErrFile(mri.get(), nullptr);
+  QuietArkode(mri.get());
   ASSERT_EQ(MRIStepSetFixedStep(mri.get(), -0.1), 0);
   sunrealtype t = 0;
   EXPECT_LT(MRIStepEvolve(mri.get(), -0.5, y.get(), &t, ARK_NORMAL), 0);
@@ -300,7 +310,7 @@ TEST_F(MriInnerStepperBadInput, AManyVectorOfThreePartsIsRefused) {
   Inner keep(s);
   std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
   ASSERT_TRUE(mri);
-  MRIStepSetErrFile(mri.get(), nullptr);
+  QuietArkode(mri.get());
   ASSERT_EQ(MRIStepSetFixedStep(mri.get(), 0.1), 0);
   sunrealtype t = 0;
   EXPECT_LT(MRIStepEvolve(mri.get(), 0.5, y.get(), &t, ARK_NORMAL), 0);
@@ -315,7 +325,7 @@ TEST_F(MriInnerStepperBadInput, ASerialStateOfTheWrongLengthIsRefused) {
   Inner keep(s);
   std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
   ASSERT_TRUE(mri);
-  MRIStepSetErrFile(mri.get(), nullptr);
+  QuietArkode(mri.get());
   ASSERT_EQ(MRIStepSetFixedStep(mri.get(), 0.1), 0);
   sunrealtype t = 0;
   EXPECT_LT(MRIStepEvolve(mri.get(), 0.5, y.get(), &t, ARK_NORMAL), 0);
