@@ -5,6 +5,11 @@
  * closed-form solution there).
  *
  * Usage: mri_inner_cost [ceode|erk4|erk4-adapt] [h_inner or rtol] [CEODE method] [omega]
+ *        mri_inner_cost equal-error [omega]
+ * The second form compares at equal error: for each H, the reference error is
+ * that of MRI with an (almost) exact inner solve (RK4, h = 5e-5); for each inner
+ * stepper it reports the fewest fast f evaluations over a grid of inner steps
+ * whose MRI error is within 10 % of the reference.
  * Prints, for slow steps H = 2/10 .. 2/160: H, max error at t = 2, fast f
  * evaluations (counted inside the fast right-hand side, every call), and the
  * order of a log-log fit of the errors.
@@ -149,8 +154,44 @@ static double run(SUNContext ctx, const char* kind, double hin, const char* meth
   return err;
 }
 
+static void equal_error(SUNContext ctx) {
+  static const double grid[] = {0.1,  0.05,   0.03,  0.02,  0.0199, 0.0173, 0.015,
+                                0.01, 0.0075, 0.005, 0.003, 0.002,  0.001,  0.0005};
+  static const char* kinds[3][2] = {{"ceode", "G4_A34"}, {"ceode", "G3_CD"}, {"erk4", "RK4"}};
+  printf("# omega %g; cheapest inner step with MRI error within 10%% of the exact-inner error\n",
+         OMEGA);
+  printf("# H ref_error | G4_A34: h err fast_f | G3_CD: h err fast_f | RK4: h err fast_f\n");
+  for (int i = 0; i < NRUNS; ++i) {
+    const int nslow = 10 << i;
+    long nref = 0;
+    const double ref = run(ctx, "erk4", 5e-5, "", nslow, &nref);
+    printf("%.5f %.4e", TEND / nslow, ref);
+    for (int k = 0; k < 3; ++k) {
+      double best_h = 0, best_e = 0;
+      long best_n = -1;
+      for (size_t j = 0; j < sizeof(grid) / sizeof(grid[0]); ++j) {
+        long n = 0;
+        const double e = run(ctx, kinds[k][0], grid[j], kinds[k][1], nslow, &n);
+        if (e > 0 && fabs(e - ref) <= 0.1 * ref && (best_n < 0 || n < best_n)) {
+          best_h = grid[j], best_e = e, best_n = n;
+        }
+      }
+      printf(" | %.4g %.4e %ld", best_h, best_e, best_n);
+    }
+    printf("\n");
+  }
+}
+
 int main(int argc, char** argv) {
   const char* kind = argc > 1 ? argv[1] : "ceode";
+  if (strcmp(kind, "equal-error") == 0) {
+    SUNContext ctx = NULL;
+    if (argc > 2) OMEGA = atof(argv[2]);
+    if (SUNContext_Create(CTX_COMM, &ctx) != 0) return 1;
+    equal_error(ctx);
+    SUNContext_Free(&ctx);
+    return 0;
+  }
   const double hin = argc > 2 ? atof(argv[2]) : 0.01;
   const char* method = argc > 3 ? argv[3] : "G4_A34";
   if (argc > 4) OMEGA = atof(argv[4]);

@@ -375,7 +375,10 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     // The first run estimated omega_max; later restarts check h against it without
     // a new power iteration.
     if (!st->omega_fixed && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
+      const bool warned = ce->guard_warned;  // one warning per run, not one per restart
       CEodeSetMaxFrequency(ce, ce->omega_est);
+      ce->guard_warned = warned;
+      ce->guard_pending = false;
       st->omega_fixed = true;
     }
     if (st->nforcing > 0) {
