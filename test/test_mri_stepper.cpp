@@ -6,6 +6,11 @@
 #include <ceode/ceode_stepper.h>
 #include <nvector/nvector_manyvector.h>
 
+#ifdef CEODE_HAVE_SUNSTEPPER
+#include <arkode/arkode_erkstep.h>
+#include <arkode/arkode_splittingstep.h>
+#endif
+
 #include <cstring>
 
 #include "test_util.hpp"
@@ -344,5 +349,73 @@ TEST_F(MriInnerStepperBadInput, FreeingTheStepperHandsTheMemoryBackUsable) {
   // x'' = -omega^2 (q - s) with q = s = 0.5 at rest: nothing moves.
   EXPECT_NEAR(NV_Ith_S(x.get(), 0), 0.5, 1e-12);
 }
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+// SUNDIALS >= 7.2: CEODE's SUNStepper in SplittingStep, with ERKStep on the slow partition.
+struct ArkodeDeleter {
+  void operator()(void* mem) const { ARKodeFree(&mem); }
+};
+struct SunStepperDeleter {
+  void operator()(SUNStepper s) const { SUNStepper_Destroy(&s); }
+};
+using SunStepperPtr = std::unique_ptr<std::remove_pointer_t<SUNStepper>, SunStepperDeleter>;
+
+// Problem A split into fast (CEODE) and slow (ERKStep, h = 1e-3); returns the error or -1.
+double RunSplitting(SUNContext ctx, ARKODE_SplittingCoefficientsID id, int nsteps, void** ce_out,
+                    Mem* keep) {
+  ManyState st(ctx, 2);
+  double q, s, p;
+  ExactA(0, &q, &s, &p);
+  sunrealtype* x = N_VGetArrayPointer(st.x.get());
+  sunrealtype* v = N_VGetArrayPointer(st.v.get());
+  x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
+  *keep = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3);
+  *ce_out = keep->get();
+  SUNStepper raw[2] = {nullptr, nullptr};
+  if (!*keep || CEodeCreateSUNStepper(keep->get(), &raw[0]) != CE_SUCCESS) return -1;
+  SunStepperPtr fast(raw[0]);
+  std::unique_ptr<void, ArkodeDeleter> erk(ERKStepCreate(SlowA, 0, st.y.get(), ctx));
+  if (!erk || ARKodeSetFixedStep(erk.get(), 1e-3) != 0 ||
+      ARKodeCreateSUNStepper(erk.get(), &raw[1]) != 0) {
+    return -1;
+  }
+  SunStepperPtr slow(raw[1]);
+  std::unique_ptr<void, ArkodeDeleter> split(SplittingStepCreate(raw, 2, 0, st.y.get(), ctx));
+  SplittingStepCoefficients c = SplittingStepCoefficients_LoadCoefficients(id);
+  int flag = SplittingStepSetCoefficients(split.get(), c);
+  SplittingStepCoefficients_Destroy(&c);
+  if (flag == 0) flag = ARKodeSetFixedStep(split.get(), 2.0 / nsteps);
+  sunrealtype t = 0;
+  if (flag == 0) flag = ARKodeEvolve(split.get(), 2.0, st.y.get(), &t, ARK_NORMAL);
+  if (flag < 0) return -1;
+  ExactA(2.0, &q, &s, &p);
+  return std::max({std::fabs(x[0] - q), std::fabs(x[1] - s), std::fabs(v[0] - p) / kOmega});
+}
+
+TEST(SunStepperInner, GivesSecondOrderInsideStrangSplitting) {
+  Context ctx;
+  std::vector<double> H, E;
+  for (int n : {20, 40, 80, 160}) {
+    void* ce = nullptr;
+    Mem keep;
+    const double e = RunSplitting(ctx, ARKODE_SPLITTING_STRANG_2_2_2, n, &ce, &keep);
+    ASSERT_GT(e, 0) << "Strang run with " << n << " steps failed";
+    H.push_back(2.0 / n);
+    E.push_back(e);
+  }
+  const double order = ceode_test::FitOrder(H, E);
+  EXPECT_GE(order, 1.8);
+  EXPECT_LE(order, 2.2);
+}
+
+TEST(SunStepperInner, RefusesTheNegativeSubstepsOfAFourthOrderSplitting) {
+  Context ctx;
+  void* ce = nullptr;
+  Mem keep;
+  EXPECT_LT(RunSplitting(ctx, ARKODE_SPLITTING_YOSHIDA_4_4_2, 20, &ce, &keep), 0);
+  ASSERT_NE(ce, nullptr);
+  EXPECT_NE(LastMessage(ce).find("forward only"), std::string::npos) << LastMessage(ce);
+}
+#endif
 
 }  // namespace
