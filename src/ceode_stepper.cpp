@@ -1,0 +1,617 @@
+// CEODE as ARKODE's fast integrator: one implementation (Reset, Evolve, FullRhs,
+// SetForcing on the Stepper below) behind MRIStep's custom inner stepper
+// (SUNDIALS 6.4 and 7.x) and the SUNStepper of SUNDIALS >= 7.2.
+//
+// The forced inner problem x' = v + r_x(t), v' = g(t, x, v) + r_v(t) is integrated
+// in second-order form with u = x' = v + r_x (docs/porting.md, "The forced inner
+// problem"):  x'' = g(t, x, u - r_x) + r_v + r_x'.
+#include <ceode/ceode_stepper.h>
+#include <nvector/nvector_manyvector.h>
+#include <nvector/nvector_serial.h>
+
+#include <algorithm>
+#include <cmath>
+#include <new>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+namespace {
+
+constexpr int kMaxForcing = 10;  // MRI forcing polynomials have (order + 1) terms at most
+
+// Views of the two halves of a first-order vector y = [x; v].
+struct Halves {
+  N_Vector x = nullptr;
+  N_Vector v = nullptr;
+};
+
+// Serial views are empty serial vectors re-pointed into y's array (no copy).
+struct ViewSlot {
+  N_Vector x = nullptr;
+  N_Vector v = nullptr;
+};
+
+// The counters CEodeReInit zeroes; the stepper adds every inner run to them.
+struct Counters {
+  long int nst, nfe, nfe_start, nni, nnf, nsetups, nls_solves, nje, nfeDQ, nme, nce;
+};
+
+Counters SaveCounters(const CEodeMemRec* ce) {
+  return {ce->nst,        ce->nfe, ce->nfe_start, ce->nni, ce->nnf, ce->nsetups,
+          ce->nls_solves, ce->nje, ce->nfeDQ,     ce->nme, ce->nce};
+}
+
+void AddCounters(CEodeMemRec* ce, const Counters& c) {
+  ce->nst += c.nst;
+  ce->nfe += c.nfe;
+  ce->nfe_start += c.nfe_start;
+  ce->nni += c.nni;
+  ce->nnf += c.nnf;
+  ce->nsetups += c.nsetups;
+  ce->nls_solves += c.nls_solves;
+  ce->nje += c.nje;
+  ce->nfeDQ += c.nfeDQ;
+  ce->nme += c.nme;
+  ce->nce += c.nce;
+}
+
+int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data);
+
+// The stepper's content. It owns its state y_own = [x; v] at t_own.
+struct Stepper {
+  CEodeMemRec* ce = nullptr;
+  CEodeRhsFn g = nullptr;  // the user's fast acceleration and its data
+  void* g_data = nullptr;
+  sunrealtype h_max = 0;  // the user's inner step: the largest one taken
+  bool serial = false;    // y is a serial vector of 2n (else a ManyVector of two parts)
+  N_Vector y_own = nullptr;
+  sunrealtype t_own = 0;
+  bool have_state = false;
+  bool omega_fixed = false;  // the guard's frequency is known: restarts do not re-estimate it
+  sunrealtype stepdir = 1;
+  sunrealtype tstop = 0;
+  bool tstop_set = false;
+  ViewSlot own_view, io_view, io2_view;
+  ViewSlot forcing_view[kMaxForcing];
+  N_Vector u = nullptr;   // x' = v + r_x during an inner run
+  N_Vector rx = nullptr;  // r_x(t), and v - r_x inside the trampoline
+  N_Vector vg = nullptr;
+  // Forcing r(t) = sum_k ((t - tshift)/tscale)^k F_k, in halves
+  int nforcing = 0;
+  sunrealtype tshift = 0;
+  sunrealtype tscale = 1;
+  N_Vector Fx[kMaxForcing] = {};
+  N_Vector Fv[kMaxForcing] = {};
+  long int nrestarts = 0;
+};
+
+void FreeSlot(ViewSlot* s) {
+  if (s->x != nullptr) N_VDestroy(s->x);
+  if (s->v != nullptr) N_VDestroy(s->v);
+  s->x = s->v = nullptr;
+}
+
+void DestroyStepper(Stepper* st) {
+  if (st == nullptr) return;
+  CEodeMemRec* ce = st->ce;
+  if (ce != nullptr && ce->f == Trampoline) {  // hand the memory back to the user
+    ce->f = st->g;
+    ce->user_data = st->g_data;
+  }
+  FreeSlot(&st->own_view);
+  FreeSlot(&st->io_view);
+  FreeSlot(&st->io2_view);
+  for (ViewSlot& s : st->forcing_view) FreeSlot(&s);
+  for (N_Vector w : {st->y_own, st->u, st->rx, st->vg}) {
+    if (w != nullptr) N_VDestroy(w);
+  }
+  delete st;
+}
+
+// The one validation point of the first-order vectors handed to the stepper:
+// y must be [x; v] with both halves of CEODE's length and vector type.
+int SplitVector(Stepper* st, N_Vector y, ViewSlot* slot, Halves* out, const char* func) {
+  CEodeMemRec* ce = st->ce;
+  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
+  const N_Vector_ID id = N_VGetVectorID(y);
+  const N_Vector_ID want = N_VGetVectorID(ce->xcur);
+  if (id == SUNDIALS_NVEC_MANYVECTOR) {
+    const sunindextype np = N_VGetNumSubvectors_ManyVector(y);
+    N_Vector x = np == 2 ? N_VGetSubvector_ManyVector(y, 0) : nullptr;
+    N_Vector v = np == 2 ? N_VGetSubvector_ManyVector(y, 1) : nullptr;
+    if (np != 2 || N_VGetLength(x) != ce->n || N_VGetLength(v) != ce->n ||
+        N_VGetVectorID(x) != want || N_VGetVectorID(v) != want) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The ManyVector state has %ld parts: it must have two, y = [x; v], "
+                          "each of length %ld and of the vector type of CEODE's x0.",
+                          static_cast<long>(np), static_cast<long>(ce->n));
+    }
+    *out = {x, v};
+    return CE_SUCCESS;
+  }
+  if (id != SUNDIALS_NVEC_SERIAL || want != SUNDIALS_NVEC_SERIAL || N_VGetLength(y) != 2 * ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The state vector (id %d, length %ld) is neither a ManyVector [x; v] of "
+                        "two parts of length %ld nor a serial vector of length %ld (2n, with a "
+                        "serial x0 in CEodeInit).",
+                        static_cast<int>(id), static_cast<long>(N_VGetLength(y)),
+                        static_cast<long>(ce->n), static_cast<long>(2 * ce->n));
+  }
+  if (slot->x == nullptr) slot->x = N_VNewEmpty_Serial(ce->n, ce->sunctx);
+  if (slot->v == nullptr) slot->v = N_VNewEmpty_Serial(ce->n, ce->sunctx);
+  if (slot->x == nullptr || slot->v == nullptr) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
+  sunrealtype* data = N_VGetArrayPointer(y);
+  N_VSetArrayPointer(data, slot->x);
+  N_VSetArrayPointer(data + ce->n, slot->v);
+  *out = {slot->x, slot->v};
+  return CE_SUCCESS;
+}
+
+// Weights of r(t) (value) and r'(t) at t.
+void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealtype* der) {
+  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
+  sunrealtype p = 1;  // tau^k
+  for (int k = 0; k < st->nforcing; ++k) {
+    val[k] = p;
+    der[k] = 0;
+    if (k > 0) der[k] = k * val[k - 1] / st->tscale;
+    p *= tau;
+  }
+}
+
+// out = r_x(t).
+void ForcingX(const Stepper* st, sunrealtype t, N_Vector out) {
+  sunrealtype val[kMaxForcing], der[kMaxForcing];
+  ForcingWeights(st, t, val, der);
+  N_VLinearCombination(st->nforcing, val, const_cast<N_Vector*>(st->Fx), out);
+}
+
+// CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
+int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
+  auto* st = static_cast<Stepper*>(data);
+  if (st->nforcing == 0) return st->g(t, x, u, f, st->g_data);
+  sunrealtype val[kMaxForcing], der[kMaxForcing];
+  ForcingWeights(st, t, val, der);
+  N_VLinearCombination(st->nforcing, val, st->Fx, st->vg);
+  N_VLinearSum(1, u, -1, st->vg, st->vg);
+  const int rv = st->g(t, x, st->vg, f, st->g_data);
+  if (rv != 0) return rv;
+  sunrealtype c[2 * kMaxForcing + 1];
+  N_Vector X[2 * kMaxForcing + 1];
+  int m = 0;
+  c[m] = 1;
+  X[m++] = f;
+  for (int k = 0; k < st->nforcing; ++k) {
+    c[m] = val[k];
+    X[m++] = st->Fv[k];
+    if (der[k] != 0) {
+      c[m] = der[k];
+      X[m++] = st->Fx[k];
+    }
+  }
+  N_VLinearCombination(m, c, X, f);
+  return 0;
+}
+
+int Allocate(Stepper* st, N_Vector y, const char* func) {
+  CEodeMemRec* ce = st->ce;
+  st->serial = N_VGetVectorID(y) == SUNDIALS_NVEC_SERIAL;
+  st->y_own = N_VClone(y);
+  st->u = N_VClone(ce->xcur);
+  st->rx = N_VClone(ce->xcur);
+  st->vg = N_VClone(ce->xcur);
+  if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
+  return CE_SUCCESS;
+}
+
+// Problems the inner stepper cannot take: the forcing adds to x'' directly, so
+// a mass matrix would have to multiply it, and constraints would fight it.
+int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
+  if (ce->mfn != nullptr || ce->M != nullptr || HasConstraints(ce)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The inner stepper needs M = I and no constraints (the MRI forcing is "
+                        "added to the acceleration): divide f by M in your right-hand side.");
+  }
+  if (ce->h <= 0) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "No inner step: call CEodeSetFixedStep(ce_mem, h) first (h is the "
+                        "largest inner step).");
+  }
+  return CE_SUCCESS;
+}
+
+int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
+  int flag = StepperCheckMemory(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->f == Trampoline) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "This CEODE memory already drives an inner stepper: create one CEODE "
+                        "memory per stepper.");
+  }
+  auto* st = new (std::nothrow) Stepper;
+  if (st == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  st->ce = ce;
+  st->g = ce->f;
+  st->g_data = ce->user_data;
+  st->h_max = ce->h;
+  st->omega_fixed = ce->omega_user > 0;
+  ce->f = Trampoline;
+  ce->user_data = st;
+  *out = st;
+  return CE_SUCCESS;
+}
+
+void StepperDestroy(Stepper* st) { DestroyStepper(st); }
+
+// The stepper copies the state: it owns what it restarts from.
+int StepperReset(Stepper* st, sunrealtype tR, N_Vector yR, const char* func) {
+  Halves in;
+  int flag = SplitVector(st, yR, &st->io_view, &in, func);
+  if (flag != CE_SUCCESS) return flag;
+  if (!std::isfinite(tR)) return ProcessError(st->ce, CE_ILL_INPUT, func, "tR is not finite.");
+  if (st->y_own == nullptr && (flag = Allocate(st, yR, func)) != CE_SUCCESS) return flag;
+  if (N_VGetVectorID(yR) != N_VGetVectorID(st->y_own)) {
+    return ProcessError(st->ce, CE_ILL_INPUT, func,
+                        "The state vector changed type since the first call (serial vs "
+                        "ManyVector): pass the same kind of vector every time.");
+  }
+  N_VScale(1, yR, st->y_own);
+  st->t_own = tR;
+  st->have_state = true;
+  return CE_SUCCESS;
+}
+
+int StepperSetForcing(Stepper* st, sunrealtype tshift, sunrealtype tscale, N_Vector* F, int nf,
+                      const char* func) {
+  if (nf < 0 || nf > kMaxForcing || (nf > 0 && F == nullptr)) {
+    return ProcessError(st->ce, CE_ILL_INPUT, func,
+                        "%d forcing vectors: 0..%d are supported (F must not be NULL).", nf,
+                        kMaxForcing);
+  }
+  if (nf > 1 && !(tscale != 0)) {
+    return ProcessError(st->ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
+  }
+  st->nforcing = 0;
+  for (int k = 0; k < nf; ++k) {
+    Halves hv;
+    const int flag = SplitVector(st, F[k], &st->forcing_view[k], &hv, func);
+    if (flag != CE_SUCCESS) return flag;
+    st->Fx[k] = hv.x;
+    st->Fv[k] = hv.v;
+  }
+  st->nforcing = nf;
+  st->tshift = tshift;
+  st->tscale = tscale;
+  return CE_SUCCESS;
+}
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+int StepperSetStepDirection(Stepper* st, sunrealtype stepdir, const char* func) {
+  if (stepdir < 0) {
+    return ProcessError(st->ce, CE_BAD_T, func,
+                        "Step direction %g: CEODE integrates forward only (a splitting method "
+                        "of order > 2 takes negative substeps); use a second-order splitting "
+                        "such as Strang, or another inner stepper.",
+                        static_cast<double>(stepdir));
+  }
+  st->stepdir = 1;
+  return CE_SUCCESS;
+}
+
+void StepperSetStopTime(Stepper* st, sunrealtype tstop) {
+  st->tstop = tstop;
+  st->tstop_set = true;
+}
+#endif
+
+// Restart CEODE at (t0, x, u = v + r_x(t0)) with the largest step <= h_max that
+// lands on tout, keeping the counters and the guard's frequency.
+int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& own,
+                 const char* func) {
+  CEodeMemRec* ce = st->ce;
+  const sunrealtype span = tout - t0;
+  const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
+  int flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
+  if (flag != CE_SUCCESS) return flag;
+  N_VScale(1, own.v, st->u);
+  if (st->nforcing > 0) {
+    ForcingX(st, t0, st->rx);
+    N_VLinearSum(1, st->u, 1, st->rx, st->u);
+  }
+  const Counters saved = SaveCounters(ce);
+  const bool warned = ce->guard_warned;
+  flag = CEodeReInit(ce, t0, own.x, st->u);
+  AddCounters(ce, saved);
+  ce->guard_warned = warned;
+  ++st->nrestarts;
+  (void)func;
+  return flag;
+}
+
+// Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's
+// x0, v0 at t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
+int StateFromMemory(Stepper* st, N_Vector y, const char* func) {
+  Halves in, own;
+  int flag = SplitVector(st, y, &st->io_view, &in, func);
+  if (flag == CE_SUCCESS && st->y_own == nullptr) flag = Allocate(st, y, func);
+  if (flag == CE_SUCCESS) flag = SplitVector(st, st->y_own, &st->own_view, &own, func);
+  if (flag != CE_SUCCESS) return flag;
+  N_VScale(1, st->ce->xcur, own.x);
+  N_VScale(1, st->ce->D[1], own.v);
+  st->t_own = st->ce->tcur;
+  st->have_state = true;
+  return CE_SUCCESS;
+}
+
+// Integrates the owned state from t_own to tout (> t_own) and copies it to y.
+int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
+  CEodeMemRec* ce = st->ce;
+  int flag = StepperCheckMemory(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  if (!st->have_state && (flag = StateFromMemory(st, y, func)) != CE_SUCCESS) return flag;
+  if (st->tstop_set && tout > st->tstop) tout = st->tstop;
+  const sunrealtype t0 = st->t_own;
+  const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(t0) + std::fabs(tout));
+  if (!(tout >= t0 - tol)) {
+    return ProcessError(ce, CE_BAD_T, func,
+                        "Inner step from t0 = %.17g to tout = %.17g is negative: CEODE integrates "
+                        "forward only (a splitting method of order > 2 takes negative substeps); "
+                        "use a second-order splitting such as Strang, or another inner stepper.",
+                        static_cast<double>(t0), static_cast<double>(tout));
+  }
+  Halves own, io;
+  if ((flag = SplitVector(st, st->y_own, &st->own_view, &own, func)) != CE_SUCCESS) return flag;
+  if ((flag = SplitVector(st, y, &st->io_view, &io, func)) != CE_SUCCESS) return flag;
+  if (tout - t0 > tol) {
+    if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
+    sunrealtype tret = t0;
+    flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL);
+    if (flag < 0) return flag;
+    // The first run estimated omega_max; later restarts check h against it without
+    // a new power iteration.
+    if (!st->omega_fixed && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
+      const bool warned = ce->guard_warned;  // one warning per run, not one per restart
+      CEodeSetMaxFrequency(ce, ce->omega_est);
+      ce->guard_warned = warned;
+      ce->guard_pending = false;
+      st->omega_fixed = true;
+    }
+    if (st->nforcing > 0) {
+      ForcingX(st, tout, st->rx);
+      N_VLinearSum(1, st->u, -1, st->rx, own.v);
+    } else {
+      N_VScale(1, st->u, own.v);
+    }
+    st->t_own = tout;
+  }
+  N_VScale(1, st->y_own, y);
+  return CE_SUCCESS;
+}
+
+// The unforced fast right-hand side f = [v; g(t, x, v)].
+int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const char* func) {
+  Halves in, out;
+  int flag = SplitVector(st, y, &st->io_view, &in, func);
+  if (flag != CE_SUCCESS) return flag;
+  if ((flag = SplitVector(st, f, &st->io2_view, &out, func)) != CE_SUCCESS) return flag;
+  N_VScale(1, in.v, out.x);
+  const int rv = st->g(t, in.x, in.v, out.v, st->g_data);
+  ++st->ce->nfe;
+  if (rv != 0) {
+    return ProcessError(st->ce, CE_RHSFUNC_FAIL, func,
+                        "The right-hand side failed (returned %d) at t = %.17g.", rv,
+                        static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
+long int StepperNumRestarts(const Stepper* st) { return st->nrestarts; }
+
+// The stepper attached to a CEODE memory, or nullptr.
+Stepper* AttachedStepper(CEodeMemRec* ce) {
+  return ce->f == Trampoline ? static_cast<Stepper*>(ce->user_data) : nullptr;
+}
+
+}  // namespace
+}  // namespace ceode
+
+// ---------------------------------------------------------------------------
+// Version-specific glue: each callback unpacks its stepper and calls the
+// implementation above.
+// ---------------------------------------------------------------------------
+namespace {
+
+using ceode::Stepper;
+
+Stepper* MriContent(MRIStepInnerStepper s) {
+  void* content = nullptr;
+  return MRIStepInnerStepper_GetContent(s, &content) == 0 ? static_cast<Stepper*>(content)
+                                                          : nullptr;
+}
+
+int MriEvolve(MRIStepInnerStepper s, sunrealtype t0, sunrealtype tout, N_Vector y) {
+  static const char* func = "CEodeMRIStepInnerEvolve";
+  Stepper* st = MriContent(s);
+  if (st == nullptr) return CE_MEM_NULL;
+  sunrealtype tshift = 0, tscale = 1;
+  N_Vector* F = nullptr;
+  int nf = 0;
+  if (MRIStepInnerStepper_GetForcingData(s, &tshift, &tscale, &F, &nf) != 0) nf = 0;
+  int flag = ceode::StepperSetForcing(st, tshift, tscale, F, nf, func);
+  if (flag == CE_SUCCESS) flag = ceode::StepperReset(st, t0, y, func);
+  if (flag == CE_SUCCESS) flag = ceode::StepperEvolve(st, tout, y, func);
+  return flag;
+}
+
+int MriFullRhs(MRIStepInnerStepper s, sunrealtype t, N_Vector y, N_Vector f, int /*mode*/) {
+  Stepper* st = MriContent(s);
+  return st == nullptr ? CE_MEM_NULL : ceode::StepperFullRhs(st, t, y, f, "CEodeMRIStepFullRhs");
+}
+
+int MriReset(MRIStepInnerStepper s, sunrealtype tR, N_Vector yR) {
+  Stepper* st = MriContent(s);
+  return st == nullptr ? CE_MEM_NULL : ceode::StepperReset(st, tR, yR, "CEodeMRIStepReset");
+}
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+Stepper* SunContent(SUNStepper s) {
+  void* content = nullptr;
+  return SUNStepper_GetContent(s, &content) == SUN_SUCCESS ? static_cast<Stepper*>(content)
+                                                           : nullptr;
+}
+
+// SUNStepper calls return a SUNErrCode; CEODE's own flag is the stepper's last flag.
+SUNErrCode SunResult(SUNStepper s, int flag) {
+  SUNStepper_SetLastFlag(s, flag);
+  return flag < 0 ? SUN_ERR_OP_FAIL : SUN_SUCCESS;
+}
+
+SUNErrCode SunEvolve(SUNStepper s, sunrealtype tout, N_Vector vret, sunrealtype* tret) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr || tret == nullptr) return SUN_ERR_ARG_CORRUPT;
+  const int flag = ceode::StepperEvolve(st, tout, vret, "CEodeSUNStepperEvolve");
+  *tret = st->t_own;
+  return SunResult(s, flag);
+}
+
+SUNErrCode SunFullRhs(SUNStepper s, sunrealtype t, N_Vector v, N_Vector f, SUNFullRhsMode) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return SunResult(s, ceode::StepperFullRhs(st, t, v, f, "CEodeSUNStepperFullRhs"));
+}
+
+SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return SunResult(s, ceode::StepperReset(st, tR, vR, "CEodeSUNStepperReset"));
+}
+
+SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  ceode::StepperSetStopTime(st, tstop);
+  return SUN_SUCCESS;
+}
+
+SUNErrCode SunSetStepDirection(SUNStepper s, sunrealtype stepdir) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  const int flag = ceode::StepperSetStepDirection(st, stepdir, "CEodeSUNStepperSetStepDirection");
+  SUNStepper_SetLastFlag(s, flag);
+  return flag < 0 ? SUN_ERR_ARG_OUTOFRANGE : SUN_SUCCESS;
+}
+
+SUNErrCode SunSetForcing(SUNStepper s, sunrealtype tshift, sunrealtype tscale, N_Vector* F,
+                         int nf) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return SunResult(s,
+                   ceode::StepperSetForcing(st, tshift, tscale, F, nf, "CEodeSUNStepperForcing"));
+}
+
+SUNErrCode SunGetNumSteps(SUNStepper s, suncountertype* nst) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr || nst == nullptr) return SUN_ERR_ARG_CORRUPT;
+  *nst = static_cast<suncountertype>(st->ce->nst);
+  return SUN_SUCCESS;
+}
+
+SUNErrCode SunDestroy(SUNStepper s) {
+  ceode::StepperDestroy(SunContent(s));
+  return SUNStepper_SetContent(s, nullptr);
+}
+
+int SunAttach(SUNStepper s, Stepper* st) {
+  int rv = SUNStepper_SetContent(s, st);
+  if (rv == 0) rv = SUNStepper_SetEvolveFn(s, SunEvolve);
+  if (rv == 0) rv = SUNStepper_SetFullRhsFn(s, SunFullRhs);
+  if (rv == 0) rv = SUNStepper_SetResetFn(s, SunReset);
+  if (rv == 0) rv = SUNStepper_SetStopTimeFn(s, SunSetStopTime);
+  if (rv == 0) rv = SUNStepper_SetStepDirectionFn(s, SunSetStepDirection);
+  if (rv == 0) rv = SUNStepper_SetForcingFn(s, SunSetForcing);
+  if (rv == 0) rv = SUNStepper_SetGetNumStepsFn(s, SunGetNumSteps);
+  if (rv == 0) rv = SUNStepper_SetDestroyFn(s, SunDestroy);
+  return rv;
+}
+#endif
+
+}  // namespace
+
+extern "C" {
+
+int CEodeCreateMRIStepInnerStepper(void* ce_mem, MRIStepInnerStepper* stepper) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(ce_mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (stepper == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "stepper = NULL.");
+  *stepper = nullptr;
+  Stepper* st = nullptr;
+  if ((flag = ceode::StepperCreate(ce, &st, __func__)) != CE_SUCCESS) return flag;
+  int rv = MRIStepInnerStepper_Create(ce->sunctx, stepper);
+  if (rv == 0) rv = MRIStepInnerStepper_SetContent(*stepper, st);
+  if (rv == 0) rv = MRIStepInnerStepper_SetEvolveFn(*stepper, MriEvolve);
+  if (rv == 0) rv = MRIStepInnerStepper_SetFullRhsFn(*stepper, MriFullRhs);
+  if (rv == 0) rv = MRIStepInnerStepper_SetResetFn(*stepper, MriReset);
+  if (rv != 0) {
+    ceode::StepperDestroy(st);
+    if (*stepper != nullptr) MRIStepInnerStepper_Free(stepper);
+    return ceode::ProcessError(ce, CE_MEM_FAIL, __func__,
+                               "MRIStepInnerStepper_Create or a setter failed (%d).", rv);
+  }
+  return CE_SUCCESS;
+}
+
+int CEodeFreeMRIStepInnerStepper(MRIStepInnerStepper* stepper) {
+  if (stepper == nullptr || *stepper == nullptr) return CE_SUCCESS;
+  ceode::StepperDestroy(MriContent(*stepper));
+  MRIStepInnerStepper_SetContent(*stepper, nullptr);
+  MRIStepInnerStepper_Free(stepper);
+  return CE_SUCCESS;
+}
+
+int CEodeGetNumInnerRestarts(void* ce_mem, long int* nrestarts) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = ceode::Access(ce_mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (nrestarts == nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "nrestarts = NULL.");
+  }
+  const Stepper* st = ceode::AttachedStepper(ce);
+  if (st == nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "This CEODE memory drives no inner stepper.");
+  }
+  *nrestarts = ceode::StepperNumRestarts(st);
+  return CE_SUCCESS;
+}
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+int CEodeCreateSUNStepper(void* ce_mem, SUNStepper* stepper) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(ce_mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (stepper == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "stepper = NULL.");
+  *stepper = nullptr;
+  Stepper* st = nullptr;
+  if ((flag = ceode::StepperCreate(ce, &st, __func__)) != CE_SUCCESS) return flag;
+  int rv = SUNStepper_Create(ce->sunctx, stepper);
+  if (rv == 0) rv = SunAttach(*stepper, st);
+  if (rv != 0) {
+    ceode::StepperDestroy(st);
+    if (*stepper != nullptr) {
+      SUNStepper_SetContent(*stepper, nullptr);
+      SUNStepper_Destroy(stepper);
+    }
+    return ceode::ProcessError(ce, CE_MEM_FAIL, __func__,
+                               "SUNStepper_Create or a setter failed (%d).", rv);
+  }
+  return CE_SUCCESS;
+}
+#endif
+
+}  // extern "C"
