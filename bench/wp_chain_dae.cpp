@@ -220,7 +220,7 @@ int IdaRes(sunrealtype, N_Vector yy, N_Vector yp, N_Vector rr, void* data) {
   const double *Q = Y, *V = Y + n, *L = Y + 2 * n, *U = Y + 2 * n + N;
   for (long i = 0; i < n; ++i) {
     R[i] = P[i] - V[i];                                /* q' - v (- G^T mu below) */
-    R[n + i] = P[n + i] - ((i & 1) != 0 ? -kGrav : 0);  /* v' - f (+ G^T lambda below) */
+    R[n + i] = P[n + i] - ((i & 1) != 0 ? -kGrav : 0); /* v' - f (+ G^T lambda below) */
   }
   double xp = 0.0, yq = 0.0, up = 0.0, wp = 0.0;
   for (long i = 0; i < N; ++i) {
@@ -359,8 +359,7 @@ void RunPoint(Scene* sc, const Config& c, double h) {
     ++sc->bad;
     std::printf("  <-- %s %g: drift above 1e-10 l^2\n", c.name, h);
   }
-  if ((c.kind == Config::kRk3 || c.kind == Config::kRk3Proj) &&
-      o.rhs_evals != 3 * o.steps + 1) {
+  if ((c.kind == Config::kRk3 || c.kind == Config::kRk3Proj) && o.rhs_evals != 3 * o.steps + 1) {
     ++sc->bad;
     std::printf("  <-- %s %g: not 3 f evaluations per step\n", c.name, h);
   }
@@ -402,8 +401,9 @@ int main(int argc, char** argv) {
   };
   const double hs[] = {6e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5};
   const double tols[] = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
-  std::printf("Chain of N = %ld pendulums (n = %ld, nc = %ld), t in [0, %g] s, from rest at 60 deg\n",
-              kN, 2 * kN, kN, kTend);
+  std::printf(
+      "Chain of N = %ld pendulums (n = %ld, nc = %ld), t in [0, %g] s, from rest at 60 deg\n", kN,
+      2 * kN, kN, kTend);
   std::printf("error = max |E - E0|, drift = max |Phi_i| (l^2 = %.4g)\n\n",
               (chain::kLtot / kN) * (chain::kLtot / kN));
   wp::Table table("chain_dae_wp", args.csv);

@@ -496,8 +496,8 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
   double t = p.t0, emax = 0, dmax = 0;
   const double* yd = N_VGetArrayPointer(y);
   // Fixed steps end half a step before tend (as CeodeOnce), adaptive ones at tend.
-  const double margin = kind == Sun::kErkFixed ? 0.5 * h_or_rtol
-                                               : 1e-12 * std::max(1.0, std::fabs(p.tend));
+  const double margin =
+      kind == Sun::kErkFixed ? 0.5 * h_or_rtol : 1e-12 * std::max(1.0, std::fabs(p.tend));
   while (!bad && t < p.tend - margin) {
     int flag;
     if (is_cvode) {
@@ -649,8 +649,7 @@ inline bool MeasureSundials(Table* table, SUNContext ctx, const FirstOrder& p, S
                             Outcome* got = nullptr) {
   return Measure(
       table, solver != nullptr ? solver : SunName(kind), config, h_or_rtol,
-      [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); },
-      got);
+      [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); }, got);
 }
 
 inline bool MeasureIda(Table* table, SUNContext ctx, const Residual& p, double tol,

@@ -18,8 +18,8 @@
 //  - CEODE, index 3, no index reduction: G5_ONES (paper's zero start, the
 //    configuration of its Table 11, and the consistent start), G4_A34, G3_CD;
 //    fixed h = 1e-2 ... 1e-4 (1e-5 with --full); a constant mass function and
-//    the 5 x 5 saddle matrix factored by SUNLinSol_Dense. CEODE needs that
-//    solver: without one CEodeEvolve stops with CE_LSETUP_FAIL (M is singular).
+//    the 5 x 5 saddle matrix factored by SUNLinSol_Dense (attached explicitly;
+//    with constraints and no solver CEODE would build the same one itself).
 //  - ARKODE ERKStep, Kutta's RK3 (wp::KuttaRk3), same steps, on the index-1
 //    form (constraints differentiated twice, the 5 x 5 saddle system solved by
 //    Gaussian elimination at every stage): "RK3" unstabilised, "RK3+proj" with
@@ -100,8 +100,8 @@ int DenseSolve(int n, double* A, double* b) {
 // Index-1 accelerations: [M G^T; G 0] (q'', lambda) = (f, -(dG/dt) q').
 int Index1Accel(const double* q, const double* v, double* acc, double* lam) {
   const double c = std::cos(q[2]), s = std::sin(q[2]), w2 = v[2] * v[2];
-  double A[25] = {kMass, 0, 0, 1, 0, 0, kMass, 0, 0, 1, 0, 0, kIzz, -kLen * c, -kLen * s,
-                  1, 0, -kLen * c, 0, 0, 0, 1, -kLen * s, 0, 0};
+  double A[25] = {kMass,     0,         0, 1, 0,         0, kMass, 0, 0, 1,         0, 0, kIzz,
+                  -kLen * c, -kLen * s, 1, 0, -kLen * c, 0, 0,     0, 1, -kLen * s, 0, 0};
   double b[5] = {0.0, -kMass * kGrav, 0.0, -kLen * s * w2, kLen * c * w2};
   if (DenseSolve(5, A, b) != 0) return 1;
   for (int i = 0; i < 3; ++i) acc[i] = b[i];
@@ -164,13 +164,34 @@ int IdaJac(sunrealtype, sunrealtype cj, N_Vector yy, N_Vector, N_Vector, SUNMatr
   const double c = std::cos(Y[2]), s = std::sin(Y[2]);
   if (SUNMatZero(J) != 0) return -1;
   const std::array<std::array<double, 3>, 28> e = {{
-      {0, 0, cj}, {0, 3, -1}, {0, 8, -1}, {1, 1, cj}, {1, 4, -1}, {1, 9, -1},
-      {2, 2, cj - kLen * s * Y[8] + kLen * c * Y[9]}, {2, 5, -1}, {2, 8, kLen * c},
-      {2, 9, kLen * s}, {3, 3, cj * kMass}, {3, 6, 1}, {4, 4, cj * kMass}, {4, 7, 1},
-      {5, 2, kLen * s * Y[6] - kLen * c * Y[7]}, {5, 5, cj * kIzz}, {5, 6, -kLen * c},
-      {5, 7, -kLen * s}, {6, 0, 1}, {6, 2, -kLen * c}, {7, 1, 1}, {7, 2, -kLen * s},
-      {8, 2, kLen * s * Y[5]}, {8, 3, 1}, {8, 5, -kLen * c}, {9, 2, -kLen * c * Y[5]},
-      {9, 4, 1}, {9, 5, -kLen * s},
+      {0, 0, cj},
+      {0, 3, -1},
+      {0, 8, -1},
+      {1, 1, cj},
+      {1, 4, -1},
+      {1, 9, -1},
+      {2, 2, cj - kLen * s * Y[8] + kLen * c * Y[9]},
+      {2, 5, -1},
+      {2, 8, kLen * c},
+      {2, 9, kLen * s},
+      {3, 3, cj * kMass},
+      {3, 6, 1},
+      {4, 4, cj * kMass},
+      {4, 7, 1},
+      {5, 2, kLen * s * Y[6] - kLen * c * Y[7]},
+      {5, 5, cj * kIzz},
+      {5, 6, -kLen * c},
+      {5, 7, -kLen * s},
+      {6, 0, 1},
+      {6, 2, -kLen * c},
+      {7, 1, 1},
+      {7, 2, -kLen * s},
+      {8, 2, kLen * s * Y[5]},
+      {8, 3, 1},
+      {8, 5, -kLen * c},
+      {9, 2, -kLen * c * Y[5]},
+      {9, 4, 1},
+      {9, 5, -kLen * s},
   }};
   for (const auto& t : e) {
     SM_ELEMENT_D(J, static_cast<sunindextype>(t[0]), static_cast<sunindextype>(t[1])) = t[2];
@@ -239,8 +260,8 @@ void CheckRow(const char* config, double h, const wp::Outcome& o, Checks* ck) {
     if (std::strcmp(r.config, config) != 0 || std::fabs(h / r.h - 1) > 1e-9) continue;
     ck->Expect(std::fabs(o.error / r.err - 1) <= 0.10, "error off the paper by > 10 %", config, h);
     if (r.drift > 0) {
-      ck->Expect(std::fabs(o.drift / r.drift - 1) <= 0.10, "drift off the paper by > 10 %",
-                 config, h);
+      ck->Expect(std::fabs(o.drift / r.drift - 1) <= 0.10, "drift off the paper by > 10 %", config,
+                 h);
     }
   }
   if (std::strcmp(config, "G5_ONES") != 0) return;
@@ -298,8 +319,10 @@ int main(int argc, char** argv) {
   for (const CeConfig& c : ces) {
     steps(1e-2, hmin, [&](double h) {
       wp::Outcome o;
-      if (!wp::MeasureCeode(&table, ctx, ce, c.method, h, c.zero_start, c.name, &o)) ++nfail;
-      else if (c.zero_start) CheckRow(c.name, h, o, &ck);
+      if (!wp::MeasureCeode(&table, ctx, ce, c.method, h, c.zero_start, c.name, &o))
+        ++nfail;
+      else if (c.zero_start)
+        CheckRow(c.name, h, o, &ck);
     });
   }
   for (bool project : {false, true}) {
