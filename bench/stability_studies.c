@@ -1,6 +1,6 @@
 /* -----------------------------------------------------------------------------
  * stability: where CEODE's fixed-step methods stop being stable, checked by
- * running them (method.md sections 4-6).
+ * running them (docs/theory.md sections 9 and 11).
  *
  * Scenes
  *  1. One-DOF forced vibration x'' + w^2 x = sin(wb t), w = 1, wb = 0.01, started

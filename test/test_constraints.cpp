@@ -1,4 +1,4 @@
-// Index-3 constraints without index reduction (method.md section 3): the DAE pendulum of the
+// Index-3 constraints without index reduction (docs/theory.md section 8): the DAE pendulum of the
 // paper's Table 11, multipliers, velocity-dependent forces, error paths, dense versus KLU.
 #include <ceode/ceode.h>
 #include <gtest/gtest.h>

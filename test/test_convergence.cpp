@@ -1,4 +1,4 @@
-// Observed convergence orders of every named parameter set (method.md section 5)
+// Observed convergence orders of every named parameter set (docs/theory.md section 5)
 // from log-log least-squares fits of the max error over a 10 s run against the
 // exact solution, in x and in x'.
 #include <gtest/gtest.h>
@@ -22,7 +22,7 @@ using ceode_test::RunResult;
 
 struct SetCase {
   const char* method;
-  int claimed;        // the paper's global order (method.md section 5): a lower bound
+  int claimed;        // the paper's global order (docs/theory.md section 5): a lower bound
   double observed;    // order measured on the damped forced oscillator; 0: only the bound holds
   double hmax;        // largest step of the fit: keeps the smallest error above round-off
   const char* label;  // test-name sentence

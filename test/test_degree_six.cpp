@@ -1,4 +1,4 @@
-// Degrees above 5 run through the same degree-generic step (method.md section 2):
+// Degrees above 5 run through the same degree-generic step (docs/theory.md section 2):
 // nothing in the library is written per degree. The paper stops at d = 5, so the
 // degree-6 parameters here come from a scan with the library's own stability
 // analysis (CEodeStabilityLimit) for a set whose Omega_max is about 1.09.

@@ -1,4 +1,4 @@
-// Regression against the paper's pendulum tables (method.md sections 6 and 7):
+// Regression against the paper's pendulum tables (docs/theory.md section 11):
 // the max energy error over 10 s of the IFToMM simple pendulum must match the
 // published figure within 5 % at h = 1e-3 and 1e-4 wherever it is above 1e-10
 // (below that the figures are round-off and machine dependent).

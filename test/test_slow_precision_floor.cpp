@@ -1,4 +1,4 @@
-// The precision floor (method.md section 2.1, issue "Stability"): at very small
+// The precision floor (docs/theory.md section 10, issue "Stability"): at very small
 // steps the pendulum's energy error stops falling because of round-off. Summing
 // each increment before the large term, and optionally Kahan-compensating the
 // accumulated quantities, pushes that floor below the paper's ~2e-11.

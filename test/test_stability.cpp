@@ -1,4 +1,4 @@
-// Linear stability analysis (method.md section 4) and the runtime stability guard.
+// Linear stability analysis (docs/theory.md section 9) and the runtime stability guard.
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>

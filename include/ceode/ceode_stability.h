@@ -1,5 +1,5 @@
 /* -----------------------------------------------------------------------------
- * Linear stability of the conditionally explicit methods (method.md section 4).
+ * Linear stability of the conditionally explicit methods (docs/theory.md section 9).
  *
  * The amplification matrix is built from CEODE's own step applied to the test
  * equation x'' + 2 xi Omega x' + Omega^2 x = 0 with h = 1, so the analysis and the
