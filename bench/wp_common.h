@@ -129,6 +129,16 @@ struct Row {
   double seconds = 0;
 };
 
+// The one CSV schema of every bench program and its row format.
+constexpr const char* kCsvHeader =
+    "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n";
+
+inline void WriteCsvRow(FILE* f, const std::string& scene, const Row& r) {
+  std::fprintf(f, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene.c_str(), r.solver.c_str(),
+               r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds);
+  std::fflush(f);
+}
+
 class Table {
  public:
   Table(const std::string& scene, const std::string& csv_path) : scene_(scene) {
@@ -138,7 +148,7 @@ class Table {
         std::fprintf(stderr, "ERROR: cannot write %s\n", csv_path.c_str());
         std::exit(1);
       }
-      std::fprintf(csv_, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
+      std::fputs(kCsvHeader, csv_);
     }
     std::printf("%-16s %-14s %9s %12s %10s %10s %10s %11s %9s\n", "solver", "config", "h_or_tol",
                 "error", "drift", "steps", "rhs_evals", "seconds", "ns/step");
@@ -156,11 +166,7 @@ class Table {
                 ns);
     std::fflush(stdout);
     rows_.push_back(r);
-    if (csv_ != nullptr) {
-      std::fprintf(csv_, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene_.c_str(), r.solver.c_str(),
-                   r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds);
-      std::fflush(csv_);
-    }
+    if (csv_ != nullptr) WriteCsvRow(csv_, scene_, r);
   }
   void Fail(const std::string& solver, const std::string& config, double h_or_tol,
             const char* why) {

@@ -269,40 +269,49 @@ void CheckRow(const char* config, double h, const wp::Outcome& o, Checks* ck) {
   ck->Expect(o.drift <= 1e-14, "drift above 1e-14", config, h);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const wp::Args args = wp::ParseArgs(argc, argv);
-  SUNContext ctx = nullptr;
-  if (SUNContext_Create(nullptr, &ctx) != 0) return 1;
+// The three formulations of the pendulum, for CEODE, ARKODE and IDA.
+struct Problems {
   User user;
-  const std::vector<double> q0 = {kLen, 0.0, kHalfPi}, v0 = {0.0, 0.0, 0.0};
-  user.e0 = Energy(q0.data(), v0.data());
-
   wp::SecondOrder ce;
-  ce.n = 3, ce.f = CeForce, ce.user = &user, ce.tend = kTend, ce.x0 = q0, ce.v0 = v0;
-  ce.err = ErrXV, ce.drift = DriftXV, ce.mass = CeMass, ce.nc = 2, ce.phi = CePhi, ce.G = CeG;
-
   wp::FirstOrder ark;
-  ark.n = 6, ark.f = ArkRhs, ark.user = &user, ark.tend = kTend, ark.err = ErrY, ark.drift = DriftY;
-  ark.y0 = {kLen, 0.0, kHalfPi, 0.0, 0.0, 0.0};
+  wp::Residual ida;
+};
 
-  wp::Residual ida;  // consistent start: v' and lambda from the index-1 system, mu = 0
-  ida.n = 10, ida.res = IdaRes, ida.jac = IdaJac, ida.user = &user, ida.tend = kTend;
+// Returns false when IDA's consistent start cannot be computed.
+bool MakeProblems(Problems* p) {
+  const std::vector<double> q0 = {kLen, 0.0, kHalfPi}, v0 = {0.0, 0.0, 0.0};
+  p->user.e0 = Energy(q0.data(), v0.data());
+  wp::SecondOrder& ce = p->ce;
+  ce.n = 3, ce.f = CeForce, ce.user = &p->user, ce.tend = kTend, ce.x0 = q0, ce.v0 = v0;
+  ce.err = ErrXV, ce.drift = DriftXV, ce.mass = CeMass, ce.nc = 2, ce.phi = CePhi, ce.G = CeG;
+  wp::FirstOrder& ark = p->ark;
+  ark.n = 6, ark.f = ArkRhs, ark.user = &p->user, ark.tend = kTend;
+  ark.err = ErrY, ark.drift = DriftY;
+  ark.y0 = {kLen, 0.0, kHalfPi, 0.0, 0.0, 0.0};
+  wp::Residual& ida = p->ida;  // consistent start: v' and lambda from the index-1 system, mu = 0
+  ida.n = 10, ida.res = IdaRes, ida.jac = IdaJac, ida.user = &p->user, ida.tend = kTend;
   ida.init_step = 1e-5, ida.err = ErrY, ida.drift = DriftY;
   ida.y0.assign(10, 0.0), ida.yp0.assign(10, 0.0), ida.id.assign(10, 0.0);
   std::copy(ark.y0.begin(), ark.y0.end(), ida.y0.begin());
-  if (Index1Accel(ida.y0.data(), ida.y0.data() + 3, ida.yp0.data() + 3, ida.y0.data() + 6) != 0) {
-    return 1;
-  }
   for (int i = 0; i < 6; ++i) ida.id[i] = (i < 5 || kIzz > 0.0) ? 1.0 : 0.0;
+  return Index1Accel(ida.y0.data(), ida.y0.data() + 3, ida.yp0.data() + 3, ida.y0.data() + 6) == 0;
+}
 
-  std::printf("DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from 90 deg at rest\n");
-  std::printf("error = max |E - E0|, drift = max |x^2 + y^2 - L^2|\n\n");
-  wp::Table table("pendulum_dae", args.csv);
+// Calls run(h) for h = hi, hi/10, ... down to lo.
+template <class F>
+void Decades(double hi, double lo, F&& run) {
+  for (int j = 0; hi * std::pow(10.0, -j) >= lo * 0.999; ++j) run(hi * std::pow(10.0, -j));
+}
+
+struct Scene {
+  SUNContext ctx = nullptr;
+  wp::Table* table = nullptr;
   Checks ck;
-  const double hmin = args.quick ? 1e-3 : args.full ? 1e-5 : 1e-4;
-  const double tolmin = args.quick ? 1e-6 : args.full ? 1e-11 : 1e-10;
+  int nfail = 0;
+  double hmin = 1e-4, tolmin = 1e-10;
+};
+
+void RunCeode(Scene* sc, const Problems& p) {
   struct CeConfig {
     const char *name, *method;
     bool zero_start;
@@ -311,40 +320,57 @@ int main(int argc, char** argv) {
                           {"G5_ONES/consistent", "G5_ONES", false},
                           {"G4_A34", "G4_A34", false},
                           {"G3_CD", "G3_CD", false}};
-  ARKodeButcherTable rk3 = wp::KuttaRk3();
-  int nfail = 0;
-  auto steps = [](double hi, double lo, auto&& run) {
-    for (int j = 0; hi * std::pow(10.0, -j) >= lo * 0.999; ++j) run(hi * std::pow(10.0, -j));
-  };
   for (const CeConfig& c : ces) {
-    steps(1e-2, hmin, [&](double h) {
+    Decades(1e-2, sc->hmin, [&](double h) {
       wp::Outcome o;
-      if (!wp::MeasureCeode(&table, ctx, ce, c.method, h, c.zero_start, c.name, &o))
-        ++nfail;
-      else if (c.zero_start)
-        CheckRow(c.name, h, o, &ck);
-    });
-  }
-  for (bool project : {false, true}) {
-    ark.post_step = project ? ProjectPositions : nullptr;
-    const char* name = project ? "RK3+proj" : "RK3";
-    steps(1e-2, hmin, [&](double h) {
-      wp::Outcome o;
-      if (!wp::MeasureSundials(&table, ctx, ark, wp::Sun::kErkFixed, h, 0, rk3, name, "ARKODE",
-                               &o)) {
-        ++nfail;
-      } else {
-        CheckRow(name, h, o, &ck);
+      if (!wp::MeasureCeode(sc->table, sc->ctx, p.ce, c.method, h, c.zero_start, c.name, &o)) {
+        ++sc->nfail;
+      } else if (c.zero_start) {
+        CheckRow(c.name, h, o, &sc->ck);
       }
     });
   }
-  steps(1e-4, tolmin, [&](double tol) {
-    if (!wp::MeasureIda(&table, ctx, ida, tol, "BDF-GGL")) ++nfail;
-  });
-  wp::PrintEqualError(table, {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11});
+}
+
+void RunSundials(Scene* sc, Problems* p) {
+  ARKodeButcherTable rk3 = wp::KuttaRk3();
+  for (bool project : {false, true}) {
+    p->ark.post_step = project ? ProjectPositions : nullptr;
+    const char* name = project ? "RK3+proj" : "RK3";
+    Decades(1e-2, sc->hmin, [&](double h) {
+      wp::Outcome o;
+      if (!wp::MeasureSundials(sc->table, sc->ctx, p->ark, wp::Sun::kErkFixed, h, 0, rk3, name,
+                               "ARKODE", &o)) {
+        ++sc->nfail;
+      } else {
+        CheckRow(name, h, o, &sc->ck);
+      }
+    });
+  }
   ARKodeButcherTable_Free(rk3);
-  SUNContext_Free(&ctx);
+  Decades(1e-4, sc->tolmin, [&](double tol) {
+    if (!wp::MeasureIda(sc->table, sc->ctx, p->ida, tol, "BDF-GGL")) ++sc->nfail;
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const wp::Args args = wp::ParseArgs(argc, argv);
+  Scene sc;
+  Problems p;
+  if (SUNContext_Create(nullptr, &sc.ctx) != 0 || !MakeProblems(&p)) return 1;
+  std::printf("DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from 90 deg at rest\n");
+  std::printf("error = max |E - E0|, drift = max |x^2 + y^2 - L^2|\n\n");
+  wp::Table table("pendulum_dae", args.csv);
+  sc.table = &table;
+  sc.hmin = args.quick ? 1e-3 : args.full ? 1e-5 : 1e-4;
+  sc.tolmin = args.quick ? 1e-6 : args.full ? 1e-11 : 1e-10;
+  RunCeode(&sc, p);
+  RunSundials(&sc, &p);
+  wp::PrintEqualError(table, {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11});
+  SUNContext_Free(&sc.ctx);
   const int needed = args.quick ? 10 : 12;
-  std::printf("\n%d checks, %d off, %d runs failed\n", ck.done, ck.off, nfail);
-  return ck.off == 0 && nfail == 0 && ck.done >= needed ? 0 : 1;
+  std::printf("\n%d checks, %d off, %d runs failed\n", sc.ck.done, sc.ck.off, sc.nfail);
+  return sc.ck.off == 0 && sc.nfail == 0 && sc.ck.done >= needed ? 0 : 1;
 }

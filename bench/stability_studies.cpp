@@ -20,7 +20,8 @@
  *     (about 1e9 steps, several minutes).
  *
  * Exit code 0 only if every check printed as "ok" holds.
- * Usage: stability [--csv FILE] [--full]
+ * Usage: stability_studies [--csv FILE] [--full]
+ * Times are the process CPU time of wp::Now (bench/wp_common.h).
  * ---------------------------------------------------------------------------*/
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
@@ -29,13 +30,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "wp_common.h" /* the one clock and CSV schema of bench/ */
+
+static double now(void) { return wp::Now(); }
 
 /* Counts failed checks; prints each one with its verdict. */
 struct checks {
@@ -52,8 +50,10 @@ static void check(struct checks* c, int ok, const char* what) {
 static void csv_row(FILE* csv, const char* scene, const char* solver, const char* config, double h,
                     double err, double drift, long steps, long nfe, double secs) {
   if (csv == NULL) return;
-  fprintf(csv, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene, solver, config, h, err, drift,
-          steps, nfe, secs);
+  wp::Row r;
+  r.solver = solver, r.config = config, r.h_or_tol = h, r.error = err, r.drift = drift;
+  r.steps = steps, r.rhs_evals = nfe, r.seconds = secs;
+  wp::WriteCsvRow(csv, scene, r);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -477,11 +477,11 @@ int main(int argc, char** argv) {
     if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
       csv = fopen(argv[++i], "w");
       if (csv == NULL) return 1;
-      fprintf(csv, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
+      fputs(wp::kCsvHeader, csv);
     } else if (strcmp(argv[i], "--full") == 0) {
       full = 1;
     } else {
-      fprintf(stderr, "usage: stability [--csv FILE] [--full]\n");
+      fprintf(stderr, "usage: stability_studies [--csv FILE] [--full]\n");
       return 2;
     }
   }
