@@ -5,7 +5,7 @@
 // Problems: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n (n = 1 is the
 // 1-DOF oscillator), explicit path, h = 1e-3 (far inside every stability limit).
 // Methods: G3_CD (d = 3) and G5 (d = 5); CEODE through CEodeEvolve(CE_ONE_STEP)
-// with serial N_Vectors, the hand loop with the method.md section 2 formulas.
+// with serial N_Vectors, the hand loop with the docs/theory.md section 2 formulas.
 // One benchmark iteration = one step, so "Time" is ns/step; for n > 1 the
 // counter ns_per_dof divides it by n.
 //

@@ -9,10 +9,15 @@
 //  * Rows in the common CSV schema
 //      scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds
 //    printed as a table while the scene runs.
-//  * Runners for CEODE (second-order form) and for ARKODE ERKStep (fixed Butcher
-//    table or adaptive), ARKODE ARKStep DIRK and CVODE (Adams / BDF) on the
-//    equivalent first-order system, so that every solver of a scene is driven,
+//  * Runners for CEODE (second-order form, optionally with a mass matrix and
+//    index-3 constraints), for ARKODE ERKStep (fixed Butcher table or
+//    adaptive, optionally with a projection after every step), ARKODE ARKStep
+//    DIRK and CVODE (Adams / BDF) on the equivalent first-order system, and
+//    for IDA on a residual form, so that every solver of a scene is driven,
 //    observed and timed the same way in the same process.
+//  * One RK3 (Kutta's, with the one workaround for SUNDIALS 6.4's FSAL rule)
+//    and one equal-error rule (TimeAtError, the cheapest time at which a curve
+//    reaches a given error, as scripts/wp_curves.py computes it).
 // -----------------------------------------------------------------------------
 #ifndef CEODE_BENCH_WP_COMMON_H_
 #define CEODE_BENCH_WP_COMMON_H_
@@ -22,10 +27,14 @@
 #include <arkode/arkode_erkstep.h>
 #include <ceode/ceode.h>
 #include <cvode/cvode.h>
+#include <ida/ida.h>
+#include <ida/ida_ls.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
@@ -46,6 +55,7 @@ namespace wp {
 struct Args {
   std::string csv;     // --csv FILE: where the rows go (none: table only)
   bool quick = false;  // --quick: fewer configurations, for smoke tests
+  bool full = false;   // --full: the scene's extra (long) configurations
 };
 
 inline Args ParseArgs(int argc, char** argv) {
@@ -55,8 +65,10 @@ inline Args ParseArgs(int argc, char** argv) {
       a.csv = argv[++i];
     } else if (std::strcmp(argv[i], "--quick") == 0) {
       a.quick = true;
+    } else if (std::strcmp(argv[i], "--full") == 0) {
+      a.full = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--csv FILE] [--quick]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--csv FILE] [--quick] [--full]\n", argv[0]);
       std::exit(2);
     }
   }
@@ -119,6 +131,16 @@ struct Row {
   double seconds = 0;
 };
 
+// The one CSV schema of every bench program and its row format.
+constexpr const char* kCsvHeader =
+    "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n";
+
+inline void WriteCsvRow(FILE* f, const std::string& scene, const Row& r) {
+  std::fprintf(f, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene.c_str(), r.solver.c_str(),
+               r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds);
+  std::fflush(f);
+}
+
 class Table {
  public:
   Table(const std::string& scene, const std::string& csv_path) : scene_(scene) {
@@ -128,7 +150,7 @@ class Table {
         std::fprintf(stderr, "ERROR: cannot write %s\n", csv_path.c_str());
         std::exit(1);
       }
-      std::fprintf(csv_, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
+      std::fputs(kCsvHeader, csv_);
     }
     std::printf("%-16s %-14s %9s %12s %10s %10s %10s %11s %9s\n", "solver", "config", "h_or_tol",
                 "error", "drift", "steps", "rhs_evals", "seconds", "ns/step");
@@ -145,11 +167,8 @@ class Table {
                 r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds,
                 ns);
     std::fflush(stdout);
-    if (csv_ != nullptr) {
-      std::fprintf(csv_, "%s,%s,%s,%.6g,%.6e,%.6e,%ld,%ld,%.6e\n", scene_.c_str(), r.solver.c_str(),
-                   r.config.c_str(), r.h_or_tol, r.error, r.drift, r.steps, r.rhs_evals, r.seconds);
-      std::fflush(csv_);
-    }
+    rows_.push_back(r);
+    if (csv_ != nullptr) WriteCsvRow(csv_, scene_, r);
   }
   void Fail(const std::string& solver, const std::string& config, double h_or_tol,
             const char* why) {
@@ -157,12 +176,70 @@ class Table {
     ++nfail_;
   }
   int failures() const { return nfail_; }
+  const std::vector<Row>& rows() const { return rows_; }
 
  private:
   std::string scene_;
+  std::vector<Row> rows_;
   FILE* csv_ = nullptr;
   int nfail_ = 0;
 };
+
+// --------------------------------------------------------------- equal error
+// Cheapest time at which one curve (the rows of one solver and config, in run
+// order) reaches error <= e: measured points at or below e, and log t
+// interpolated linearly in log error on every segment that crosses e (as
+// scripts/wp_curves.py). Returns < 0 when the curve never reaches e.
+inline double TimeAtError(const std::vector<Row>& rows, const std::string& solver,
+                          const std::string& config, double e) {
+  std::vector<const Row*> c;
+  for (const Row& r : rows) {
+    if (r.solver == solver && r.config == config) c.push_back(&r);
+  }
+  double best = -1;
+  auto take = [&best](double s) {
+    if (best < 0 || s < best) best = s;
+  };
+  for (const Row* r : c) {
+    if (r->error > 0 && r->error <= e) take(r->seconds);
+  }
+  for (size_t i = 0; i + 1 < c.size(); ++i) {
+    const double e1 = c[i]->error, e2 = c[i + 1]->error;
+    if (!(e1 > 0 && e2 > 0) || (e1 - e) * (e2 - e) >= 0 || e1 == e2) continue;
+    const double w = (std::log(e) - std::log(e1)) / (std::log(e2) - std::log(e1));
+    take(std::exp(std::log(c[i]->seconds) +
+                  w * (std::log(c[i + 1]->seconds) - std::log(c[i]->seconds))));
+  }
+  return best;
+}
+
+// Prints, at each error level, the best CEODE curve and the best other curve of
+// the table and their time ratio (< 1: CEODE faster).
+inline void PrintEqualError(const Table& table, const std::vector<double>& levels) {
+  std::vector<std::pair<std::string, std::string>> curves;
+  for (const Row& r : table.rows()) {
+    const auto key = std::make_pair(r.solver, r.config);
+    if (std::find(curves.begin(), curves.end(), key) == curves.end()) curves.push_back(key);
+  }
+  std::printf("\ntime at equal error (best curve per side):\n%9s %-30s %11s %-30s %11s %8s\n",
+              "error", "best CEODE", "seconds", "best other", "seconds", "ratio");
+  for (double e : levels) {
+    double tc = -1, to = -1;
+    std::string nc = "not reached", no = "not reached";
+    for (const auto& k : curves) {
+      const double t = TimeAtError(table.rows(), k.first, k.second, e);
+      const bool ce = k.first == "CEODE";
+      double& best = ce ? tc : to;
+      if (t > 0 && (best < 0 || t < best)) {
+        best = t;
+        (ce ? nc : no) = k.first + " " + k.second;
+      }
+    }
+    if (tc < 0 && to < 0) continue;
+    std::printf("%9.0e %-30s %11.3e %-30s %11.3e %8.3f\n", e, nc.c_str(), tc, no.c_str(), to,
+                tc > 0 && to > 0 ? tc / to : 0.0);
+  }
+}
 
 // ------------------------------------------------------- problem descriptions
 // Error of the state at one output instant; runners keep the maximum.
@@ -176,6 +253,25 @@ struct FirstOrder {
   double t0 = 0, tend = 0;
   std::vector<double> y0;
   ErrFn1 err = nullptr;
+  ErrFn1 drift = nullptr;  // constraint drift (nullptr: not tracked)
+  // ERKStep only: called by ARKODE on y after every step (e.g. a projection
+  // onto the constraints, ERKStepSetPostprocessStepFn); ARKODE then evaluates
+  // f on the changed state for the next step's first stage.
+  ARKPostProcessFn post_step = nullptr;
+};
+
+// A residual form F(t, y, y') = 0 for IDA, with a consistent (y0, yp0); id
+// marks the differential components (1) and the algebraic ones (0), which are
+// left out of the error test. err and drift see y, whose leading entries are
+// the positions and velocities as in FirstOrder.
+struct Residual {
+  int n = 0;
+  IDAResFn res = nullptr;
+  IDALsJacFn jac = nullptr;  // dense iteration matrix (nullptr: difference quotients)
+  void* user = nullptr;
+  double t0 = 0, tend = 0, init_step = 0;  // init_step 0: IDA's own estimate
+  std::vector<double> y0, yp0, id;
+  ErrFn1 err = nullptr, drift = nullptr;
 };
 
 struct SecondOrder {
@@ -188,26 +284,90 @@ struct SecondOrder {
   bool vel_dependent = false;
   CEodeVelJacFn vjac = nullptr;  // nullptr: CEODE's difference quotients
   int max_nonlin_iters = 0;      // 0: CEODE's default
+  ErrFn2 drift = nullptr;        // constraint drift (nullptr: not tracked)
+  CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
+  // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G) and the
+  // saddle-point matrix [[M, G^T], [G, 0]]: dense (saddle_nnz = 0) or CSR with
+  // room for saddle_nnz entries, factored by KLU.
+  int nc = 0;
+  CEodeConstrFn phi = nullptr;
+  CEodeConstrJacFn G = nullptr;
+  long saddle_nnz = 0;
 };
 
 // One integration's outcome (the timing is added by TimeMedian).
 struct Outcome {
-  double error = 0;
+  double error = 0, drift = 0;
   long steps = 0, rhs_evals = 0;
 };
 
 // ----------------------------------------------------------- CEODE (2nd order)
+// The objects of one CEODE run, freed together.
+struct CeodeObjects {
+  N_Vector x = nullptr, v = nullptr, phi = nullptr, b = nullptr;
+  SUNMatrix M = nullptr, A = nullptr;
+  SUNLinearSolver LS = nullptr;
+  void* mem = nullptr;
+  CeodeObjects(SUNContext ctx, int n) : x(N_VNew_Serial(n, ctx)), v(N_VNew_Serial(n, ctx)) {
+    mem = CEodeCreate(ctx);
+  }
+  ~CeodeObjects() {
+    CEodeFree(&mem);
+    if (LS != nullptr) SUNLinSolFree(LS);
+    if (A != nullptr) SUNMatDestroy(A);
+    if (M != nullptr) SUNMatDestroy(M);
+    for (N_Vector w : {x, v, phi, b}) {
+      if (w != nullptr) N_VDestroy(w);
+    }
+  }
+  CeodeObjects(const CeodeObjects&) = delete;
+  CeodeObjects& operator=(const CeodeObjects&) = delete;
+};
+
+// Linear solver, mass matrix and constraints of p; returns true on failure.
+inline bool CeodeAttach(SUNContext ctx, const SecondOrder& p, CeodeObjects* o) {
+  void* mem = o->mem;
+  if (p.vel_dependent) {
+    o->A = SUNDenseMatrix(p.n, p.n, ctx);
+    o->LS = SUNLinSol_Dense(o->x, o->A, ctx);
+    return o->A == nullptr || o->LS == nullptr ||
+           Failed(CEodeSetVelocityDependence(mem, SUNTRUE), "CEodeSetVelocityDependence") ||
+           Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver") ||
+           (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
+           (p.max_nonlin_iters > 0 &&
+            Failed(CEodeSetMaxNonlinIters(mem, p.max_nonlin_iters), "CEodeSetMaxNonlinIters"));
+  }
+  if (p.mass != nullptr) {
+    o->M = SUNDenseMatrix(p.n, p.n, ctx);
+    if (o->M == nullptr || Failed(CEodeSetMassFn(mem, p.mass, o->M, SUNTRUE), "CEodeSetMassFn")) {
+      return true;
+    }
+  }
+  if (p.nc == 0) return false;
+  const int m = p.n + p.nc;  // the saddle-point system [[M, G^T], [G, 0]]
+  o->phi = N_VNew_Serial(p.nc, ctx);
+  o->b = N_VNew_Serial(m, ctx);
+  if (o->phi == nullptr || o->b == nullptr) return true;
+  if (p.saddle_nnz > 0) {
+    o->A = SUNSparseMatrix(m, m, p.saddle_nnz, CSR_MAT, ctx);
+    if (o->A != nullptr) o->LS = SUNLinSol_KLU(o->b, o->A, ctx);
+  } else {
+    o->A = SUNDenseMatrix(m, m, ctx);
+    if (o->A != nullptr) o->LS = SUNLinSol_Dense(o->b, o->A, ctx);
+  }
+  return o->LS == nullptr ||
+         Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver") ||
+         Failed(CEodeSetConstraints(mem, o->phi, p.phi, p.G), "CEodeSetConstraints");
+}
+
 inline int CeodeOnce(SUNContext ctx, const SecondOrder& p, const char* method, double h,
                      bool zero_start, Outcome* out) {
-  N_Vector x = N_VNew_Serial(p.n, ctx);
-  N_Vector v = N_VNew_Serial(p.n, ctx);
-  SUNMatrix A = nullptr;
-  SUNLinearSolver LS = nullptr;
-  void* mem = CEodeCreate(ctx);
-  if (x == nullptr || v == nullptr || mem == nullptr) return 1;
-  std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(x));
-  std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(v));
-  bool bad = Failed(CEodeInit(mem, p.f, p.t0, x, v), "CEodeInit") ||
+  CeodeObjects o(ctx, p.n);
+  if (o.x == nullptr || o.v == nullptr || o.mem == nullptr) return 1;
+  void* mem = o.mem;
+  std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(o.x));
+  std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(o.v));
+  bool bad = Failed(CEodeInit(mem, p.f, p.t0, o.x, o.v), "CEodeInit") ||
              Failed(CEodeSetUserData(mem, p.user), "CEodeSetUserData") ||
              Failed(CEodeSetMethodByName(mem, method), "CEodeSetMethodByName") ||
              Failed(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep") ||
@@ -215,28 +375,20 @@ inline int CeodeOnce(SUNContext ctx, const SecondOrder& p, const char* method, d
              // Runs past a stability limit are part of the picture: let them blow up.
              Failed(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard") ||
              Failed(CEodeSetMaxNumSteps(mem, 100000000L), "CEodeSetMaxNumSteps") ||
-             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime");
-  if (!bad && p.vel_dependent) {
-    A = SUNDenseMatrix(p.n, p.n, ctx);
-    LS = SUNLinSol_Dense(x, A, ctx);
-    bad = A == nullptr || LS == nullptr ||
-          Failed(CEodeSetVelocityDependence(mem, SUNTRUE), "CEodeSetVelocityDependence") ||
-          Failed(CEodeSetLinearSolver(mem, LS, A), "CEodeSetLinearSolver") ||
-          (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
-          (p.max_nonlin_iters > 0 &&
-           Failed(CEodeSetMaxNonlinIters(mem, p.max_nonlin_iters), "CEodeSetMaxNonlinIters"));
-  }
-  double t = p.t0, emax = 0;
-  const double* xd = N_VGetArrayPointer(x);
-  const double* vd = N_VGetArrayPointer(v);
+             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") || CeodeAttach(ctx, p, &o);
+  double t = p.t0, emax = 0, dmax = 0;
+  const double* xd = N_VGetArrayPointer(o.x);
+  const double* vd = N_VGetArrayPointer(o.v);
   while (!bad && t < p.tend - 0.5 * h) {
     // One step at a time: x and x' are then known at the same instant.
-    if (Failed(CEodeEvolve(mem, p.tend, x, v, &t, CE_ONE_STEP), "CEodeEvolve")) {
+    if (Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve")) {
       bad = true;
       break;
     }
     const double e = p.err(t, xd, vd, p.user);
     if (!(e <= emax)) emax = e;  // also catches NaN
+    const double d = p.drift != nullptr ? p.drift(t, xd, vd, p.user) : 0.0;
+    if (!(d <= dmax)) dmax = d;
   }
   long nfe = 0, nfe_dq = 0;
   if (!bad) {
@@ -246,11 +398,7 @@ inline int CeodeOnce(SUNContext ctx, const SecondOrder& p, const char* method, d
   }
   out->rhs_evals = nfe + nfe_dq;
   out->error = emax;
-  CEodeFree(&mem);
-  if (LS != nullptr) SUNLinSolFree(LS);
-  if (A != nullptr) SUNMatDestroy(A);
-  N_VDestroy(x);
-  N_VDestroy(v);
+  out->drift = dmax;
   return bad || !std::isfinite(emax) ? 1 : 0;
 }
 
@@ -272,15 +420,17 @@ inline const char* SunName(Sun s) {
   return "?";
 }
 
-// Kutta's classic third-order method, the paper's "RK3" (method.md section 7).
-// c3 is 1 - 1e-8, not 1: SUNDIALS 6.4.1's ERKStep takes any table with
-// c_s = 1 to be first-same-as-last and reuses the last stage's f as the next
-// step's first stage, which for Kutta's table (b != last row of A) silently
-// runs a different method with 2 f calls per step. Measured: after 5 steps of
-// h = 0.1 on the pendulum ARKODE gave theta = -1.16642 against -1.16874 by
-// hand. With c3 != 1 ARKODE evaluates f(t_n+1, y_n+1) properly (3 calls per
-// step, matching the hand-written method to the last digit); c only moves the
-// time argument, so on autonomous problems this is exactly Kutta's method.
+// Kutta's classic third-order method, the paper's "RK3" (docs/theory.md
+// section 11), with the one workaround for SUNDIALS' FSAL rule: c3 is
+// 1 - 1e-8, not 1. SUNDIALS before 6.7.0 (Debian's is 6.4.1) takes any ERKStep
+// table with c_s = 1 to be first-same-as-last and reuses the last stage's f as
+// the next step's first stage, which for Kutta's table (b != last row of A)
+// silently runs a different method with 2 f calls per step. Measured: after 5
+// steps of h = 0.1 on the pendulum ARKODE gave theta = -1.16642 against
+// -1.16874 by hand. With c3 != 1 ARKODE evaluates f(t_n+1, y_n+1) properly (3
+// calls per step, matching the hand-written method to the last digit); c only
+// moves the time argument, so on autonomous problems this is exactly Kutta's
+// method.
 inline ARKodeButcherTable KuttaRk3() {
   sunrealtype c[3] = {0.0, 0.5, 1.0 - 1e-8};
   sunrealtype A[9] = {0.0, 0.0, 0.0, 0.5, 0.0, 0.0, -1.0, 2.0, 0.0};
@@ -309,7 +459,9 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
       mem = ERKStepCreate(p.f, p.t0, y, ctx);
       bad = mem == nullptr || Failed(ERKStepSetUserData(mem, p.user), "ERKStepSetUserData") ||
             Failed(ERKStepSetMaxNumSteps(mem, 100000000L), "ERKStepSetMaxNumSteps") ||
-            Failed(ERKStepSetStopTime(mem, p.tend), "ERKStepSetStopTime");
+            Failed(ERKStepSetStopTime(mem, p.tend), "ERKStepSetStopTime") ||
+            (p.post_step != nullptr &&
+             Failed(ERKStepSetPostprocessStepFn(mem, p.post_step), "ERKStepSetPostprocessStepFn"));
       if (!bad && kind == Sun::kErkFixed) {
         bad = Failed(ERKStepSetTable(mem, table), "ERKStepSetTable") ||
               Failed(ERKStepSetFixedStep(mem, h_or_rtol), "ERKStepSetFixedStep");
@@ -349,10 +501,12 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
       }
       break;
   }
-  double t = p.t0, emax = 0;
+  double t = p.t0, emax = 0, dmax = 0;
   const double* yd = N_VGetArrayPointer(y);
-  const double tiny = 1e-12 * std::max(1.0, std::fabs(p.tend));
-  while (!bad && t < p.tend - tiny) {
+  // Fixed steps end half a step before tend (as CeodeOnce), adaptive ones at tend.
+  const double margin =
+      kind == Sun::kErkFixed ? 0.5 * h_or_rtol : 1e-12 * std::max(1.0, std::fabs(p.tend));
+  while (!bad && t < p.tend - margin) {
     int flag;
     if (is_cvode) {
       flag = CVode(mem, p.tend, y, &t, CV_ONE_STEP);
@@ -367,6 +521,8 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
     }
     const double e = p.err(t, yd, p.user);
     if (!(e <= emax)) emax = e;
+    const double d = p.drift != nullptr ? p.drift(t, yd, p.user) : 0.0;
+    if (!(d <= dmax)) dmax = d;
   }
   long nfe = 0, nfi = 0, nfe_ls = 0;
   if (!bad) {
@@ -386,6 +542,7 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
   }
   out->rhs_evals = nfe + nfi + nfe_ls;
   out->error = emax;
+  out->drift = dmax;
   if (is_cvode) {
     CVodeFree(&mem);
   } else if (kind == Sun::kArkDirk) {
@@ -400,44 +557,113 @@ inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_
   return bad || !std::isfinite(emax) ? 1 : 0;
 }
 
+// ------------------------------------------------------------------------ IDA
+// One integration of a residual form with IDA (variable-order BDF, dense
+// iteration matrix) in one-step mode at rtol = atol = tol.
+inline int IdaOnce(SUNContext ctx, const Residual& p, double tol, Outcome* out) {
+  N_Vector yy = N_VNew_Serial(p.n, ctx), yp = N_VNew_Serial(p.n, ctx);
+  N_Vector id = N_VNew_Serial(p.n, ctx);
+  SUNMatrix J = SUNDenseMatrix(p.n, p.n, ctx);
+  SUNLinearSolver LS = yy != nullptr && J != nullptr ? SUNLinSol_Dense(yy, J, ctx) : nullptr;
+  void* mem = IDACreate(ctx);
+  bool bad = yp == nullptr || id == nullptr || LS == nullptr || mem == nullptr;
+  if (!bad) {
+    std::copy(p.y0.begin(), p.y0.end(), N_VGetArrayPointer(yy));
+    std::copy(p.yp0.begin(), p.yp0.end(), N_VGetArrayPointer(yp));
+    std::copy(p.id.begin(), p.id.end(), N_VGetArrayPointer(id));
+    bad = Failed(IDAInit(mem, p.res, p.t0, yy, yp), "IDAInit") ||
+          Failed(IDASetUserData(mem, p.user), "IDASetUserData") ||
+          Failed(IDASStolerances(mem, tol, tol), "IDASStolerances") ||
+          Failed(IDASetId(mem, id), "IDASetId") ||
+          Failed(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg") ||
+          Failed(IDASetStopTime(mem, p.tend), "IDASetStopTime") ||
+          Failed(IDASetMaxNumSteps(mem, 100000000L), "IDASetMaxNumSteps") ||
+          (p.init_step > 0 && Failed(IDASetInitStep(mem, p.init_step), "IDASetInitStep")) ||
+          Failed(IDASetLinearSolver(mem, LS, J), "IDASetLinearSolver") ||
+          (p.jac != nullptr && Failed(IDASetJacFn(mem, p.jac), "IDASetJacFn"));
+  }
+  double t = p.t0, emax = 0, dmax = 0;
+  const double* Y = bad ? nullptr : N_VGetArrayPointer(yy);
+  while (!bad && t < p.tend) {
+    const int flag = IDASolve(mem, p.tend, &t, yy, yp, IDA_ONE_STEP);
+    if (Failed(flag, "IDASolve")) {
+      bad = true;
+      break;
+    }
+    const double e = p.err(t, Y, p.user);
+    if (!(e <= emax)) emax = e;
+    const double d = p.drift != nullptr ? p.drift(t, Y, p.user) : 0.0;
+    if (!(d <= dmax)) dmax = d;
+    if (flag == IDA_TSTOP_RETURN) break;
+  }
+  long nre = 0, nre_ls = 0;
+  bad = bad || Failed(IDAGetNumSteps(mem, &out->steps), "IDAGetNumSteps") ||
+        Failed(IDAGetNumResEvals(mem, &nre), "IDAGetNumResEvals") ||
+        Failed(IDAGetNumLinResEvals(mem, &nre_ls), "IDAGetNumLinResEvals");
+  out->rhs_evals = nre + nre_ls;
+  out->error = emax;
+  out->drift = dmax;
+  IDAFree(&mem);
+  if (LS != nullptr) SUNLinSolFree(LS);
+  if (J != nullptr) SUNMatDestroy(J);
+  for (N_Vector w : {yy, yp, id}) {
+    if (w != nullptr) N_VDestroy(w);
+  }
+  return bad || !std::isfinite(emax) ? 1 : 0;
+}
+
 // ------------------------------------------------------- measured + timed rows
 // Runs once for the numbers, then times the same call; adds a row or a failure.
+// Returns true when the row was added; *got (if given) receives the figures.
 template <class F>
-void Measure(Table* table, const std::string& solver, const std::string& config, double h_or_tol,
-             F&& once) {
+bool Measure(Table* table, const std::string& solver, const std::string& config, double h_or_tol,
+             F&& once, Outcome* got = nullptr) {
   Outcome o;
   if (once(&o) != 0) {
     table->Fail(solver, config, h_or_tol, "failed or unstable");
-    return;
+    return false;
   }
   Outcome scratch;
   const double secs = TimeMedian([&]() { return once(&scratch); });
   if (secs < 0) {
     table->Fail(solver, config, h_or_tol, "failed while timing");
-    return;
+    return false;
   }
   Row r;
   r.solver = solver;
   r.config = config;
   r.h_or_tol = h_or_tol;
   r.error = o.error;
+  r.drift = o.drift;
   r.steps = o.steps;
   r.rhs_evals = o.rhs_evals;
   r.seconds = secs;
   table->Add(r);
+  if (got != nullptr) *got = o;
+  return true;
 }
 
-inline void MeasureCeode(Table* table, SUNContext ctx, const SecondOrder& p, const char* method,
-                         double h, bool zero_start, const std::string& config) {
-  Measure(table, "CEODE", config, h,
-          [&](Outcome* o) { return CeodeOnce(ctx, p, method, h, zero_start, o); });
+inline bool MeasureCeode(Table* table, SUNContext ctx, const SecondOrder& p, const char* method,
+                         double h, bool zero_start, const std::string& config,
+                         Outcome* got = nullptr) {
+  return Measure(
+      table, "CEODE", config, h,
+      [&](Outcome* o) { return CeodeOnce(ctx, p, method, h, zero_start, o); }, got);
 }
 
-inline void MeasureSundials(Table* table, SUNContext ctx, const FirstOrder& p, Sun kind,
+inline bool MeasureSundials(Table* table, SUNContext ctx, const FirstOrder& p, Sun kind,
                             double h_or_rtol, double atol_factor, ARKodeButcherTable tab,
-                            const std::string& config) {
-  Measure(table, SunName(kind), config, h_or_rtol,
-          [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); });
+                            const std::string& config, const char* solver = nullptr,
+                            Outcome* got = nullptr) {
+  return Measure(
+      table, solver != nullptr ? solver : SunName(kind), config, h_or_rtol,
+      [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); }, got);
+}
+
+inline bool MeasureIda(Table* table, SUNContext ctx, const Residual& p, double tol,
+                       const std::string& config, Outcome* got = nullptr) {
+  return Measure(
+      table, "IDA", config, tol, [&](Outcome* o) { return IdaOnce(ctx, p, tol, o); }, got);
 }
 
 }  // namespace wp

@@ -1,6 +1,6 @@
 // -----------------------------------------------------------------------------
 // wp_forced_vibration: work-precision scene for a stability-limited problem,
-// the one-DOF forced vibration of method.md section 6 with a slow forcing.
+// the one-DOF forced vibration of docs/theory.md section 11 with a slow forcing.
 //
 // Problem: x'' + w^2 x = sin(wb t), w = 1, wb = 0.01 (w / wb = 100), t in
 // [0, 1000] s, x(0) = 0, x'(0) = wb / (w^2 - wb^2).

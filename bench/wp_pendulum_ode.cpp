@@ -1,12 +1,12 @@
 // -----------------------------------------------------------------------------
 // wp_pendulum_ode: work-precision scene for the IFToMM simple pendulum
-// (method.md section 6), every solver timed side by side in one run.
+// (docs/theory.md section 11), every solver timed side by side in one run.
 //
 // Problem: theta'' = -(g/L) cos(theta), theta(0) = theta'(0) = 0 (released from
 // the horizontal), g = 9.81, L = 1, m = 1, t in [0, 10] s.
 // Reference solution: none needed; the exact flow conserves
 // E = 1/2 m L^2 theta'^2 + m g L sin(theta), so error = max |E - E0| over every
-// step, with theta and theta' taken at the same instant (method.md section 6).
+// step, with theta and theta' taken at the same instant (docs/theory.md section 11).
 //
 // Methods:
 //  * CEODE G3_CD, G3_A2, G4_A34, G4_A14, G5 at fixed h = 1e-1 ... 1e-5
@@ -60,7 +60,7 @@ double Err2(double, const double* x, const double* v, void*) {
 }
 double Err1(double, const double* y, void*) { return std::fabs(Energy(y[0], y[1])); }
 
-// The G3 step (method.md section 2, d = 3) written out on doubles.
+// The G3 step (docs/theory.md section 2, d = 3) written out on doubles.
 double HandG3(double alpha, double beta, double h, long* steps) {
   const long n = std::lround(kTend / h);
   double x = 0, v = 0, a = -(kGrav / kLen) * std::cos(x), emax = 0;

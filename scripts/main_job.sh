@@ -4,12 +4,13 @@
 #
 #   scripts/main_job.sh            # deps, Release build in ./build, all scenes, plots, ratios
 #
-# Steps: scripts/install_deps.sh; configure and build (Release, ./build) the
-# scene programs; run each scene (progress line per scene, its table saved as
-# docs/results/<scene>.txt, its rows as docs/results/<scene>.csv); the DAE
-# examples (examples/pendulum_dae, chain_dae) when they were built -- chain_dae
-# writes two CSVs: its N-scaling study (chain_dae.csv, time per step against N,
-# CEODE only) and its work-precision scene (chain_dae_wp.csv, --wp-csv); the
+# Steps: scripts/install_deps.sh; pick a Python that imports matplotlib (after
+# the install, so that a fresh machine's first run draws the plots too);
+# configure and build (Release, ./build) the bench programs; run every scene
+# (run_all_scenes: one progress line per scene, its table saved as
+# docs/results/<scene>.txt, its rows as docs/results/<scene>.csv): each
+# bench/wp_<name> program is scene <name> (wp_chain_dae is chain_dae_wp) and
+# bench/chain_scaling is chain_dae (time per step against N, CEODE only); the
 # per-step Google Benchmark; one log-log work-precision plot per scene (PNG +
 # SVG; scripts/plot_dae.py draws pendulum_dae and the chain's N-scaling); the
 # CEODE / best-SUNDIALS time ratios at equal error for every work-precision
@@ -28,27 +29,35 @@ status=0
 elapsed() { echo $(( $(date +%s) - T0 )); }
 step() { printf '[main_job %4ss] %s\n' "$(elapsed)" "$*"; }
 
-# Debian's python3 carries python3-matplotlib; a pyenv/venv python3 earlier on
-# PATH may not, so prefer /usr/bin/python3 when it can import matplotlib.
-if [ -z "${PYTHON:-}" ]; then
-  PYTHON=python3
-  if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then PYTHON=/usr/bin/python3; fi
-fi
-
 step "dependencies (scripts/install_deps.sh)"
 scripts/install_deps.sh || { echo "install_deps.sh failed"; exit 1; }
+
+# Debian's python3 carries python3-matplotlib (just installed if it was
+# missing); a pyenv/venv python3 earlier on PATH may not, so the first
+# interpreter that really imports matplotlib is used.
+if [ -z "${PYTHON:-}" ]; then
+  for PYTHON in /usr/bin/python3 python3 ""; do
+    [ -n "$PYTHON" ] && "$PYTHON" -c 'import matplotlib' 2>/dev/null && break
+  done
+fi
+if [ -z "$PYTHON" ] || ! "$PYTHON" -c 'import matplotlib' 2>/dev/null; then
+  echo "no python3 that imports matplotlib (set PYTHON=...); plots and ratios would fail"
+  exit 1
+fi
+step "python: $PYTHON"
 
 step "configure Release in ./build"
 cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_BENCHMARKS=ON \
   > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
 rm -f "$BUILD.configure.log"
 
-# Only what the job runs: the scene programs, the per-step benchmark and the
-# DAE examples (the unit tests are scripts/test.sh's business).
+# Only what the job runs: the bench programs (the unit tests and the examples
+# are scripts/test.sh's business).
 targets=()
-for src in bench/wp_*.c bench/wp_*.cpp; do
+for src in bench/wp_*.cpp; do
   [ -e "$src" ] && targets+=("$(basename "${src%.*}")")
 done
+targets+=(chain_scaling)
 [ -e bench/bench_step.cpp ] && targets+=(bench_step)
 step "build (${targets[*]})"
 if ! cmake --build "$BUILD" -j"$JOBS" --target "${targets[@]}" > "$BUILD/main_job_build.log" 2>&1; then
@@ -56,15 +65,6 @@ if ! cmake --build "$BUILD" -j"$JOBS" --target "${targets[@]}" > "$BUILD/main_jo
   echo "build failed (log: $BUILD/main_job_build.log)"
   exit 1
 fi
-# The DAE examples are another author's work in progress: a failure to build
-# one skips its scene instead of stopping the job.
-for ex in pendulum_dae chain_dae; do
-  if [ -e "examples/$ex.c" ] || [ -e "examples/$ex.cpp" ]; then
-    step "build $ex"
-    cmake --build "$BUILD" -j"$JOBS" --target "$ex" >> "$BUILD/main_job_build.log" 2>&1 ||
-      { step "build of $ex FAILED (log: $BUILD/main_job_build.log)"; status=1; }
-  fi
-done
 
 mkdir -p "$OUT"
 scenes=()
@@ -84,25 +84,21 @@ run_scene() {  # name, executable, extra arguments
   fi
   scenes+=("$OUT/$name.csv")
 }
-for t in "${targets[@]}"; do
-  case $t in
-    wp_*) run_scene "${t#wp_}" "$BUILD/bench/$t" ;;
-  esac
-done
-for ex in pendulum_dae chain_dae; do
-  if [ -x "$BUILD/examples/$ex" ]; then
-    if [ "$ex" = chain_dae ]; then
-      # second scene of the same program: the work-precision comparison at N = 8
-      rm -f "$OUT/chain_dae_wp.csv"
-      run_scene "$ex" "$BUILD/examples/$ex" --wp-csv "$OUT/chain_dae_wp.csv"
-      [ -s "$OUT/chain_dae_wp.csv" ] && scenes+=("$OUT/chain_dae_wp.csv")
-    else
-      run_scene "$ex" "$BUILD/examples/$ex"
-    fi
-  else
-    step "scene $ex skipped: $BUILD/examples/$ex was not built"
-  fi
-done
+# Every scene of one build directory; suffix (may be empty) goes after each
+# scene name, so that a second build's results sit beside the first's.
+run_all_scenes() {  # build directory, suffix
+  local build=$1 suffix=$2 t name
+  for t in "${targets[@]}"; do
+    case $t in
+      wp_chain_dae) name=chain_dae_wp ;;
+      wp_*) name=${t#wp_} ;;
+      chain_scaling) name=chain_dae ;;
+      *) continue ;;
+    esac
+    run_scene "$name$suffix" "$build/bench/$t"
+  done
+}
+run_all_scenes "$BUILD" ""
 
 if [ -x "$BUILD/bench/bench_step" ]; then
   step "per-step cost (Google Benchmark, median of 5)"
@@ -128,7 +124,7 @@ for c in "${scenes[@]}"; do
   [ "$(basename "$c")" = chain_dae.csv ] || wp+=("$c")
 done
 if ((${#mine[@]})); then "$PYTHON" scripts/plot_results.py "${mine[@]}" || status=1; fi
-# pendulum_dae (wall-time work-precision) and chain_dae (time per step against N)
+# pendulum_dae (work-precision with drift) and chain_dae (time per step against N)
 if ((${#dae[@]})); then "$PYTHON" scripts/plot_dae.py --outdir "$OUT" "${dae[@]}" || status=1; fi
 
 step "ratios at equal error"
@@ -137,7 +133,6 @@ step "ratios at equal error"
 echo
 for c in "${scenes[@]}"; do
   n=$(basename "$c" .csv)
-  [ -e "$OUT/$n.txt" ] || continue  # chain_dae_wp's table is in chain_dae.txt
   printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem|checks off|[0-9]+ checks,|work-precision:' "$OUT/$n.txt" | tr '\n' ' ')"
 done
 step "total $(elapsed) s; results in docs/results/ (exit $status)"

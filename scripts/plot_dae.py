@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Plot the results of the constrained (DAE) examples.
+"""Plot the results of the constrained (DAE) bench scenes.
 
-Reads the CSV written by `pendulum_dae --csv FILE` (and, optionally, by
-`chain_dae --csv FILE`; rows: scene,solver,config,h_or_tol,error,drift,steps,
+Reads the CSV written by `bench/wp_pendulum_dae --csv FILE` (and, optionally, by
+`bench/chain_scaling --csv FILE`; rows: scene,solver,config,h_or_tol,error,drift,steps,
 rhs_evals,seconds) and writes
 
   * for scene pendulum_dae: a log-log work-precision plot, max energy error
@@ -83,7 +83,7 @@ def plot_pendulum(rows, outdir):
         lo, hi = pts[-1]["h_or_tol"], pts[0]["h_or_tol"]
         label = f"{solver} {config} ({kind} {hi:.0e}..{lo:.0e})"
         ax.loglog([p["seconds"] for p in pts], [p["error"] for p in pts], label=label, **style)
-    ax.set_xlabel("wall time per run [s] (median of 3 timings; one run if > 1 s)")
+    ax.set_xlabel("CPU time per run [s] (median of 5 repetitions of >= 50 ms)")
     ax.set_ylabel("max |E - E0| over 10 s [J]")
     ax.set_title("DAE pendulum (index 3, I_zz = 0): work-precision")
     ax.grid(True, which="both", alpha=0.3)
@@ -111,7 +111,7 @@ def plot_chain(rows, outdir):
     ax.loglog(ns, ts, "o-", label=f"CEODE {pts[0][2]} + KLU (slope {slope:.2f})")
     ax.loglog(ns, [ts[-1] * n / ns[-1] for n in ns], "k:", label="linear growth")
     ax.set_xlabel("N (masses; n + nc = 3N)")
-    ax.set_ylabel("wall time per step [s]")
+    ax.set_ylabel("CPU time per step [s]")
     ax.set_title("Planar chain, index-3 DAE: cost per step")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)

@@ -5,7 +5,7 @@ one curve per (solver, config). Writes <csv stem>.png and .svg beside the CSV
 
 Usage: plot_results.py [--outdir DIR] [--skip-existing] FILE.csv ...
   --skip-existing  leaves a plot alone when its PNG already exists.
-scripts/plot_dae.py draws pendulum_dae (wall-time work-precision) and the
+scripts/plot_dae.py draws pendulum_dae (work-precision with drift) and the
 chain's N-scaling (chain_dae.csv); chain_dae_wp.csv, the chain's work-precision
 scene, is drawn here like the other scenes.
 """

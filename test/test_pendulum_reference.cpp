@@ -1,7 +1,7 @@
-// Regression against the paper's pendulum tables (test/data; the problem as in docs/results.md,
-// Pendulum): the max energy error over 10 s of the IFToMM simple pendulum must match the published
-// figure within 5 % at h = 1e-3 and 1e-4 wherever it is above 1e-10 (below that the figures are
-// round-off and machine dependent).
+// Regression against the paper's pendulum tables (docs/theory.md section 11):
+// the max energy error over 10 s of the IFToMM simple pendulum must match the
+// published figure within 5 % at h = 1e-3 and 1e-4 wherever it is above 1e-10
+// (below that the figures are round-off and machine dependent).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -302,7 +302,7 @@ inline std::vector<double> ConvergenceSteps(double hmax) {
   return hs;
 }
 
-// The IFToMM simple pendulum (docs/results.md, Pendulum): theta from the horizontal,
+// The IFToMM simple pendulum of docs/theory.md section 11: theta from the horizontal,
 // m = 1 kg, L = 1 m, released at rest from theta = 0, 10 s.
 namespace pendulum {
 constexpr sunrealtype kGrav = SUN_RCONST(9.81);

@@ -1,5 +1,5 @@
 // ceode-stability: the linear stability of a CEODE parameter set, from the
-// integrator's own step map (method.md section 4), beside the classic methods
+// integrator's own step map (docs/theory.md section 9), beside the classic methods
 // the paper compares with.
 //
 //   ceode-stability --method G4_A34 [--xi 0.05] [--omega-max 5] [--points 2000] [--csv out.csv]
