@@ -353,6 +353,12 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
   int flag = StepperCheckMemory(ce, func);
   if (flag != CE_SUCCESS) return flag;
+  if (ce->f != Trampoline || ce->user_data != st) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The CEODE memory of this stepper was changed by CEodeInit or "
+                        "CEodeSetUserData after the stepper was created: free the stepper and "
+                        "create a new one (put your data in user_data before creating it).");
+  }
   if (!st->have_state && (flag = StateFromMemory(st, y, func)) != CE_SUCCESS) return flag;
   if (st->tstop_set && tout > st->tstop) tout = st->tstop;
   const sunrealtype t0 = st->t_own;

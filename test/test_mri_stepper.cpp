@@ -338,6 +338,23 @@ TEST_F(MriInnerStepperBadInput, ASerialStateOfTheWrongLengthIsRefused) {
       << LastMessage(ce_.get());
 }
 
+TEST_F(MriInnerStepperBadInput, UserDataChangedBehindTheStepperIsRefusedNotFollowed) {
+  MRIStepInnerStepper s = nullptr;
+  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce_.get(), &s), CE_SUCCESS);
+  Inner keep(s);
+  int other = 0;
+  ASSERT_EQ(CEodeSetUserData(ce_.get(), &other), CE_SUCCESS);
+  Vector y = SerialVector(4, ctx_, 0.5);
+  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
+  ASSERT_TRUE(mri);
+  QuietArkode(mri.get());
+  ASSERT_EQ(MRIStepSetFixedStep(mri.get(), 0.1), 0);
+  sunrealtype t = 0;
+  EXPECT_LT(MRIStepEvolve(mri.get(), 0.5, y.get(), &t, ARK_NORMAL), 0);
+  EXPECT_NE(LastMessage(ce_.get()).find("CEodeSetUserData"), std::string::npos)
+      << LastMessage(ce_.get());
+}
+
 TEST_F(MriInnerStepperBadInput, FreeingTheStepperHandsTheMemoryBackUsable) {
   MRIStepInnerStepper s = nullptr;
   ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce_.get(), &s), CE_SUCCESS);
