@@ -89,13 +89,15 @@ int Prepare(CEodeMemRec* ce, const char* func) {
         "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
   }
   if (ce->started) return CE_SUCCESS;
-  int flag = LsInitialize(ce, func);
+  int flag = ValidateConfiguration(ce, func);
+  if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = NlsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = ConstrInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
-  return StartMethod(ce);
+  flag = StartMethod(ce);
+  return flag == CE_SUCCESS ? ValidateStart(ce, func) : flag;
 }
 
 }  // namespace
@@ -194,9 +196,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::GuardCheck(ce, __func__);
   }
   if (flag < 0) {
-    // Nothing was integrated: hand back the current state, never garbage.
-    N_VScale(1.0, ce->xcur, xout);
-    N_VScale(1.0, ce->D[1], vout);
+    // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
     *tret = ce->tcur;
     return flag;
   }
@@ -204,6 +204,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   const sunrealtype h = ce->h;
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + h);
   if (itask == CE_NORMAL && tout < ce->tcur - troundoff) {
+    *tret = ce->tcur;
     return ceode::ProcessError(ce, CE_BAD_T, __func__,
                                "tout = %.17g is behind the current time %.17g: CEODE integrates "
                                "forward only; call CEodeReInit to go back.",
@@ -213,6 +214,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   bool hit_tstop = false;
   if (ce->tstop_set) {
     if (ce->tstop < ce->tcur - troundoff) {
+      *tret = ce->tcur;
       return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                  "The stop time %.17g is behind the current time %.17g.",
                                  static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
@@ -274,7 +276,7 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
   }
   const sunrealtype s = t - ce->tcur;
   const sunrealtype tol = 1e-8 * ce->h;
-  if (s < -tol || s > ce->h + tol) {
+  if (!(s >= -tol && s <= ce->h + tol)) {  // also refuses t = NaN
     return ceode::ProcessError(ce, CE_BAD_T, __func__,
                                "t = %.17g is outside the current interval [%.17g, %.17g].",
                                static_cast<double>(t), static_cast<double>(ce->tcur),

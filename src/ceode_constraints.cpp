@@ -790,6 +790,7 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
   ce->phifn = phi;
   ce->Gfn = G;
   ce->nc = nc;
+  ce->phi_template_checked = false;  // checked against Phi at the next start
   ce->started = false;
   return CE_SUCCESS;
 }

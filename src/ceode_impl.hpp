@@ -5,6 +5,7 @@
 #include <ceode/ceode.h>
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -189,7 +190,8 @@ struct CEodeMemRec {
   sunindextype nc = 0;
   N_Vector lambda = nullptr;
   N_Vector phi = nullptr;
-  void* con = nullptr;  // private saddle-point workspace (ceode_constraints.cpp)
+  bool phi_template_checked = false;  // Phi seen to write every template entry
+  void* con = nullptr;                // private saddle-point workspace (ceode_constraints.cpp)
 
   // Stability guard
   int guard_mode = CE_GUARD_WARN;
@@ -277,6 +279,22 @@ void ConstrFree(CEodeMemRec* ce);
 // ceode_stability.cpp
 int GuardCheck(CEodeMemRec* ce, const char* func);
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
+
+// ceode_validate.cpp: one validation point per attached object, called by its setter and again
+// at the first CEodeEvolve after a configuration change (the problem size may have changed).
+int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_t len);  // pure
+int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
+                             sunrealtype abstol);
+int ValidateStep(CEodeMemRec* ce, const char* func);  // h against t and the method
+int ValidateMassMatrix(CEodeMemRec* ce, const char* func, SUNMatrix M);
+int ValidateLinearSolver(CEodeMemRec* ce, const char* func, SUNLinearSolver LS, SUNMatrix A,
+                         bool at_start);
+int ValidateMassAgainstSolver(CEodeMemRec* ce, const char* func);  // M and A: same type, size
+int ValidateNonlinearSolver(CEodeMemRec* ce, const char* func, SUNNonlinearSolver NLS);
+int ValidateConstraintTemplate(CEodeMemRec* ce, const char* func);  // one Phi call
+int ValidateConfiguration(CEodeMemRec* ce, const char* func);  // all of the above, at the start
+int ValidateStart(CEodeMemRec* ce, const char* func);          // the start's history is finite
+sunrealtype MaxNormOrNaN(N_Vector v);  // N_VMaxNorm skips NaN; this returns NaN for them
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

@@ -519,7 +519,7 @@ int TakeStep(CEodeMemRec* ce) {
                         ce->method_name.c_str());
   }
   if (!std::isfinite(xl1)) {
-    const sunrealtype xn = N_VMaxNorm(ce->xnext);
+    const sunrealtype xn = MaxNormOrNaN(ce->xnext);  // NaN-blind N_VMaxNorm would say 0
     if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {
       return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                           "The acceleration became NaN or Inf at t = %.17g (step %ld) while the "
