@@ -48,7 +48,13 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   return CE_SUCCESS;
 }
 
-bool IsFinite(N_Vector v) { return std::isfinite(N_VL1Norm(v)); }
+bool IsFinite(N_Vector v) {
+  // NaN propagates through the L1 norm; +Inf is either an Inf entry or the sum overflowing
+  // (finite entries near 1e308), which the max norm tells apart.
+  const sunrealtype l1 = N_VL1Norm(v);
+  if (std::isfinite(l1)) return true;
+  return !std::isnan(l1) && std::isfinite(N_VMaxNorm(v));
+}
 
 namespace {
 
