@@ -296,6 +296,21 @@ int ValidateConfiguration(CEodeMemRec* ce, const char* func);  // all of the abo
 int ValidateStart(CEodeMemRec* ce, const char* func);          // the start's history is finite
 sunrealtype MaxNormOrNaN(N_Vector v);  // N_VMaxNorm skips NaN; this returns NaN for them
 
+// ceode_long_run.cpp: the measured long-run energy behaviour of each named set (bench/long_run,
+// docs/stability.md) and the advice that follows from it; pure, for the stability guard.
+enum LongRunKind { kLongRunBounded, kLongRunLinearDrift, kLongRunGrowing };
+struct LongRunBehaviour {
+  const char* name;
+  LongRunKind kind;        // bounded; linear drift; growing (rho > 1 for every h)
+  sunrealtype drift_rate;  // |dE/dt| measured on the pendulum at h = 1e-3 (0: bounded)
+  int drift_order;         // the drift rate scales as h^drift_order
+  sunrealtype omega_max;   // stability limit Omega_max (0: weakly unstable for every h)
+};
+const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not a named set
+// One clause of advice for a long run of `current` at Omega = h * omega_max, written into buf
+// (empty when `current` is already the right choice); returns buf.
+const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
+
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);
 
