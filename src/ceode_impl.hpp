@@ -303,7 +303,7 @@ struct LongRunBehaviour {
   const char* name;
   LongRunKind kind;        // bounded; linear drift; growing (rho > 1 for every h)
   sunrealtype drift_rate;  // |dE/dt| measured on the pendulum at h = 1e-3 (0: bounded)
-  int drift_order;         // the drift rate scales as h^drift_order
+  int drift_order;         // the drift rate scales as h^drift_order (0: growing, no fit)
   sunrealtype omega_max;   // stability limit Omega_max (0: weakly unstable for every h)
 };
 const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not a named set
