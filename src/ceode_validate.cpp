@@ -154,17 +154,19 @@ sunindextype NlsVectorLength(SUNNonlinearSolver NLS) {
 }
 
 // A NaN with a payload no arithmetic produces: an entry still holding it was not written.
+constexpr std::uint64_t kSentinelBits = 0x7FF80000000CE0DEULL;
+static_assert(sizeof(sunrealtype) == sizeof(kSentinelBits), "sunrealtype must be double");
+
 sunrealtype Sentinel() {
-  const std::uint64_t bits = 0x7FF80000000CE0DEULL;
   sunrealtype s;
-  static_assert(sizeof(s) == sizeof(bits), "sunrealtype must be double");
-  std::memcpy(&s, &bits, sizeof(s));
+  std::memcpy(&s, &kSentinelBits, sizeof(s));
   return s;
 }
 
 bool IsSentinel(sunrealtype v) {
-  const sunrealtype s = Sentinel();
-  return std::memcmp(&v, &s, sizeof(v)) == 0;
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return bits == kSentinelBits;
 }
 
 }  // namespace
