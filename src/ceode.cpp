@@ -52,7 +52,13 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
 
 void Restart(CEodeMemRec* ce) { ce->started = false; }
 
-bool IsFinite(N_Vector v) { return std::isfinite(N_VL1Norm(v)); }
+bool IsFinite(N_Vector v) {
+  // NaN propagates through the L1 norm; +Inf is either an Inf entry or the sum overflowing
+  // (finite entries near 1e308), which the max norm tells apart.
+  const sunrealtype l1 = N_VL1Norm(v);
+  if (std::isfinite(l1)) return true;
+  return !std::isnan(l1) && std::isfinite(N_VMaxNorm(v));
+}
 
 namespace {
 
@@ -93,13 +99,15 @@ int Prepare(CEodeMemRec* ce, const char* func) {
         "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
   }
   if (ce->started) return CE_SUCCESS;
-  int flag = LsInitialize(ce, func);
+  int flag = ValidateConfiguration(ce, func);
+  if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = NlsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = ConstrInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
-  return StartMethod(ce);
+  flag = StartMethod(ce);
+  return flag == CE_SUCCESS ? ValidateStart(ce, func) : flag;
 }
 
 int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
@@ -253,14 +261,17 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::GuardCheck(ce, __func__);
   }
   if (flag < 0) {
-    // Nothing was integrated: hand back the current state, never garbage.
-    ceode::ReturnCurrentState(ce, xout, vout, tret);
+    // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
+    *tret = ce->tcur;
     return flag;
   }
   sunrealtype target = 0;
   bool hit_tstop = false;
   flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
-  if (flag != CE_SUCCESS) return flag;
+  if (flag != CE_SUCCESS) {
+    *tret = ce->tcur;
+    return flag;
+  }
   flag = ceode::StepTo(ce, __func__, target);
   if (flag != CE_SUCCESS) {
     // The last good state is returned; the memory stays usable.
@@ -296,7 +307,7 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
   }
   const sunrealtype s = t - ce->tcur;
   const sunrealtype tol = 1e-8 * ce->h;
-  if (s < -tol || s > ce->h + tol) {
+  if (!(s >= -tol && s <= ce->h + tol)) {  // also refuses t = NaN
     return ceode::ProcessError(ce, CE_BAD_T, __func__,
                                "t = %.17g is outside the current interval [%.17g, %.17g].",
                                static_cast<double>(t), static_cast<double>(ce->tcur),

@@ -550,6 +550,7 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
   ce->phifn = phi;
   ce->Gfn = G;
   ce->nc = nc;
+  ce->phi_template_checked = false;  // checked against Phi at the next start
   ceode::Restart(ce);
   return CE_SUCCESS;
 }

@@ -5,6 +5,7 @@
 #include <ceode/ceode.h>
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -203,7 +204,8 @@ struct CEodeMemRec {
   sunindextype nc = 0;
   N_Vector lambda = nullptr;
   N_Vector phi = nullptr;
-  void* con = nullptr;  // private saddle-point workspace (ceode_constraints.cpp)
+  bool phi_template_checked = false;  // Phi seen to write every template entry
+  void* con = nullptr;                // private saddle-point workspace (ceode_constraints.cpp)
 
   // Stability guard
   int guard_mode = CE_GUARD_WARN;
@@ -310,6 +312,37 @@ void ConstrFree(CEodeMemRec* ce);
 // ceode_stability.cpp
 int GuardCheck(CEodeMemRec* ce, const char* func);
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
+
+// ceode_validate.cpp: one validation point per attached object, called by its setter and again
+// at the first CEodeEvolve after a configuration change (the problem size may have changed).
+int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_t len);  // pure
+int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
+                             sunrealtype abstol);
+int ValidateStep(CEodeMemRec* ce, const char* func);  // h against t and the method
+int ValidateMassMatrix(CEodeMemRec* ce, const char* func, SUNMatrix M);
+int ValidateLinearSolver(CEodeMemRec* ce, const char* func, SUNLinearSolver LS, SUNMatrix A,
+                         bool at_start);
+int ValidateMassAgainstSolver(CEodeMemRec* ce, const char* func);  // M and A: same type, size
+int ValidateNonlinearSolver(CEodeMemRec* ce, const char* func, SUNNonlinearSolver NLS);
+int ValidateConstraintTemplate(CEodeMemRec* ce, const char* func);  // one Phi call
+int ValidateConfiguration(CEodeMemRec* ce, const char* func);  // all of the above, at the start
+int ValidateStart(CEodeMemRec* ce, const char* func);          // the start's history is finite
+sunrealtype MaxNormOrNaN(N_Vector v);  // N_VMaxNorm skips NaN; this returns NaN for them
+
+// ceode_long_run.cpp: the measured long-run energy behaviour of each named set (bench/long_run,
+// docs/stability.md) and the advice that follows from it; pure, for the stability guard.
+enum LongRunKind { kLongRunBounded, kLongRunLinearDrift, kLongRunGrowing };
+struct LongRunBehaviour {
+  const char* name;
+  LongRunKind kind;        // bounded; linear drift; growing (rho > 1 for every h)
+  sunrealtype drift_rate;  // |dE/dt| measured on the pendulum at h = 1e-3 (0: bounded)
+  int drift_order;         // the drift rate scales as h^drift_order (0: growing, no fit)
+  sunrealtype omega_max;   // stability limit Omega_max (0: weakly unstable for every h)
+};
+const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not a named set
+// One clause of advice for a long run of `current` at Omega = h * omega_max, written into buf
+// (empty when `current` is already the right choice); returns buf.
+const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

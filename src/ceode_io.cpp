@@ -29,26 +29,9 @@ int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (degree < ceode::kMinDegree || degree > ceode::kMaxDegree) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__, "degree = %d: supported degrees are %d..%d.",
-                        degree, ceode::kMinDegree, ceode::kMaxDegree);
-  }
-  if (params == nullptr) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "params = NULL: pass degree-1 parameters (alpha, beta, gamma, ...).");
-  }
-  for (int i = 0; i < degree - 1; ++i) {
-    if (!std::isfinite(params[i])) {
-      return ProcessError(ce, CE_ILL_INPUT, __func__, "params[%d] is not finite.", i);
-    }
-  }
-  // p_1 (and p_2 for d >= 4) divide in kappa = c_1 / c_2 and z = (a - B_2)/c_2.
-  if ((degree >= 4 && params[2] == 0) || params[1] == 0) {
-    return ProcessError(
-        ce, CE_ILL_INPUT, __func__,
-        "beta%s must be nonzero: the velocity would not depend on the acceleration.",
-        degree >= 4 ? " and gamma" : "");
-  }
+  char why[512];
+  if (ceode::ValidateMethodParams(degree, params, why, sizeof(why)) != CE_SUCCESS)
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "%s.", why);
   ce->degree = degree;
   for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
   try {
@@ -202,11 +185,8 @@ int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol) 
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (!(reltol > 0) || abstol < 0) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "reltol = %g, abstol = %g: need reltol > 0 and abstol >= 0.",
-                        static_cast<double>(reltol), static_cast<double>(abstol));
-  }
+  if ((flag = ceode::ValidateNonlinTolerances(ce, __func__, reltol, abstol)) != CE_SUCCESS)
+    return flag;
   ce->nls_reltol = reltol;
   ce->nls_abstol = abstol;
   ce->nls_tol_set = true;

@@ -297,6 +297,7 @@ int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M, sunbooleantype const
                                "Pass both the mass function and its matrix, or both NULL to "
                                "remove the mass matrix.");
   }
+  if ((flag = ceode::ValidateMassMatrix(ce, __func__, M)) != CE_SUCCESS) return flag;
   ce->mfn = mfn;
   ce->M = M;
   ce->mass_constant = constant != SUNFALSE;
@@ -317,6 +318,8 @@ int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "A direct linear solver needs its matrix: pass A.");
   }
+  if ((flag = ceode::ValidateLinearSolver(ce, __func__, LS, A, false)) != CE_SUCCESS) return flag;
+  if (ce->own_nls) ceode::NlsFree(ce);  // CEODE's own choice (fixed point/Newton) is made anew
   ce->LS = LS;
   ce->A = A;
   ce->ls_matrix_free = (A == nullptr);

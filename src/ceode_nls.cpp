@@ -210,6 +210,7 @@ extern "C" int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS) {
                                "NLS = NULL: create one with SUNNonlinSol_Newton or "
                                "SUNNonlinSol_FixedPoint.");
   }
+  if ((flag = ceode::ValidateNonlinearSolver(ce, __func__, NLS)) != CE_SUCCESS) return flag;
   ceode::NlsFree(ce);
   ce->NLS = NLS;
   ce->own_nls = false;

@@ -112,12 +112,8 @@ int CheckArgs(int degree, const sunrealtype* params, sunrealtype xi) {
       !std::isfinite(xi)) {
     return CE_ILL_INPUT;
   }
-  for (int i = 0; i < degree - 1; ++i) {
-    if (!std::isfinite(params[i])) return CE_ILL_INPUT;
-  }
-  // beta (and gamma for d >= 4) divide in the step: CEodeSetMethod refuses them too.
-  if (params[1] == 0 || (degree >= 4 && params[2] == 0)) return CE_ILL_INPUT;
-  return CE_SUCCESS;
+  // The same check as CEodeSetMethod's, so the analysis and the integrator accept the same sets.
+  return ValidateMethodParams(degree, params, nullptr, 0);
 }
 
 // The eigen-analysis of one amplification matrix.

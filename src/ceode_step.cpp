@@ -395,7 +395,14 @@ int TakeStep(CEodeMemRec* ce) {
                         ce->method_name.c_str());
   }
   if (!std::isfinite(xl1)) {
-    const sunrealtype xn = N_VMaxNorm(ce->xnext);
+    const sunrealtype xn = MaxNormOrNaN(ce->xnext);  // NaN-blind N_VMaxNorm would say 0
+    if (!std::isfinite(xn)) {  // x(t) passed the last step's check: a callback overwrote it
+      return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                          "The position x(t) became non-finite (max |x| = %g) during the step at "
+                          "t = %.17g: a callback (f, the mass or Jacobian function) wrote NaN or "
+                          "Inf into its input x; callbacks must not modify x.",
+                          static_cast<double>(xn), static_cast<double>(t));
+    }
     if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {
       return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                           "The acceleration became NaN or Inf at t = %.17g (step %ld) while the "

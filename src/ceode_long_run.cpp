@@ -1,0 +1,86 @@
+// What each named set conserves over long runs, and the advice that follows for a given
+// Omega = h * omega_max. The figures are measurements of bench/long_run (10^7 steps of the
+// pendulum and of the linear oscillator at h = 1e-3 and 2e-3; table and command in
+// docs/stability.md, "Long runs"); the limits are those of docs/data/stability_limits.csv.
+// Pure functions: no CEODE memory, no allocation, so the stability guard can call them anywhere.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+namespace {
+
+// Ordered as the method table (ceode_step.cpp).
+constexpr LongRunBehaviour kLongRun[] = {
+    {"G3_CD", kLongRunBounded, 0, 0, 2.0},
+    {"G3_A43", kLongRunLinearDrift, 8.63e-8, 3, 1.549193338},
+    {"G3_A2", kLongRunLinearDrift, 2.59e-7, 3, 1.154700538},
+    {"G4_A54", kLongRunGrowing, 1.66e-13, 0, 0},  // order: the 2e-3 run grows, no fit
+    {"G4_A14", kLongRunLinearDrift, 8.63e-8, 3, 1.264911064},
+    {"G4_A34", kLongRunLinearDrift, 4.31e-8, 3, 1.732050814},
+    {"G5", kLongRunGrowing, 2.65e-13, 0, 0},
+    {"G5_TOP", kLongRunLinearDrift, 4.08e-11, 3, 0.06816569051},
+    {"G5_ONES", kLongRunGrowing, 1.65e-13, 0, 0},
+};
+
+// Steps that stay this far inside a limit are not on its edge (the guard's estimate of
+// omega_max is a lower bound).
+constexpr sunrealtype kLimitMargin = 0.9;
+
+bool StableAt(const LongRunBehaviour& b, sunrealtype Omega) {
+  return b.omega_max > 0 && Omega < kLimitMargin * b.omega_max;
+}
+
+// The drifting set, stable at Omega, whose measured drift is slowest (nullptr: none).
+const LongRunBehaviour* SlowestStableDrift(sunrealtype Omega) {
+  const LongRunBehaviour* best = nullptr;
+  for (const LongRunBehaviour& b : kLongRun) {
+    if (b.kind != kLongRunLinearDrift || !StableAt(b, Omega)) continue;
+    if (best == nullptr || b.drift_rate < best->drift_rate) best = &b;
+  }
+  return best;
+}
+
+}  // namespace
+
+const LongRunBehaviour* FindLongRunBehaviour(const char* name) {
+  if (name == nullptr) return nullptr;
+  for (const LongRunBehaviour& b : kLongRun) {
+    if (std::strcmp(b.name, name) == 0) return &b;
+  }
+  return nullptr;
+}
+
+const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len) {
+  if (buf == nullptr || len == 0) return "";
+  buf[0] = '\0';
+  const LongRunBehaviour& cd = kLongRun[0];
+  if (!std::isfinite(Omega) || Omega < 0) return buf;
+  if (!StableAt(cd, Omega)) {
+    std::snprintf(
+        buf, len,
+        "no named set is stable at Omega = %.3g (the largest limit is G3_CD's 2): reduce h",
+        static_cast<double>(Omega));
+    return buf;
+  }
+  const LongRunBehaviour* cur = FindLongRunBehaviour(current);
+  if (cur == &cd) return buf;  // already the set whose energy error stays bounded
+  const LongRunBehaviour* drift = SlowestStableDrift(Omega);
+  if (drift == nullptr || (cur != nullptr && cur == drift)) {
+    std::snprintf(buf, len,
+                  "for long runs use G3_CD, whose energy error stays bounded (every other named "
+                  "set drifts or grows, docs/stability.md)");
+  } else {
+    std::snprintf(buf, len,
+                  "for long runs use G3_CD, whose energy error stays bounded; if its second order "
+                  "is not accurate enough, %s is stable here and drifts slowest (linearly, "
+                  "proportional to h^%d; docs/stability.md)",
+                  drift->name, drift->drift_order);
+  }
+  return buf;
+}
+
+}  // namespace ceode
