@@ -29,6 +29,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace ceode_tools {
@@ -45,6 +46,7 @@ struct FindOptions {
   double tol = 1e-9;
   double omega_top = 3;
   double max_param = 1000;  // larger parameters amplify round-off (docs/theory.md 10)
+  std::string check;        // a named set the result must reproduce
 };
 
 constexpr int kCoefs = 20;  // 2 * 8 + 4, see CEodeMethodErrorCoeffs
@@ -287,6 +289,8 @@ bool ParseFind(int argc, char** argv, FindOptions* o) {
       o->scale = std::atof(val);
     } else if (std::strcmp(a, "--tol") == 0) {
       o->tol = std::atof(val);
+    } else if (std::strcmp(a, "--check") == 0) {
+      o->check = val;
     } else if (std::strcmp(a, "--max-param") == 0) {
       o->max_param = std::atof(val);
     } else if (std::strcmp(a, "--omega-top") == 0) {
@@ -320,6 +324,24 @@ void Report(const FindOptions& o, const Eigen::VectorXd& p, double score) {
   std::printf("rho(0.1)-1 %.3e\n", rho - 1);
 }
 
+// --check NAME: the named set must come out again, to 1e-6 in every parameter (the
+// search is deterministic; the tolerance covers rounding differences between builds).
+int Check(const FindOptions& o, const Eigen::VectorXd& p) {
+  int d = 0;
+  double q[8];
+  if (CEodeGetMethodParams(o.check.c_str(), &d, q, 8) != CE_SUCCESS || d != o.degree) {
+    std::printf("check     %s: not a named set of degree %d\n", o.check.c_str(), o.degree);
+    return 1;
+  }
+  double diff = 0;
+  for (int i = 0; i < d - 1; ++i)
+    diff = std::max(diff, std::fabs(p(i) - q[i]) / (1 + std::fabs(q[i])));
+  const bool ok = diff <= 1e-6;
+  std::printf("check     %s %s (max relative parameter difference %.2e)\n", o.check.c_str(),
+              ok ? "reproduced" : "NOT reproduced", diff);
+  return ok ? 0 : 1;
+}
+
 }  // namespace
 
 int FindMain(int argc, char** argv) {
@@ -327,7 +349,8 @@ int FindMain(int argc, char** argv) {
   if (!ParseFind(argc, argv, &o)) {
     std::fprintf(stderr,
                  "usage: ceode-stability find --degree D --order P [--order-v Q] [--samples N]\n"
-                 "       [--seed S] [--scale W] [--tol T] [--omega-top W] [--max-param M]\n");
+                 "       [--seed S] [--scale W] [--tol T] [--omega-top W] [--max-param M]\n"
+                 "       [--check NAME]\n");
     return 2;
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -425,7 +448,7 @@ int FindMain(int argc, char** argv) {
   std::printf("search    %ld candidates scored, seed %llu, scale %g, %.1f s\n", scorer.evals(),
               static_cast<unsigned long long>(o.seed), scale, secs);
   Report(o, pbest, top.score);
-  return 0;
+  return o.check.empty() ? 0 : Check(o, pbest);
 }
 
 }  // namespace ceode_tools
