@@ -4,16 +4,17 @@
 //   ceode-stability find --degree 7 --order 7 [--order-v 6] [--samples 3000] [--seed 1]
 //                        [--scale 30] [--tol 1e-9] [--omega-top 3] [--max-param 1000]
 //
-// The order conditions are linear in the parameters (CEodeMethodErrorCoeffs is
-// affine in them, src/ceode_order.cpp), so they are solved once: p = p* + N y,
-// N a basis of their null space. The search runs over y: deterministic samples
-// (a fixed-seed splitmix64 sequence, cube [-scale, scale]^f around p*, with the
-// cube shrinking by powers of 3 through the run) and then Nelder-Mead from the best four.
-// A candidate's score is the first Omega (scan 0.01 .. omega-top, step 0.01, then
-// bisection) where the spectral radius of A(Omega) = A0 + Omega^2 (A1 - A0) exceeds
-// 1 + tol (A is affine in Omega^2 for the undamped test equation); sets that are not
-// zero-stable (a parasitic root of A0 on or outside the unit circle) score 0. The
-// result is verified with the library's own CEodeMethodOrder and CEodeStabilityLimit.
+// The order conditions are linear in the parameters (CEodeMethodErrorCoeffs is affine in
+// them, src/ceode_order.cpp), and so is rho(zeta) = 0 for a chosen parasitic root zeta (the
+// parameters sit in one column of the step's symbol). A candidate is therefore fixed by
+// where its parasitic roots go: y places them inside the unit disk (complex pairs, then real
+// roots), and any freedom left moves along the null space of all these linear conditions.
+// Deterministic samples (a fixed-seed splitmix64 sequence) are scored, then Nelder-Mead
+// refines the best four. A candidate's score is the first Omega (scan 0.01 .. omega-top,
+// step 0.01, then bisection) where the spectral radius of A(Omega) = A0 + Omega^2 (A1 - A0)
+// exceeds 1 + tol (A is affine in Omega^2 for the undamped test equation); candidates that
+// are not zero-stable, or have a parameter above max-param, score 0. The result is verified
+// with the library's own CEodeMethodOrder and CEodeStabilityLimit.
 #include "ceode_find.hpp"
 
 #include <ceode/ceode.h>
@@ -344,6 +345,109 @@ int Check(const FindOptions& o, const Eigen::VectorXd& p) {
 
 }  // namespace
 
+namespace {
+
+// The search space: p = solution of [order conditions; rho(root_i) = 0] + free directions.
+class Search {
+ public:
+  Search(const FindOptions& o, Eigen::MatrixXd J, Eigen::VectorXd r, int nfree, double scale)
+      : o_(o), J_(std::move(J)), r_(std::move(r)), nfree_(nfree), scale_(scale), scorer_(o) {
+    nroot_ = std::min(nfree, o.degree - 3);  // the parasitic roots of rho
+  }
+
+  // y -> parameters: the first nroot entries place parasitic roots (npairs complex pairs as
+  // radius, angle; then real roots), the rest move along what the order and root
+  // conditions leave free. False when the conditions cannot all hold.
+  bool Params(const Eigen::VectorXd& y, int npairs, Eigen::VectorXd* p) const {
+    const int np = o_.degree - 1;
+    std::vector<std::complex<double>> roots;
+    int k = 0;
+    for (int q = 0; q < npairs; ++q, k += 2) {
+      roots.push_back(std::polar(std::min(std::fabs(y(k)), 0.98), y(k + 1)));
+    }
+    for (; k < nroot_; ++k) roots.push_back(std::max(-0.98, std::min(0.98, y(k))));
+    Eigen::MatrixXd Jr;
+    Eigen::VectorXd rr;
+    RootRows(o_.degree, roots, &Jr, &rr);
+    Eigen::MatrixXd A(J_.rows() + Jr.rows(), np);
+    A << J_, Jr;
+    Eigen::VectorXd b(r_.size() + rr.size());
+    b << r_, rr;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    svd.setThreshold(1e-10);
+    *p = svd.solve(b);
+    const int free2 = np - static_cast<int>(svd.rank());
+    for (int e = 0; e < free2 && nroot_ + e < y.size(); ++e) {
+      *p += svd.matrixV().col(np - 1 - e) * y(nroot_ + e);
+    }
+    return (A * *p - b).norm() <= 1e-9 * (1 + b.norm());
+  }
+
+  double Score(const Eigen::VectorXd& y, int layout) {
+    Eigen::VectorXd p;
+    return Params(y, layout, &p) ? scorer_.Score(p) : 0.0;
+  }
+
+  // The i-th deterministic sample, its root layout cycling through 0 .. nroot/2 pairs and
+  // its free directions through four nested cubes.
+  Eigen::VectorXd Sample(int i, Sequence* seq, int* layout) const {
+    *layout = i % (nroot_ / 2 + 1);
+    Eigen::VectorXd y(nfree_);
+    for (int k = 0; k < nfree_; ++k) {
+      const double u = seq->Next();
+      if (k < 2 * *layout) {
+        y(k) = k % 2 == 0 ? 0.49 * (u + 1) : 1.5707963267948966 * (u + 1);
+      } else {
+        y(k) = k < nroot_ ? 0.98 * u : scale_ / std::pow(3.0, i % 4) * u;
+      }
+    }
+    return y;
+  }
+
+  // Samples, then Nelder-Mead from the best four; returns the best parameters.
+  Eigen::VectorXd Run(double* score) {
+    struct Cand {
+      double score;
+      Eigen::VectorXd y;
+      int layout;
+    };
+    Sequence seq(o_.seed);
+    std::vector<Cand> best;
+    for (int i = 0; i < o_.samples; ++i) {
+      int layout = 0;
+      const Eigen::VectorXd y = Sample(i, &seq, &layout);
+      best.push_back({Score(y, layout), y, layout});
+      std::sort(best.begin(), best.end(),
+                [](const Cand& a, const Cand& b) { return a.score > b.score; });
+      if (best.size() > 4) best.pop_back();
+    }
+    Cand top{-1, Eigen::VectorXd(), 0};
+    for (const Cand& c : best) {
+      double v = 0;
+      auto f = [&](const Eigen::VectorXd& y) { return Score(y, c.layout); };
+      const Eigen::VectorXd y = Refine(f, c.y, 0.05, 400, &v);
+      if (v > top.score) top = {v, y, c.layout};
+    }
+    Eigen::VectorXd p;
+    Params(top.y, top.layout, &p);
+    *score = top.score;
+    return p;
+  }
+
+  long evals() const { return scorer_.evals(); }
+
+ private:
+  const FindOptions& o_;
+  Eigen::MatrixXd J_;
+  Eigen::VectorXd r_;
+  int nfree_;
+  int nroot_ = 0;
+  double scale_;
+  Scorer scorer_;
+};
+
+}  // namespace
+
 int FindMain(int argc, char** argv) {
   FindOptions o;
   if (!ParseFind(argc, argv, &o)) {
@@ -368,86 +472,22 @@ int FindMain(int argc, char** argv) {
                 o.order_v);
     return 1;
   }
-  const int np = o.degree - 1;
-  const int nfree = np - rank;
+  const int nfree = o.degree - 1 - rank;
   std::printf("degree %d, orders x %d / v %d: %d conditions of rank %d, %d free parameters\n",
               o.degree, o.order_x, o.order_v, static_cast<int>(J.rows()), rank, nfree);
-  Scorer scorer(o);
-  const int npar = o.degree - 3;  // parasitic roots of rho
-  const int nroot = std::min(nfree, npar);
-  const double scale = o.scale > 0 ? o.scale : 2 * (1 + pstar.cwiseAbs().maxCoeff());
-  // y -> parameters: the first nroot entries place parasitic roots (npairs complex
-  // pairs as radius, angle; then real roots), the rest move along what the order and
-  // root conditions leave free.
-  auto params = [&](const Eigen::VectorXd& y, int npairs, Eigen::VectorXd* p) {
-    std::vector<std::complex<double>> roots;
-    int k = 0;
-    for (int q = 0; q < npairs; ++q, k += 2) {
-      roots.push_back(std::polar(std::min(std::fabs(y(k)), 0.98), y(k + 1)));
-    }
-    for (; k < nroot; ++k) roots.push_back(std::max(-0.98, std::min(0.98, y(k))));
-    Eigen::MatrixXd Jr;
-    Eigen::VectorXd rr;
-    RootRows(o.degree, roots, &Jr, &rr);
-    Eigen::MatrixXd A(J.rows() + Jr.rows(), np);
-    A << J, Jr;
-    Eigen::VectorXd b(r.size() + rr.size());
-    b << r, rr;
-    Eigen::JacobiSVD<Eigen::MatrixXd> sv2(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    sv2.setThreshold(1e-10);
-    *p = sv2.solve(b);
-    const int free2 = np - static_cast<int>(sv2.rank());
-    for (int e = 0; e < free2 && nroot + e < y.size(); ++e) {
-      *p += sv2.matrixV().col(np - 1 - e) * y(nroot + e);
-    }
-    return (A * *p - b).norm() <= 1e-9 * (1 + b.norm());
-  };
-  int layout = 0;
-  auto f = [&](const Eigen::VectorXd& y) {
-    Eigen::VectorXd p;
-    return params(y, layout, &p) ? scorer.Score(p) : 0.0;
-  };
   if (nfree == 0) {
+    Scorer scorer(o);
     Report(o, pstar, scorer.Score(pstar));
     return 0;
   }
-  Sequence seq(o.seed);
-  struct Cand {
-    double score;
-    Eigen::VectorXd y;
-    int layout;
-  };
-  std::vector<Cand> best;
-  for (int i = 0; i < o.samples; ++i) {
-    layout = i % (nroot / 2 + 1);
-    Eigen::VectorXd y(nfree);
-    for (int k = 0; k < nfree; ++k) {
-      const double u = seq.Next();
-      if (k < 2 * layout) {
-        y(k) = k % 2 == 0 ? 0.49 * (u + 1) : 1.5707963267948966 * (u + 1);
-      } else {
-        y(k) = k < nroot ? 0.98 * u : scale / std::pow(3.0, i % 4) * u;
-      }
-    }
-    best.push_back({f(y), y, layout});
-    std::sort(best.begin(), best.end(),
-              [](const Cand& a, const Cand& b) { return a.score > b.score; });
-    if (best.size() > 4) best.pop_back();
-  }
-  Cand top{-1, Eigen::VectorXd(), 0};
-  for (const Cand& c : best) {
-    layout = c.layout;
-    double v = 0;
-    const Eigen::VectorXd y = Refine(f, c.y, 0.05, 400, &v);
-    if (v > top.score) top = {v, y, c.layout};
-  }
-  Eigen::VectorXd pbest;
-  layout = top.layout;
-  params(top.y, top.layout, &pbest);
+  const double scale = o.scale > 0 ? o.scale : 2 * (1 + pstar.cwiseAbs().maxCoeff());
+  Search search(o, J, r, nfree, scale);
+  double score = 0;
+  const Eigen::VectorXd pbest = search.Run(&score);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("search    %ld candidates scored, seed %llu, scale %g, %.1f s\n", scorer.evals(),
+  std::printf("search    %ld candidates scored, seed %llu, scale %g, %.1f s\n", search.evals(),
               static_cast<unsigned long long>(o.seed), scale, secs);
-  Report(o, pbest, top.score);
+  Report(o, pbest, score);
   return o.check.empty() ? 0 : Check(o, pbest);
 }
 
