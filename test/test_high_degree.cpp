@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -89,6 +90,68 @@ TEST(OrderConditions, RejectBadInput) {
   EXPECT_EQ(CEodeMethodOrder(3, nullptr, &ox, &ov), CE_ILL_INPUT);
   const sunrealtype bad[2] = {NAN, 0.5};
   EXPECT_EQ(CEodeMethodOrder(3, bad, &ox, &ov), CE_ILL_INPUT);
+}
+
+// The same orders seen from the amplification matrix (theory.md section 9.4): the principal
+// root of A(Omega) errs from e^{i Omega} by O(Omega^{p+1}). The root is found by Newton's
+// method on det(zeta I - A) (complex Gaussian elimination), started at e^{i Omega}.
+std::complex<double> DetShifted(const std::vector<double>& A, int d, std::complex<double> z) {
+  std::vector<std::complex<double>> M(A.size());
+  for (int i = 0; i < d; ++i) {
+    for (int j = 0; j < d; ++j) M[i * d + j] = (i == j ? z : 0.0) - A[i * d + j];
+  }
+  std::complex<double> det = 1;
+  for (int c = 0; c < d; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < d; ++r) {
+      if (std::abs(M[r * d + c]) > std::abs(M[piv * d + c])) piv = r;
+    }
+    if (piv != c) {
+      for (int j = 0; j < d; ++j) std::swap(M[c * d + j], M[piv * d + j]);
+      det = -det;
+    }
+    det *= M[c * d + c];
+    for (int r = c + 1; r < d; ++r) {
+      const std::complex<double> f = M[r * d + c] / M[c * d + c];
+      for (int j = c; j < d; ++j) M[r * d + j] -= f * M[c * d + j];
+    }
+  }
+  return det;
+}
+
+double PrincipalRootError(const char* method, double Omega) {
+  int d = 0;
+  sunrealtype p[8];
+  EXPECT_EQ(CEodeGetMethodParams(method, &d, p, 8), CE_SUCCESS);
+  std::vector<double> A(static_cast<size_t>(d) * d);
+  EXPECT_EQ(CEodeAmplificationMatrix(d, p, Omega, 0, A.data()), CE_SUCCESS);
+  const std::complex<double> exact = std::polar(1.0, Omega);
+  std::complex<double> z = exact;
+  for (int it = 0; it < 30; ++it) {
+    const std::complex<double> dz = 1e-7 * Omega;
+    const std::complex<double> f = DetShifted(A, d, z);
+    const std::complex<double> df =
+        (DetShifted(A, d, z + dz) - DetShifted(A, d, z - dz)) / (2.0 * dz);
+    z -= f / df;
+  }
+  return std::abs(z - exact);
+}
+
+TEST(OrderConditions, AgreeWithThePrincipalRootOfTheAmplificationMatrix) {
+  for (const char* m : {"G3_CD", "G4_A34", "G6_O5", "G7_O7", "G8_O8"}) {
+    int d = 0, ox = 0, ov = 0;
+    sunrealtype p[8];
+    ASSERT_EQ(CEodeGetMethodParams(m, &d, p, 8), CE_SUCCESS);
+    ASSERT_EQ(CEodeMethodOrder(d, p, &ox, &ov), CE_SUCCESS);
+    const double e1 = PrincipalRootError(m, 0.4);
+    const double e2 = PrincipalRootError(m, 0.2);
+    const double slope = std::log2(e1 / e2);
+    std::printf(
+        "[ root     ] %-6s |zeta - e^(i Omega)| %.2e (0.4) %.2e (0.2): slope %.2f, order_x + 1 = "
+        "%d\n",
+        m, e1, e2, slope, ox + 1);
+    EXPECT_NEAR(slope, ox + 1, 0.3) << m;
+  }
 }
 
 // ---- measured orders --------------------------------------------------------------------

@@ -115,7 +115,7 @@ bool Conditions(const FindOptions& o, Eigen::MatrixXd* J, Eigen::VectorXd* r) {
 // D_2 = 0). The parameters all sit in the delta_{d-1} column, so it is affine in them.
 std::complex<double> SymbolDet(int d, const std::vector<double>& p, std::complex<double> zeta) {
   using C = std::complex<double>;
-  auto col = [d](int var) { return var == 0 ? 0 : (var == 1 ? 1 : var - 1); };
+  auto col = [](int var) { return var == 0 ? 0 : (var == 1 ? 1 : var - 1); };
   const int n = d - 1;
   Eigen::MatrixXcd M = Eigen::MatrixXcd::Zero(n, n);
   const C zi = 1.0 / zeta;
@@ -170,7 +170,7 @@ class Scorer {
   double Score(const Eigen::VectorXd& p) {
     ++evals_;
     const int d = o_.degree;
-    std::vector<double> a0(d * d), a1(d * d);
+    std::vector<double> a0(static_cast<size_t>(d) * d), a1(static_cast<size_t>(d) * d);
     if (p(1) == 0 || (d >= 4 && p(2) == 0) || p.cwiseAbs().maxCoeff() > o_.max_param) return 0;
     if (CEodeAmplificationMatrix(d, p.data(), 0, 0, a0.data()) != CE_SUCCESS ||
         CEodeAmplificationMatrix(d, p.data(), 1, 0, a1.data()) != CE_SUCCESS) {
@@ -184,6 +184,7 @@ class Scorer {
     if (ParasiticRadius() >= 1 - 1e-6) return 0;
     double lo = 0;
     double hi = -1;
+    // NOLINTNEXTLINE(clang-analyzer-security.FloatLoopCounter): the grid of the named sets
     for (double Om = 0.01; Om <= o_.omega_top + 1e-12; Om += 0.01) {
       if (!Stable(Om)) {
         hi = Om;
@@ -205,6 +206,7 @@ class Scorer {
   double ParasiticRadius() const {
     const Eigen::VectorXcd ev = A0_.eigenvalues();
     std::vector<std::pair<double, double>> r;
+    r.reserve(ev.size());
     for (int i = 0; i < ev.size(); ++i) r.push_back({std::abs(ev(i) - 1.0), std::abs(ev(i))});
     std::sort(r.begin(), r.end());
     double m = 0;
@@ -223,8 +225,8 @@ class Scorer {
 };
 
 // Nelder-Mead (maximising), a fixed number of evaluations.
-Eigen::VectorXd Refine(const std::function<double(const Eigen::VectorXd&)>& f, Eigen::VectorXd y0,
-                       double step, int max_evals, double* best) {
+Eigen::VectorXd Refine(const std::function<double(const Eigen::VectorXd&)>& f,
+                       const Eigen::VectorXd& y0, double step, int max_evals, double* best) {
   const int n = static_cast<int>(y0.size());
   std::vector<Eigen::VectorXd> s(n + 1, y0);
   std::vector<double> v(n + 1);
