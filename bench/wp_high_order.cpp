@@ -239,6 +239,62 @@ double TimeAt(std::vector<Result> rs, double target) {
   return -1;
 }
 
+struct Plan {
+  std::vector<const char*> sets;
+  std::vector<long> steps;
+  std::vector<double> tols;
+};
+
+// Every solver on one problem; *g8_best: G8_O8's smallest error (the quick check).
+bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<Result>* rs,
+                double* g8_best) {
+  bool ok = true;
+  for (const char* m : plan.sets) {
+    for (bool comp : {false, true}) {
+      if (comp && std::strcmp(m, "G8_O8") != 0 && std::strcmp(m, "G7_O7") != 0) continue;
+      const std::string name = std::string(m) + (comp ? "+comp" : "");
+      for (long n : plan.steps) {
+        ok &= Measure(
+            p, name, p.tend / n, [&](double* e) { return CeodeRun(ctx, p, m, n, comp, e); }, rs);
+        if (!comp && std::strcmp(m, "G8_O8") == 0) *g8_best = std::min(*g8_best, rs->back().error);
+      }
+    }
+  }
+  for (double tol : plan.tols) {
+    ok &= Measure(
+        p, "gsl_rk8pd", tol, [&](double* e) { return GslRun(p, tol, e); }, rs);
+    ok &= Measure(
+        p, "odeint_rkf78", tol, [&](double* e) { return OdeintRun(p, tol, false, e); }, rs);
+    ok &= Measure(
+        p, "odeint_bs", tol, [&](double* e) { return OdeintRun(p, tol, true, e); }, rs);
+    ok &= Measure(
+        p, "arkode_erk8", tol, [&](double* e) { return ArkRun(ctx, p, tol, e); }, rs);
+  }
+  return ok;
+}
+
+// CSV rows and the summary table of one problem.
+void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
+  std::map<std::string, std::vector<Result>> by;
+  for (const Result& r : rs) {
+    by[r.solver].push_back(r);
+    if (csv) {
+      std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", p.name, r.solver.c_str(),
+                   r.solver.rfind("G", 0) == 0 ? "fixed h" : "adaptive tol", r.param, r.error,
+                   r.evals, r.seconds);
+    }
+  }
+  const double g9 = TimeAt(by["gsl_rk8pd"], 1e-9), g11 = TimeAt(by["gsl_rk8pd"], 1e-11);
+  std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n", p.name);
+  for (const auto& kv : by) {
+    const double t9 = TimeAt(kv.second, 1e-9), t11 = TimeAt(kv.second, 1e-11);
+    double best = 1e300;
+    for (const Result& r : kv.second) best = std::min(best, r.error);
+    std::printf("  %-14s %10.3e s (%5.2f)  %10.3e s (%5.2f)  best %.2e\n", kv.first.c_str(), t9,
+                t9 > 0 && g9 > 0 ? t9 / g9 : -1, t11, t11 > 0 && g11 > 0 ? t11 / g11 : -1, best);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -254,18 +310,15 @@ int main(int argc, char** argv) {
   }
   std::vector<Problem*> problems = {&pend};
   if (!args.quick) problems.push_back(&chain);
-  const std::vector<const char*> sets =
-      args.quick ? std::vector<const char*>{"G8_O8"}
-                 : std::vector<const char*>{"G4_A34", "G5", "G6_O5", "G7_O7", "G8_O8"};
-  const std::vector<long> steps =
-      args.quick
-          ? std::vector<long>{400, 1600}
-          : std::vector<long>{40,  60,   80,   100,  130,  160,  200,  250,  320,  400,  500,  650,
-                              800, 1000, 1300, 1600, 2000, 2500, 3200, 4000, 5000, 8000, 16000};
-  const std::vector<double> tols =
-      args.quick ? std::vector<double>{1e-10}
-                 : std::vector<double>{1e-5,  1e-6,  1e-7,  1e-8,  1e-9, 1e-10,
-                                       1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
+  Plan plan;
+  if (args.quick) {
+    plan = {{"G8_O8"}, {400, 1600}, {1e-10}};
+  } else {
+    plan.sets = {"G4_A34", "G5", "G6_O5", "G7_O7", "G8_O8"};
+    plan.steps = {40,  60,   80,   100,  130,  160,  200,  250,  320,  400,  500,  650,
+                  800, 1000, 1300, 1600, 2000, 2500, 3200, 4000, 5000, 8000, 16000};
+    plan.tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
+  }
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
   if (csv) std::fprintf(csv, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
   bool ok = true;
@@ -273,47 +326,10 @@ int main(int argc, char** argv) {
   for (Problem* p : problems) {
     p->ref = Reference(*p);
     std::vector<Result> rs;
-    for (const char* m : sets) {
-      for (bool comp : {false, true}) {
-        if (comp && std::strcmp(m, "G8_O8") != 0 && std::strcmp(m, "G7_O7") != 0) continue;
-        const std::string name = std::string(m) + (comp ? "+comp" : "");
-        for (long n : steps) {
-          ok &= Measure(
-              *p, name, p->tend / n, [&](double* e) { return CeodeRun(ctx, *p, m, n, comp, e); },
-              &rs);
-          if (!comp && std::strcmp(m, "G8_O8") == 0)
-            quick_best = std::min(quick_best, rs.back().error);
-        }
-      }
-    }
-    for (double tol : tols) {
-      ok &= Measure(
-          *p, "gsl_rk8pd", tol, [&](double* e) { return GslRun(*p, tol, e); }, &rs);
-      ok &= Measure(
-          *p, "odeint_rkf78", tol, [&](double* e) { return OdeintRun(*p, tol, false, e); }, &rs);
-      ok &= Measure(
-          *p, "odeint_bs", tol, [&](double* e) { return OdeintRun(*p, tol, true, e); }, &rs);
-      ok &= Measure(
-          *p, "arkode_erk8", tol, [&](double* e) { return ArkRun(ctx, *p, tol, e); }, &rs);
-    }
-    std::map<std::string, std::vector<Result>> by;
-    for (const Result& r : rs) {
-      by[r.solver].push_back(r);
-      if (csv) {
-        std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", p->name, r.solver.c_str(),
-                     r.solver.rfind("G", 0) == 0 ? "fixed h" : "adaptive tol", r.param, r.error,
-                     r.evals, r.seconds);
-      }
-    }
-    const double g9 = TimeAt(by["gsl_rk8pd"], 1e-9), g11 = TimeAt(by["gsl_rk8pd"], 1e-11);
-    std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n", p->name);
-    for (const auto& kv : by) {
-      const double t9 = TimeAt(kv.second, 1e-9), t11 = TimeAt(kv.second, 1e-11);
-      double best = 1e300;
-      for (const Result& r : kv.second) best = std::min(best, r.error);
-      std::printf("  %-14s %10.3e s (%5.2f)  %10.3e s (%5.2f)  best %.2e\n", kv.first.c_str(), t9,
-                  t9 > 0 && g9 > 0 ? t9 / g9 : -1, t11, t11 > 0 && g11 > 0 ? t11 / g11 : -1, best);
-    }
+    double g8 = 1;
+    ok &= RunSolvers(ctx, plan, *p, &rs, &g8);
+    if (p == &pend) quick_best = g8;
+    Summarise(*p, rs, csv);
   }
   if (csv) std::fclose(csv);
   SUNContext_Free(&ctx);
