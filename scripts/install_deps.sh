@@ -4,7 +4,7 @@
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libsundials-dev libeigen3-dev libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev openmpi-bin
-      gnuplot-nox python3 python3-matplotlib python3-numpy valgrind)
+      libgsl-dev libboost-dev gnuplot-nox python3 python3-matplotlib python3-numpy valgrind)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

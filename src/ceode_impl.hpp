@@ -273,6 +273,12 @@ int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x,
 // (the symmetric stencil cancels the curve's own error). xs, vs, as: scratch vectors.
 int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
                      const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
+// Degrees >= kHighStartDegree: the same derivatives to the order of the high-degree sets
+// (src/ceode_start_high.cpp); StartDerivatives hands over to it.
+constexpr int kHighStartDegree = 6;
+int StartDerivativesHigh(
+    CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+    const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
 void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
             const char* func);  // f(t, x, v), counted, failures reported

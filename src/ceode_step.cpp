@@ -24,6 +24,23 @@ const MethodSet kMethodSets[] = {
     {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}},
     {"G5_TOP", 5, {1.62, 1.03522, 1.0291293, 1.016}},
     {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}},
+    // High-degree sets found by `ceode-stability find` (command in docs/stability.md).
+    {"G6_O5",
+     6,
+     {7.8581049690442608, 3.2003060015391878, 2.306472520152492, 1.445972372099134,
+      0.78920709629572905}},
+    {"G6_O6",
+     6,
+     {2.438146987413893, 1.260773492352264, 1.0359340008566345, 0.84442784269433835,
+      0.57681936136099354}},
+    {"G7_O7",
+     7,
+     {19.362993681325158, 15.310841926671563, 8.7099568711498723, 3.9685609709725753,
+      2.3539640770647496, 0.90130820250696653}},
+    {"G8_O8",
+     8,
+     {399.99982239054896, 278.28678067794129, 134.15990720943549, 51.039413540261052,
+      20.827940678986256, 6.8588048481939303, 2.805527440772015}},
 };
 
 sunrealtype Factorial(int n) {
@@ -248,6 +265,7 @@ void BuildPlans(CEodeMemRec* ce) {
 int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
                      const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
   const int d = ce->degree;
+  if (d >= kHighStartDegree) return StartDerivativesHigh(ce, t0, xs, vs, as, accel);
   const sunrealtype h = ce->h;
   int flag = CE_SUCCESS;
   for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {

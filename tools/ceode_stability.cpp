@@ -7,6 +7,7 @@
 //   ceode-stability --method RK4            (also RK3, AB4, AB5, HHT, HHT:<alpha>)
 //   ceode-stability --list [--xi 0.05]      (Omega_max of every named set and comparison)
 //   ceode-stability --method G3_CD --matrix 1.5   (prints A(Omega))
+//   ceode-stability find --degree 7 --order 7     (the set finder, tools/ceode_find.cpp)
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
 
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_find.hpp"
 #include "classic_methods.hpp"
 
 namespace {
@@ -181,6 +183,8 @@ int List(sunrealtype xi) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "find") == 0)
+    return ceode_tools::FindMain(argc - 1, argv + 1);
   Options opt;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
@@ -252,6 +256,11 @@ int main(int argc, char** argv) {
     std::printf(")");
   }
   std::printf("\nxi        %g\n", static_cast<double>(opt.xi));
+  int order_x = 0;
+  int order_v = 0;
+  if (!m.classic && CEodeMethodOrder(m.degree, m.params, &order_x, &order_v) == CE_SUCCESS) {
+    std::printf("order     x %d, x' %d (CEodeMethodOrder)\n", order_x, order_v);
+  }
   sunrealtype lim = 0;
   if (!m.Limit(opt.xi, &lim)) {
     std::fprintf(stderr, "ceode-stability: the analysis failed (bad parameters?)\n");

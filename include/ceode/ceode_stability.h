@@ -34,6 +34,22 @@ SUNDIALS_EXPORT int CEodeAmplificationMatrix(int degree, const sunrealtype* para
 SUNDIALS_EXPORT int CEodeSpectralRadii(int degree, const sunrealtype* params, sunrealtype xi, int n,
                                        const sunrealtype* Omega, sunrealtype* rho);
 
+/* ---- Order conditions (src/ceode_order.cpp, docs/theory.md section 9.4) -------------------
+ * Orders in x and x' of the step with these parameters: the largest p such that the
+ * method is exact on polynomial solutions of degree p + 1 (local error O(h^(p+2)) in x,
+ * O(h^(p+1)) in x' per step; the principal root errs by O(Omega^(p+1))). Zero-stability is
+ * not part of the order: check it with CEodeStabilityLimit. */
+SUNDIALS_EXPORT int CEodeMethodOrder(int degree, const sunrealtype* params, int* order_x,
+                                     int* order_v);
+
+/* The first n Taylor coefficients (in s = h times the exponent of an exponential solution)
+ * of the x and x' residuals; coef_x[order_x + 2] and coef_v[order_v + 2] are the error
+ * constants (1/12 in magnitude for central differences). Affine in the parameters.
+ * n <= 2 * 8 + 4. */
+SUNDIALS_EXPORT int CEodeMethodErrorCoeffs(int degree, const sunrealtype* params, int n,
+                                           sunrealtype* coef_x, sunrealtype* coef_v);
+/* ---- end of order conditions ---------------------------------------------------------- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,341 @@
+// -----------------------------------------------------------------------------
+// wp_high_order: CEODE's high-degree sets (G6_O5 ... G8_O8, docs/stability.md) against
+// the high-order integrators users pick for smooth problems, error against CPU time:
+//   * GSL rk8pd (Prince-Dormand 8(7), gsl_odeiv2_driver, eps_abs = eps_rel = tol),
+//   * Boost.Odeint runge_kutta_fehlberg78 (controlled) and bulirsch_stoer,
+//   * ARKODE ERKStep at order 8 (Fehlberg 13-7-8), adaptive, stop time at t_end,
+//   * CEODE at fixed steps (h divides t_end), stability guard off.
+// Problems: the IFToMM pendulum theta'' = -9.81 cos theta, theta(0) = theta'(0) = 0, error
+// |theta(10) - ref|; and an FPU-beta chain of 16 masses (fixed ends, beta = 1, released from
+// rest in mode 1 (amplitude 1) plus mode 5 (amplitude 0.3): strongly nonlinear), error
+// max_i |x_i(10) - ref_i|. References: classical RK4 in long double,
+// Richardson-extrapolated from 2e5 and 4e5 steps (agreement of the two runs: < 1e-16).
+// Timing: wp::TimeMedian (process CPU time, median of >= 5 repetitions of >= 50 ms).
+//
+//   wp_high_order [--csv FILE] [--quick]
+// Prints one row per run and a summary: per solver, the CPU time interpolated (log-log, on
+// the solver's Pareto front) at errors 1e-9 and 1e-11, and the smallest error reached.
+// --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
+// -----------------------------------------------------------------------------
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include <array>
+#include <boost/numeric/odeint.hpp>
+#include <map>
+
+#include "wp_common.h"
+
+namespace {
+
+constexpr int kChain = 16;
+
+// One problem: x'' = a(t, x), n degrees of freedom; counts its evaluations.
+struct Problem {
+  const char* name;
+  int n;
+  double tend;
+  void (*accel)(const double* x, double* a, int n);
+  std::vector<double> x0, v0, ref;
+  mutable long evals = 0;
+};
+
+void PendulumAccel(const double* x, double* a, int /*n*/) { a[0] = -9.81 * std::cos(x[0]); }
+
+template <class T>
+void ChainAccelT(const T* x, T* a, int n) {
+  for (int i = 0; i < n; ++i) {
+    const T l = i > 0 ? x[i - 1] : T(0);
+    const T r = i + 1 < n ? x[i + 1] : T(0);
+    const T dl = x[i] - l, dr = r - x[i];
+    a[i] = dr - dl + (dr * dr * dr - dl * dl * dl);
+  }
+}
+void ChainAccel(const double* x, double* a, int n) { ChainAccelT(x, a, n); }
+
+// Long-double RK4 reference with Richardson extrapolation (see the header comment).
+std::vector<double> Reference(const Problem& p) {
+  auto run = [&p](long steps) {
+    const int n = p.n;
+    std::vector<long double> x(p.x0.begin(), p.x0.end()), v(p.v0.begin(), p.v0.end());
+    std::vector<long double> k[4][2], xs(n), a(n);
+    for (auto& kk : k) kk[0].resize(n), kk[1].resize(n);
+    auto acc = [&](const std::vector<long double>& xx, std::vector<long double>* out) {
+      if (p.n == 1) {
+        (*out)[0] = -9.81L * std::cos(xx[0]);
+      } else {
+        ChainAccelT(xx.data(), out->data(), n);
+      }
+    };
+    const long double h = p.tend / steps;
+    const long double c[4] = {0, 0.5L, 0.5L, 1};
+    for (long s = 0; s < steps; ++s) {
+      for (int st = 0; st < 4; ++st) {
+        std::vector<long double> vs(n);
+        for (int i = 0; i < n; ++i) {
+          xs[i] = x[i] + (st ? c[st] * h * k[st - 1][0][i] : 0);
+          vs[i] = v[i] + (st ? c[st] * h * k[st - 1][1][i] : 0);
+        }
+        acc(xs, &a);
+        for (int i = 0; i < n; ++i) k[st][0][i] = vs[i], k[st][1][i] = a[i];
+      }
+      for (int i = 0; i < n; ++i) {
+        x[i] += h / 6 * (k[0][0][i] + 2 * k[1][0][i] + 2 * k[2][0][i] + k[3][0][i]);
+        v[i] += h / 6 * (k[0][1][i] + 2 * k[1][1][i] + 2 * k[2][1][i] + k[3][1][i]);
+      }
+    }
+    return x;
+  };
+  const std::vector<long double> a = run(200000), b = run(400000);
+  std::vector<double> r(p.n);
+  for (int i = 0; i < p.n; ++i) r[i] = static_cast<double>((16 * b[i] - a[i]) / 15);
+  return r;
+}
+
+double ErrorOf(const Problem& p, const double* x) {
+  double e = 0;
+  for (int i = 0; i < p.n; ++i) e = std::max(e, std::fabs(x[i] - p.ref[i]));
+  return e;
+}
+
+struct Result {
+  std::string solver;
+  double param = 0, error = 0, seconds = 0;
+  long evals = 0;
+};
+
+// ---- CEODE -----------------------------------------------------------------
+int CeodeRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* data) {
+  const auto* p = static_cast<const Problem*>(data);
+  ++p->evals;
+  p->accel(N_VGetArrayPointer(x), N_VGetArrayPointer(f), p->n);
+  return 0;
+}
+
+int CeodeRun(SUNContext ctx, const Problem& p, const char* method, long steps, bool comp,
+             double* err) {
+  N_Vector x = N_VNew_Serial(p.n, ctx), v = N_VNew_Serial(p.n, ctx);
+  std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(x));
+  std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(v));
+  void* mem = CEodeCreate(ctx);
+  int flag = CEodeInit(mem, CeodeRhs, 0, x, v);
+  if (flag == 0) flag = CEodeSetUserData(mem, const_cast<Problem*>(&p));
+  if (flag == 0) flag = CEodeSetMethodByName(mem, method);
+  if (flag == 0) flag = CEodeSetFixedStep(mem, p.tend / steps);
+  if (flag == 0) flag = CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0);
+  if (flag == 0 && comp) flag = CEodeSetCompensatedSummation(mem, SUNTRUE);
+  if (flag == 0) flag = CEodeSetMaxNumSteps(mem, steps + 10);
+  sunrealtype t = 0;
+  if (flag == 0) flag = CEodeEvolve(mem, p.tend, x, v, &t, CE_NORMAL);
+  *err = ErrorOf(p, N_VGetArrayPointer(x));
+  CEodeFree(&mem);
+  N_VDestroy(x);
+  N_VDestroy(v);
+  return flag < 0 ? 1 : 0;
+}
+
+// ---- first-order form for the others -----------------------------------------
+void FirstOrder(const Problem& p, const double* y, double* dy) {
+  ++p.evals;
+  std::copy(y + p.n, y + 2 * p.n, dy);
+  p.accel(y, dy + p.n, p.n);
+}
+
+int GslRhs(double /*t*/, const double y[], double dy[], void* data) {
+  FirstOrder(*static_cast<const Problem*>(data), y, dy);
+  return GSL_SUCCESS;
+}
+
+int GslRun(const Problem& p, double tol, double* err) {
+  gsl_odeiv2_system sys = {GslRhs, nullptr, static_cast<size_t>(2 * p.n), const_cast<Problem*>(&p)};
+  gsl_odeiv2_driver* d =
+      gsl_odeiv2_driver_alloc_standard_new(&sys, gsl_odeiv2_step_rk8pd, 1e-3, tol, tol, 1, 0);
+  std::vector<double> y(2 * p.n);
+  std::copy(p.x0.begin(), p.x0.end(), y.begin());
+  std::copy(p.v0.begin(), p.v0.end(), y.begin() + p.n);
+  double t = 0;
+  const int s = gsl_odeiv2_driver_apply(d, &t, p.tend, y.data());
+  gsl_odeiv2_driver_free(d);
+  *err = ErrorOf(p, y.data());
+  return s == GSL_SUCCESS ? 0 : 1;
+}
+
+using State = std::vector<double>;
+
+int OdeintRun(const Problem& p, double tol, bool bs, double* err) {
+  namespace ode = boost::numeric::odeint;
+  State y(2 * p.n);
+  std::copy(p.x0.begin(), p.x0.end(), y.begin());
+  std::copy(p.v0.begin(), p.v0.end(), y.begin() + p.n);
+  auto rhs = [&p](const State& s, State& ds, double) { FirstOrder(p, s.data(), ds.data()); };
+  if (bs) {
+    ode::bulirsch_stoer<State> stepper(tol, tol);
+    ode::integrate_adaptive(stepper, rhs, y, 0.0, p.tend, 1e-3);
+  } else {
+    auto stepper = ode::make_controlled(tol, tol, ode::runge_kutta_fehlberg78<State>());
+    ode::integrate_adaptive(stepper, rhs, y, 0.0, p.tend, 1e-3);
+  }
+  *err = ErrorOf(p, y.data());
+  return 0;
+}
+
+int ArkRhs(sunrealtype /*t*/, N_Vector y, N_Vector dy, void* data) {
+  FirstOrder(*static_cast<const Problem*>(data), N_VGetArrayPointer(y), N_VGetArrayPointer(dy));
+  return 0;
+}
+
+int ArkRun(SUNContext ctx, const Problem& p, double tol, double* err) {
+  N_Vector y = N_VNew_Serial(2 * p.n, ctx);
+  double* yd = N_VGetArrayPointer(y);
+  std::copy(p.x0.begin(), p.x0.end(), yd);
+  std::copy(p.v0.begin(), p.v0.end(), yd + p.n);
+  void* mem = ERKStepCreate(ArkRhs, 0, y, ctx);
+  int flag = ERKStepSetUserData(mem, const_cast<Problem*>(&p));
+  if (flag == 0) flag = ERKStepSetTableNum(mem, ARKODE_FEHLBERG_13_7_8);
+  if (flag == 0) flag = ERKStepSStolerances(mem, tol, tol);
+  if (flag == 0) flag = ERKStepSetStopTime(mem, p.tend);
+  if (flag == 0) flag = ERKStepSetMaxNumSteps(mem, 1000000);
+  sunrealtype t = 0;
+  if (flag == 0) flag = ERKStepEvolve(mem, p.tend, y, &t, ARK_NORMAL);
+  *err = ErrorOf(p, N_VGetArrayPointer(y));
+  ERKStepFree(&mem);
+  N_VDestroy(y);
+  return flag < 0 ? 1 : 0;
+}
+
+// Times run (returns 0 on success) and records error and evaluations of one call.
+template <class F>
+bool Measure(const Problem& p, const std::string& solver, double param, F run,
+             std::vector<Result>* out) {
+  double err = 0;
+  p.evals = 0;
+  if (run(&err) != 0) return false;
+  Result r{solver, param, err, 0, p.evals};
+  double dummy = 0;
+  r.seconds = wp::TimeMedian([&] { return run(&dummy); });
+  std::printf("%-10s %-14s %10.4g  error %.3e  f-evals %8ld  %.3e s\n", p.name, solver.c_str(),
+              param, r.error, r.evals, r.seconds);
+  out->push_back(r);
+  return r.seconds >= 0;
+}
+
+// CPU time at a target error on the solver's Pareto front, log-log interpolated; < 0: the
+// front does not reach the target.
+double TimeAt(std::vector<Result> rs, double target) {
+  std::sort(rs.begin(), rs.end(),
+            [](const Result& a, const Result& b) { return a.seconds < b.seconds; });
+  std::vector<Result> front;
+  for (const Result& r : rs) {
+    if (front.empty() || r.error < front.back().error) front.push_back(r);
+  }
+  for (size_t i = 0; i < front.size(); ++i) {
+    if (front[i].error > target) continue;
+    if (i == 0) return front[0].seconds;
+    const Result& a = front[i - 1];
+    const Result& b = front[i];
+    const double w = std::log(target / a.error) / std::log(b.error / a.error);
+    return std::exp(std::log(a.seconds) + w * std::log(b.seconds / a.seconds));
+  }
+  return -1;
+}
+
+struct Plan {
+  std::vector<const char*> sets;
+  std::vector<long> steps;
+  std::vector<double> tols;
+};
+
+// Every solver on one problem; *g8_best: G8_O8's smallest error (the quick check).
+bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<Result>* rs,
+                double* g8_best) {
+  bool ok = true;
+  for (const char* m : plan.sets) {
+    for (bool comp : {false, true}) {
+      if (comp && std::strcmp(m, "G8_O8") != 0 && std::strcmp(m, "G7_O7") != 0) continue;
+      const std::string name = std::string(m) + (comp ? "+comp" : "");
+      for (long n : plan.steps) {
+        ok &= Measure(
+            p, name, p.tend / n, [&](double* e) { return CeodeRun(ctx, p, m, n, comp, e); }, rs);
+        if (!comp && std::strcmp(m, "G8_O8") == 0) *g8_best = std::min(*g8_best, rs->back().error);
+      }
+    }
+  }
+  for (double tol : plan.tols) {
+    ok &= Measure(
+        p, "gsl_rk8pd", tol, [&](double* e) { return GslRun(p, tol, e); }, rs);
+    ok &= Measure(
+        p, "odeint_rkf78", tol, [&](double* e) { return OdeintRun(p, tol, false, e); }, rs);
+    ok &= Measure(
+        p, "odeint_bs", tol, [&](double* e) { return OdeintRun(p, tol, true, e); }, rs);
+    ok &= Measure(
+        p, "arkode_erk8", tol, [&](double* e) { return ArkRun(ctx, p, tol, e); }, rs);
+  }
+  return ok;
+}
+
+// CSV rows and the summary table of one problem.
+void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
+  std::map<std::string, std::vector<Result>> by;
+  for (const Result& r : rs) {
+    by[r.solver].push_back(r);
+    if (csv) {
+      std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", p.name, r.solver.c_str(),
+                   r.solver.rfind("G", 0) == 0 ? "fixed h" : "adaptive tol", r.param, r.error,
+                   r.evals, r.seconds);
+    }
+  }
+  const double g9 = TimeAt(by["gsl_rk8pd"], 1e-9), g11 = TimeAt(by["gsl_rk8pd"], 1e-11);
+  std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n", p.name);
+  for (const auto& kv : by) {
+    const double t9 = TimeAt(kv.second, 1e-9), t11 = TimeAt(kv.second, 1e-11);
+    double best = 1e300;
+    for (const Result& r : kv.second) best = std::min(best, r.error);
+    std::printf("  %-14s %10.3e s (%5.2f)  %10.3e s (%5.2f)  best %.2e\n", kv.first.c_str(), t9,
+                t9 > 0 && g9 > 0 ? t9 / g9 : -1, t11, t11 > 0 && g11 > 0 ? t11 / g11 : -1, best);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const wp::Args args = wp::ParseArgs(argc, argv);
+  gsl_set_error_handler_off();
+  SUNContext ctx;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
+  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
+  Problem chain{"fpu_chain", kChain, 10, ChainAccel, {}, std::vector<double>(kChain, 0), {}};
+  for (int i = 0; i < kChain; ++i) {
+    const double q = M_PI * (i + 1) / (kChain + 1);
+    chain.x0.push_back(std::sin(q) + 0.3 * std::sin(5 * q));
+  }
+  std::vector<Problem*> problems = {&pend};
+  if (!args.quick) problems.push_back(&chain);
+  Plan plan;
+  if (args.quick) {
+    plan = {{"G8_O8"}, {400, 1600}, {1e-10}};
+  } else {
+    plan.sets = {"G4_A34", "G5", "G6_O5", "G7_O7", "G8_O8"};
+    plan.steps = {40,  60,   80,   100,  130,  160,  200,  250,  320,  400,  500,  650,
+                  800, 1000, 1300, 1600, 2000, 2500, 3200, 4000, 5000, 8000, 16000};
+    plan.tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
+  }
+  FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
+  if (csv) std::fprintf(csv, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
+  bool ok = true;
+  double quick_best = 1;
+  for (Problem* p : problems) {
+    p->ref = Reference(*p);
+    std::vector<Result> rs;
+    double g8 = 1;
+    ok &= RunSolvers(ctx, plan, *p, &rs, &g8);
+    if (p == &pend) quick_best = g8;
+    Summarise(*p, rs, csv);
+  }
+  if (csv) std::fclose(csv);
+  SUNContext_Free(&ctx);
+  if (args.quick) {
+    std::printf("quick: G8_O8 best pendulum error %.2e (must be <= 1e-11)\n", quick_best);
+    ok &= quick_best <= 1e-11;
+  }
+  return ok ? 0 : 1;
+}
