@@ -493,7 +493,7 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
   }
   N_Vector V0 = ce->D[1];  // f independent of v: it sees the last velocity, as the ODE path
   if (ce->vel_dependent) {
-    VelocityOffset(ce, w->vbase);
+    VelocityOffset(ce->degree, ce->co, ce->D, w->vbase);
     V0 = w->vbase;
   }
   const StepCoeffs& co = ce->co;

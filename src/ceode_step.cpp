@@ -160,10 +160,8 @@ void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
   N_VLinearCombination(d - 2, c, const_cast<N_Vector*>(ce->D + 2), a);
 }
 
-void VelocityOffset(const CEodeMemRec* ce, N_Vector V0) {
-  const int d = ce->degree;
-  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(ce->co.V0 + 1),
-                       const_cast<N_Vector*>(ce->D + 1), V0);
+void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0) {
+  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(co.V0 + 1), D + 1, V0);
 }
 
 int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
@@ -172,14 +170,10 @@ int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   return EvalAccel(ce, t, x, ce->D[1], a, func);
 }
 
-namespace {
-
 // The update after the solve: z = (a - B_2)/c_2 (d = 3: z is a itself), the
 // lower derivatives from the history and z, then the position increment.
-void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext, N_Vector xnew,
-               UpdatePlan* plan) {
-  const int d = ce->degree;
-  const StepCoeffs& co = ce->co;
+void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
+                     N_Vector xnew, UpdatePlan* plan) {
   plan->n = 0;
   N_Vector a = Dn[2];
   N_Vector z = Dn[d - 1];
@@ -210,8 +204,6 @@ void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext,
   cb.out = xnew;
 }
 
-}  // namespace
-
 // The vectors only trade places from step to step (history <-> new every step,
 // the three positions in a cycle of three), so six plans, built once per start,
 // cover every step: the step itself builds nothing.
@@ -232,7 +224,7 @@ void BuildPlans(CEodeMemRec* ce) {
   N_Vector xnew = ce->xnew;
   ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
   for (int i = 0; i < kNumPlans; ++i) {
-    BuildPlan(ce, D, Dn, xnext, xnew, &ce->plans[i]);
+    BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[i]);
     if (ce->fused_ready) {
       BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr}, &ce->fused_plans[i]);
     }
