@@ -293,6 +293,7 @@ int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
 int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
                 const char* func);
 int LsInitialize(CEodeMemRec* ce, const char* func);
+int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func);  // reports failure
 void LsFree(CEodeMemRec* ce);
 
 // ceode_nls.cpp

@@ -297,15 +297,22 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
 
 extern "C" {
 
-static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, sunrealtype Omega,
-                                        sunrealtype xi, sunrealtype* A) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || A == nullptr || !(Omega >= 0) ||
+// The amplification matrix at one Omega, after the checks of the single-point functions.
+static int AmplificationAt(int degree, const sunrealtype* params, sunrealtype Omega, sunrealtype xi,
+                           const void* out, Eigen::MatrixXd* M) {
+  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || out == nullptr || !(Omega >= 0) ||
       !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
   }
   ceode::StepMap map(degree, params, xi);
+  return map.ok() && map.Build(Omega, M) ? CE_SUCCESS : CE_ILL_INPUT;
+}
+
+static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, sunrealtype Omega,
+                                        sunrealtype xi, sunrealtype* A) {
   Eigen::MatrixXd M;
-  if (!map.ok() || !map.Build(Omega, &M)) return CE_ILL_INPUT;
+  const int flag = AmplificationAt(degree, params, Omega, xi, A, &M);
+  if (flag != CE_SUCCESS) return flag;
   for (int i = 0; i < degree; ++i) {
     for (int j = 0; j < degree; ++j) A[i * degree + j] = M(i, j);
   }
@@ -314,13 +321,9 @@ static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, s
 
 static int CEodeSpectralRadiusImpl(int degree, const sunrealtype* params, sunrealtype Omega,
                                    sunrealtype xi, sunrealtype* rho) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || rho == nullptr || !(Omega >= 0) ||
-      !std::isfinite(Omega)) {
-    return CE_ILL_INPUT;
-  }
-  ceode::StepMap map(degree, params, xi);
   Eigen::MatrixXd M;
-  if (!map.ok() || !map.Build(Omega, &M)) return CE_ILL_INPUT;
+  const int flag = AmplificationAt(degree, params, Omega, xi, rho, &M);
+  if (flag != CE_SUCCESS) return flag;
   *rho = ceode::Analyse(M).rho;
   return CE_SUCCESS;
 }
