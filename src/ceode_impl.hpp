@@ -264,7 +264,7 @@ void TaylorWeights(sunrealtype s, int m, sunrealtype* w);
 // The predicted acceleration at t: the Taylor polynomial of the history from t - h.
 void PredictAccel(const CEodeMemRec* ce, N_Vector a);
 // V0 of v(a) = V0 + kappa a: the part of the velocity at t the history fixes.
-void VelocityOffset(const CEodeMemRec* ce, N_Vector V0);
+void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0);
 // The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
 int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                   const char* func);
@@ -279,6 +279,11 @@ constexpr int kHighStartDegree = 6;
 int StartDerivativesHigh(
     CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
+// The step's update after the solve, for the history D, the new derivatives Dn (the acceleration
+// in Dn[2]), x(t + h) in xnext and x(t + 2h) into xnew: the integrator's plans and the
+// stability analysis's step map are built by this one routine.
+void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
+                     N_Vector xnew, UpdatePlan* plan);
 void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
             const char* func);  // f(t, x, v), counted, failures reported
@@ -299,6 +304,7 @@ int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
 int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
                 const char* func);
 int LsInitialize(CEodeMemRec* ce, const char* func);
+int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func);  // reports failure
 void LsFree(CEodeMemRec* ce);
 
 // ceode_nls.cpp

@@ -143,7 +143,11 @@ int LsInitialize(CEodeMemRec* ce, const char* func) {
         ce, CE_LINIT_FAIL, func,
         "The linear solver does not accept a matrix-free product: attach a matrix.");
   }
-  const int rv = SUNLinSolInitialize(ce->LS);
+  return InitLinearSolver(ce, ce->LS, func);
+}
+
+int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func) {
+  const int rv = SUNLinSolInitialize(LS);
   if (rv != 0) {
     return ProcessError(ce, CE_LINIT_FAIL, func, "SUNLinSolInitialize failed (returned %d).", rv);
   }

@@ -153,7 +153,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   if (flag != CE_SUCCESS) return flag;
 
   // Velocity offset and predictor: v(a) = V0 + kappa a; a0 = Taylor of a from t - h.
-  VelocityOffset(ce, ce->V0);
+  VelocityOffset(ce->degree, co, ce->D, ce->V0);
   PredictAccel(ce, ce->apred);
 
   // Weights: relative to the predicted acceleration, floored by its largest entry.

@@ -169,11 +169,7 @@ int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
   }
   s->sol = N_VClone(s->b);
   if (s->sol == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-  const int rv = SUNLinSolInitialize(s->LS);
-  if (rv != 0) {
-    return ProcessError(ce, CE_LINIT_FAIL, func, "SUNLinSolInitialize failed (returned %d).", rv);
-  }
-  return CE_SUCCESS;
+  return InitLinearSolver(ce, s->LS, func);
 }
 
 void SaddleFree(Saddle* s) {

@@ -2,8 +2,6 @@
 // and the runtime guard that compares h * omega_max with the method's limit.
 #include <ceode/ceode_stability.h>
 #include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -11,99 +9,84 @@
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <vector>
 
-#include "ceode_impl.hpp"
+#include "ceode_fused.hpp"
 
 namespace ceode {
 
 namespace {
 
-struct TestProblem {
-  sunrealtype omega;
-  sunrealtype xi;
-};
-
-// x'' = -Omega^2 x - 2 xi Omega x' with h = 1, so that omega h = Omega.
-int TestRhs(sunrealtype /*t*/, N_Vector x, N_Vector v, N_Vector f, void* data) {
-  const auto* p = static_cast<const TestProblem*>(data);
-  N_VLinearSum(-p->omega * p->omega, x, -2 * p->xi * p->omega, v, f);
-  return 0;
-}
-
-int TestJac(sunrealtype /*t*/, N_Vector /*x*/, N_Vector /*v*/, N_Vector /*f*/, SUNMatrix J,
-            void* data, N_Vector, N_Vector, N_Vector) {
-  const auto* p = static_cast<const TestProblem*>(data);
-  SUNDenseMatrix_Data(J)[0] = -2 * p->xi * p->omega;
-  return 0;
-}
-
-// Owns a one-degree-of-freedom CEODE run whose step is applied to unit states.
+// The step of the method on the test equation x'' = -Omega^2 x - 2 xi Omega x' with h = 1 (so
+// that omega h = Omega), applied to the d unit states (x(t), D_1..D_{d-1}(t - h)) at once: entry k
+// of every vector below belongs to unit state k. The coefficients come from ComputeStepCoeffs
+// and the update is the integrator's own plan (BuildUpdatePlan, UpdateReference); no CEODE
+// instance is involved.
 class StepMap {
  public:
-  StepMap(int degree, const sunrealtype* params, sunrealtype xi) : prob_{0, xi} {
-    sun::ContextCreate(&ctx_);
-    x_ = N_VNew_Serial(1, ctx_);
-    v_ = N_VNew_Serial(1, ctx_);
-    N_VConst(0, x_);
-    N_VConst(0, v_);
-    mem_ = CEodeCreate(ctx_);
-    CEodeSetErrFile(mem_, nullptr);
-    ok_ = CEodeInit(mem_, TestRhs, 0, x_, v_) == CE_SUCCESS &&
-          CEodeSetMethod(mem_, degree, params) == CE_SUCCESS &&
-          CEodeSetFixedStep(mem_, 1) == CE_SUCCESS &&
-          CEodeSetUserData(mem_, &prob_) == CE_SUCCESS &&
-          CEodeSetStabilityGuard(mem_, CE_GUARD_OFF, 0) == CE_SUCCESS;
-    if (ok_ && xi > 0) {
-      A_ = SUNDenseMatrix(1, 1, ctx_);
-      LS_ = SUNLinSol_Dense(x_, A_, ctx_);
-      ok_ = CEodeSetVelocityDependence(mem_, SUNTRUE) == CE_SUCCESS &&
-            CEodeSetLinearSolver(mem_, LS_, A_) == CE_SUCCESS &&
-            CEodeSetVelJacFn(mem_, TestJac) == CE_SUCCESS &&
-            CEodeSetNonlinTolerances(mem_, 1e-15, 0) == CE_SUCCESS;
+  StepMap(int degree, const sunrealtype* params, sunrealtype xi) : d_(degree), xi_(xi) {
+    ComputeStepCoeffs(degree, params, 1, &co_);
+    ok_ = sun::ContextCreate(&ctx_) == 0;
+    for (N_Vector* v : Vectors()) {
+      if (ok_) *v = N_VNew_Serial(degree, ctx_);
+      ok_ = ok_ && *v != nullptr;
     }
-    sunrealtype t = 0;
-    // One real step builds the solver objects and coefficients for h = 1.
-    ok_ = ok_ && CEodeEvolve(mem_, 1, x_, v_, &t, CE_ONE_STEP) == CE_SUCCESS;
+    if (ok_) BuildUpdatePlan(d_, co_, D_, Dn_, xnext_, xnew_, &plan_);
   }
   ~StepMap() {
-    CEodeFree(&mem_);
-    if (LS_ != nullptr) SUNLinSolFree(LS_);
-    if (A_ != nullptr) SUNMatDestroy(A_);
-    N_VDestroy(x_);
-    N_VDestroy(v_);
-    SUNContext_Free(&ctx_);
+    for (N_Vector* v : Vectors()) {
+      if (*v != nullptr) N_VDestroy(*v);
+    }
+    if (ctx_ != nullptr) SUNContext_Free(&ctx_);
   }
   StepMap(const StepMap&) = delete;
   StepMap& operator=(const StepMap&) = delete;
 
   bool ok() const { return ok_; }
 
-  // Column k of A: the step applied to the k-th unit state (x(t), D_1..D_{d-1}(t-h)).
+  // Column k of A: the step applied to the k-th unit state.
   bool Build(sunrealtype Omega, Eigen::MatrixXd* A) {
-    auto* ce = static_cast<CEodeMemRec*>(mem_);
-    const int d = ce->degree;
-    prob_.omega = Omega;
-    A->resize(d, d);
-    for (int k = 0; k < d; ++k) {
-      N_VConst(0, ce->xnext);
-      for (int j = 1; j < d; ++j) N_VConst(k == j ? 1 : 0, ce->D[j]);
-      if (k == 0) N_VConst(1, ce->xnext);
-      ce->jac_current = false;
-      if (TakeStep(ce) != CE_SUCCESS) return false;
-      (*A)(0, k) = N_VGetArrayPointer(ce->xnext)[0];
-      for (int j = 1; j < d; ++j) (*A)(j, k) = N_VGetArrayPointer(ce->D[j])[0];
+    for (int k = 0; k < d_; ++k) {
+      N_VGetArrayPointer(xnext_)[k] = k == 0 ? 1 : 0;
+      for (int j = 1; j < d_; ++j) N_VGetArrayPointer(D_[j])[k] = k == j ? 1 : 0;
     }
-    return true;
+    N_Vector a = Dn_[2];
+    if (xi_ == 0) {  // explicit path: f sees the last velocity D_1(t - h)
+      N_VLinearSum(-Omega * Omega, xnext_, -2 * xi_ * Omega, D_[1], a);
+    } else {  // implicit path: a = f(x, V0 + kappa a), linear in a, solved exactly
+      VelocityOffset(d_, co_, D_, V0_);
+      N_VLinearSum(-Omega * Omega, xnext_, -2 * xi_ * Omega, V0_, a);
+      N_VScale(1 / (1 + 2 * xi_ * Omega * co_.kappa), a, a);
+    }
+    UpdateReference(plan_, Compensation{});
+    A->resize(d_, d_);
+    for (int k = 0; k < d_; ++k) {
+      (*A)(0, k) = N_VGetArrayPointer(xnew_)[k];
+      for (int j = 1; j < d_; ++j) (*A)(j, k) = N_VGetArrayPointer(Dn_[j])[k];
+    }
+    return IsFinite(xnew_);
   }
 
  private:
-  TestProblem prob_;
+  std::vector<N_Vector*> Vectors() {
+    std::vector<N_Vector*> all = {&xnext_, &xnew_, &V0_};
+    for (int j = 1; j < d_; ++j) {
+      all.push_back(&D_[j]);
+      all.push_back(&Dn_[j]);
+    }
+    return all;
+  }
+
+  int d_;
+  sunrealtype xi_;
+  StepCoeffs co_;
+  UpdatePlan plan_;
   SUNContext ctx_ = nullptr;
-  N_Vector x_ = nullptr;
-  N_Vector v_ = nullptr;
-  SUNMatrix A_ = nullptr;
-  SUNLinearSolver LS_ = nullptr;
-  void* mem_ = nullptr;
+  N_Vector D_[kMaxDegree] = {};
+  N_Vector Dn_[kMaxDegree] = {};
+  N_Vector xnext_ = nullptr;
+  N_Vector xnew_ = nullptr;
+  N_Vector V0_ = nullptr;
   bool ok_ = false;
 };
 
@@ -310,15 +293,22 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
 
 extern "C" {
 
-static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, sunrealtype Omega,
-                                        sunrealtype xi, sunrealtype* A) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || A == nullptr || !(Omega >= 0) ||
+// The amplification matrix at one Omega, after the checks of the single-point functions.
+static int AmplificationAt(int degree, const sunrealtype* params, sunrealtype Omega, sunrealtype xi,
+                           const void* out, Eigen::MatrixXd* M) {
+  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || out == nullptr || !(Omega >= 0) ||
       !std::isfinite(Omega)) {
     return CE_ILL_INPUT;
   }
   ceode::StepMap map(degree, params, xi);
+  return map.ok() && map.Build(Omega, M) ? CE_SUCCESS : CE_ILL_INPUT;
+}
+
+static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, sunrealtype Omega,
+                                        sunrealtype xi, sunrealtype* A) {
   Eigen::MatrixXd M;
-  if (!map.ok() || !map.Build(Omega, &M)) return CE_ILL_INPUT;
+  const int flag = AmplificationAt(degree, params, Omega, xi, A, &M);
+  if (flag != CE_SUCCESS) return flag;
   for (int i = 0; i < degree; ++i) {
     for (int j = 0; j < degree; ++j) A[i * degree + j] = M(i, j);
   }
@@ -327,13 +317,9 @@ static int CEodeAmplificationMatrixImpl(int degree, const sunrealtype* params, s
 
 static int CEodeSpectralRadiusImpl(int degree, const sunrealtype* params, sunrealtype Omega,
                                    sunrealtype xi, sunrealtype* rho) {
-  if (ceode::CheckArgs(degree, params, xi) != CE_SUCCESS || rho == nullptr || !(Omega >= 0) ||
-      !std::isfinite(Omega)) {
-    return CE_ILL_INPUT;
-  }
-  ceode::StepMap map(degree, params, xi);
   Eigen::MatrixXd M;
-  if (!map.ok() || !map.Build(Omega, &M)) return CE_ILL_INPUT;
+  const int flag = AmplificationAt(degree, params, Omega, xi, rho, &M);
+  if (flag != CE_SUCCESS) return flag;
   *rho = ceode::Analyse(M).rho;
   return CE_SUCCESS;
 }

@@ -177,10 +177,8 @@ void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
   N_VLinearCombination(d - 2, c, const_cast<N_Vector*>(ce->D + 2), a);
 }
 
-void VelocityOffset(const CEodeMemRec* ce, N_Vector V0) {
-  const int d = ce->degree;
-  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(ce->co.V0 + 1),
-                       const_cast<N_Vector*>(ce->D + 1), V0);
+void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0) {
+  N_VLinearCombination(d - 1, const_cast<sunrealtype*>(co.V0 + 1), D + 1, V0);
 }
 
 int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
@@ -189,14 +187,10 @@ int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   return EvalAccel(ce, t, x, ce->D[1], a, func);
 }
 
-namespace {
-
 // The update after the solve: z = (a - B_2)/c_2 (d = 3: z is a itself), the
 // lower derivatives from the history and z, then the position increment.
-void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext, N_Vector xnew,
-               UpdatePlan* plan) {
-  const int d = ce->degree;
-  const StepCoeffs& co = ce->co;
+void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
+                     N_Vector xnew, UpdatePlan* plan) {
   plan->n = 0;
   N_Vector a = Dn[2];
   N_Vector z = Dn[d - 1];
@@ -227,8 +221,6 @@ void BuildPlan(const CEodeMemRec* ce, N_Vector* D, N_Vector* Dn, N_Vector xnext,
   cb.out = xnew;
 }
 
-}  // namespace
-
 // The vectors only trade places from step to step (history <-> new every step,
 // the three positions in a cycle of three), so six plans, built once per start,
 // cover every step: the step itself builds nothing.
@@ -249,7 +241,7 @@ void BuildPlans(CEodeMemRec* ce) {
   N_Vector xnew = ce->xnew;
   ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
   for (int i = 0; i < kNumPlans; ++i) {
-    BuildPlan(ce, D, Dn, xnext, xnew, &ce->plans[i]);
+    BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[i]);
     if (ce->fused_ready) {
       BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr}, &ce->fused_plans[i]);
     }
@@ -385,22 +377,11 @@ sunrealtype FormUpdate(CEodeMemRec* ce) {
   return N_VL1Norm(ce->xnew);
 }
 
-int TakeStep(CEodeMemRec* ce) {
-  static const char* func = "CEodeEvolve";
-  const int d = ce->degree;
-  const sunrealtype t = StepTime(ce, 1);
-  const sunrealtype tnext = StepTime(ce, 2);  // the constraint holds at the new position's time
-  N_Vector* D = ce->D;
-  N_Vector* Dn = ce->Dnew;
-  N_Vector a = Dn[2];
+namespace {
 
-  // The only solve of the step: the acceleration at t (and multipliers).
-  const int flag = ce->solve_accel(ce, t, tnext, ce->xnext, a, func);
-  if (flag != CE_SUCCESS) return flag;
-
-  const sunrealtype xl1 = FormUpdate(ce);
-
-  // Explosive growth: stop long before overflow, while the state is still readable.
+// Explosive growth or a non-finite state: stop long before overflow, while the state is still
+// readable, and say whether f or the step size is to blame.
+int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func) {
   constexpr sunrealtype kGrowthLimit = 1e15;
   constexpr sunrealtype kAbsoluteLimit = 1e150;
   if (std::isfinite(xl1) && (xl1 > kAbsoluteLimit || xl1 > kGrowthLimit * (1 + ce->xl1_start))) {
@@ -412,31 +393,33 @@ int TakeStep(CEodeMemRec* ce) {
                         static_cast<double>(ce->xl1_start), static_cast<double>(ce->h),
                         ce->method_name.c_str());
   }
-  if (!std::isfinite(xl1)) {
-    const sunrealtype xn = MaxNormOrNaN(ce->xnext);  // NaN-blind N_VMaxNorm would say 0
-    if (!std::isfinite(xn)) {  // x(t) passed the last step's check: a callback overwrote it
-      return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                          "The position x(t) became non-finite (max |x| = %g) during the step at "
-                          "t = %.17g: a callback (f, the mass or Jacobian function) wrote NaN or "
-                          "Inf into its input x; callbacks must not modify x.",
-                          static_cast<double>(xn), static_cast<double>(t));
-    }
-    if (!IsFinite(a) && std::isfinite(xn) && xn < 1e100) {
-      return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                          "The acceleration became NaN or Inf at t = %.17g (step %ld) while the "
-                          "state was finite (max |x| = %g): f returned non-finite values.",
-                          static_cast<double>(t), ce->nst + 1, static_cast<double>(xn));
-    }
-    return ProcessError(ce, CE_UNSTABLE, func,
-                        "The state stopped being finite at t = %.17g (step %ld, max |x| was %g): "
-                        "h = %g is most likely beyond the stability limit of %s (h * omega_max "
-                        "must stay below Omega_max); reduce h.",
-                        static_cast<double>(t), ce->nst + 1, static_cast<double>(xn),
-                        static_cast<double>(ce->h), ce->method_name.c_str());
+  if (std::isfinite(xl1)) return CE_SUCCESS;
+  const sunrealtype xn = MaxNormOrNaN(ce->xnext);  // NaN-blind N_VMaxNorm would say 0
+  if (!std::isfinite(xn)) {  // x(t) passed the last step's check: a callback overwrote it
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The position x(t) became non-finite (max |x| = %g) during the step at "
+                        "t = %.17g: a callback (f, the mass or Jacobian function) wrote NaN or "
+                        "Inf into its input x; callbacks must not modify x.",
+                        static_cast<double>(xn), static_cast<double>(t));
   }
+  if (!IsFinite(ce->Dnew[2]) && xn < 1e100) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The acceleration became NaN or Inf at t = %.17g (step %ld) while the "
+                        "state was finite (max |x| = %g): f returned non-finite values.",
+                        static_cast<double>(t), ce->nst + 1, static_cast<double>(xn));
+  }
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The state stopped being finite at t = %.17g (step %ld, max |x| was %g): "
+                      "h = %g is most likely beyond the stability limit of %s (h * omega_max "
+                      "must stay below Omega_max); reduce h.",
+                      static_cast<double>(t), ce->nst + 1, static_cast<double>(xn),
+                      static_cast<double>(ce->h), ce->method_name.c_str());
+}
 
-  // Commit: the new derivatives become the history.
-  for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
+// The new derivatives become the history; the three positions rotate.
+void Commit(CEodeMemRec* ce, sunrealtype t) {
+  const int d = ce->degree;
+  for (int k = 1; k < d; ++k) std::swap(ce->D[k], ce->Dnew[k]);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
@@ -447,6 +430,21 @@ int TakeStep(CEodeMemRec* ce) {
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
+}
+
+}  // namespace
+
+// One step: predict and solve for the acceleration at t (the solve chosen at the start:
+// SolveExplicit, SolveImplicit or ConstrSolveStep; the constraint holds at tnext), update the
+// derivatives and x(t + h), check, commit.
+int TakeStep(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  const sunrealtype t = StepTime(ce, 1);
+  const sunrealtype tnext = StepTime(ce, 2);
+  int flag = ce->solve_accel(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
+  if (flag == CE_SUCCESS) flag = CheckState(ce, t, FormUpdate(ce), func);
+  if (flag != CE_SUCCESS) return flag;
+  Commit(ce, t);
   if (ce->guard_every > 0 && ce->nst % ce->guard_every == 0) return GuardCheck(ce, func);
   return CE_SUCCESS;
 }
