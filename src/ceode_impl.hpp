@@ -343,7 +343,8 @@ sunrealtype MaxNormOrNaN(N_Vector v);  // N_VMaxNorm skips NaN; this returns NaN
 
 // ceode_long_run.cpp: the measured long-run energy behaviour of each named set (bench/long_run,
 // docs/stability.md) and the advice that follows from it; pure, for the stability guard.
-enum LongRunKind { kLongRunBounded, kLongRunLinearDrift, kLongRunGrowing };
+// kLongRunRoundOff: no drift resolved above round-off over 10^7 steps (the fitted rate is noise).
+enum LongRunKind { kLongRunBounded, kLongRunLinearDrift, kLongRunGrowing, kLongRunRoundOff };
 struct LongRunBehaviour {
   const char* name;
   LongRunKind kind;        // bounded; linear drift; growing (rho > 1 for every h)
