@@ -192,6 +192,7 @@ struct CEodeMemRec {
   N_Vector lambda = nullptr;
   N_Vector phi = nullptr;
   void* con = nullptr;  // private saddle-point workspace (ceode_constraints.cpp)
+  void* fo = nullptr;   // first-order adapter, CEODE's user_data while set (ceode_first_order.cpp)
 
   // Stability guard
   int guard_mode = CE_GUARD_WARN;
@@ -280,6 +281,12 @@ void ConstrFree(CEodeMemRec* ce);
 // ceode_stability.cpp
 int GuardCheck(CEodeMemRec* ce, const char* func);
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
+
+// ceode_first_order.cpp: the f CEODE calls for CEodeInitFirstOrder; dropping the adapter
+// (native CEodeInit, CEodeFree) restores the user's data; user data set while it is active.
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data);
+void FirstOrderFree(CEodeMemRec* ce);
+bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);
