@@ -20,3 +20,9 @@ target_link_libraries(ceode_sundials_compat INTERFACE ${CEODE_SUNDIALS_CORE})
 if(SUNDIALS_VERSION VERSION_GREATER_EQUAL 7.1)
   target_compile_options(ceode_sundials_compat INTERFACE -Wno-deprecated-declarations)
 endif()
+# An installed libceode must find a SUNDIALS off the system path (its libraries are
+# linked by full path, which INSTALL_RPATH_USE_LINK_PATH does not cover).
+get_filename_component(CEODE_SUNDIALS_LIBDIR "${CEODE_SUNDIALS_DIR}/../.." ABSOLUTE)
+if(NOT CEODE_SUNDIALS_LIBDIR IN_LIST CMAKE_CXX_IMPLICIT_LINK_DIRECTORIES)
+  set(CEODE_SUNDIALS_RPATH ${CEODE_SUNDIALS_LIBDIR})
+endif()

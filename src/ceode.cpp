@@ -216,6 +216,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
   flag = ceode::AllocVectors(ce, x0);
   if (flag != CE_SUCCESS) return ceode::ProcessError(ce, flag, __func__, "Out of memory.");
   ce->n = N_VGetLength(x0);
+  if (f != ceode::FirstOrderRhs) ceode::FirstOrderFree(ce);  // the native form replaces it
   ce->f = f;
   ce->initialized = true;
   return CEodeReInit(mem, t0, x0, v0);
@@ -320,6 +321,7 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
 void CEodeFree(void** mem) {
   if (mem == nullptr || *mem == nullptr) return;
   auto* ce = static_cast<CEodeMemRec*>(*mem);
+  ceode::FirstOrderFree(ce);
   ceode::NlsFree(ce);
   ceode::LsFree(ce);
   ceode::ConstrFree(ce);

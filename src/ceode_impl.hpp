@@ -206,6 +206,7 @@ struct CEodeMemRec {
   N_Vector phi = nullptr;
   bool phi_template_checked = false;  // Phi seen to write every template entry
   void* con = nullptr;                // private saddle-point workspace (ceode_constraints.cpp)
+  void* fo = nullptr;  // first-order adapter, CEODE's user_data while set (ceode_first_order.cpp)
 
   // Stability guard
   int guard_mode = CE_GUARD_WARN;
@@ -356,6 +357,12 @@ const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not
 // One clause of advice for a long run of `current` at Omega = h * omega_max, written into buf
 // (empty when `current` is already the right choice); returns buf.
 const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
+
+// ceode_first_order.cpp: the f CEODE calls for CEodeInitFirstOrder; dropping the adapter
+// (native CEodeInit, CEodeFree) restores the user's data; user data set while it is active.
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data);
+void FirstOrderFree(CEodeMemRec* ce);
+bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

@@ -139,6 +139,20 @@ SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
 SUNDIALS_EXPORT int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt);
 SUNDIALS_EXPORT char* CEodeGetReturnFlagName(long int flag);
 
+/* -----------------------------------------------------------------------------
+ * First-order adapter (ceode_first_order.cpp): an unchanged ARKODE/CVODE
+ * right-hand side F(t, y, ydot) with y = [x; v], ydot = [v; a], y an
+ * NVECTOR_MANYVECTOR of two equal parts or a serial vector of length 2n. CEODE
+ * integrates x'' = a; F's first half must be v (checked once at the start).
+ * ---------------------------------------------------------------------------*/
+typedef int (*CEodeFirstOrderRhsFn)(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
+SUNDIALS_EXPORT int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0,
+                                        N_Vector y0);
+SUNDIALS_EXPORT int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0);
+SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout,
+                                          sunrealtype* tret, int itask);
+/* ------------------------------------------------- end of the first-order adapter */
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,292 @@
+// First-order adapter: an unchanged ARKODE/CVODE right-hand side F(t, y, ydot) with
+// y = [x; v] and ydot = [v; a] drives the second-order integrator. CEODE keeps x and v
+// separate; the adapter presents them to F as y (an NVECTOR_MANYVECTOR whose two parts
+// are CEODE's own vectors, or a serial vector of length 2n filled by copies) and hands
+// the second half of ydot back as the acceleration. See docs/user_guide.md.
+#include <nvector/nvector_manyvector.h>
+#include <nvector/nvector_serial.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+namespace {
+
+// The adapter's state; it is CEODE's user_data while active, the user's data is kept here.
+struct FirstOrder {
+  CEodeFirstOrderRhsFn F = nullptr;
+  void* user_data = nullptr;
+  bool many = false;  // ManyVector [x; v], else serial of length 2n
+  sunindextype n = 0;
+  N_Vector y = nullptr;      // what F sees as y
+  N_Vector ydot = nullptr;   // what F writes
+  N_Vector xdot = nullptr;   // ManyVector form: the first half of ydot (x' = v, discarded)
+  N_Vector xview = nullptr;  // serial form: x and v windows on a user vector y
+  N_Vector vview = nullptr;
+  bool checked = false;  // the first half of ydot was compared with v
+};
+
+FirstOrder* Adapter(CEodeMemRec* ce) { return static_cast<FirstOrder*>(ce->fo); }
+
+N_Vector* Parts(N_Vector mv) {
+  return static_cast<N_VectorContent_ManyVector>(mv->content)->subvec_array;
+}
+
+// y0 (or yout) must be [x; v]: a ManyVector of two equal parts or a serial 2n.
+int CheckShape(CEodeMemRec* ce, const char* func, N_Vector y, const char* name,
+               const FirstOrder* fo) {
+  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "%s = NULL.", name);
+  const N_Vector_ID id = N_VGetVectorID(y);
+  if (id == SUNDIALS_NVEC_MANYVECTOR) {
+    const sunindextype parts = N_VGetNumSubvectors_ManyVector(y);
+    if (parts != 2) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "%s is a ManyVector of %ld parts: the first-order adapter needs two, "
+                          "[x; v].",
+                          name, static_cast<long>(parts));
+    }
+    N_Vector x = N_VGetSubvector_ManyVector(y, 0);
+    N_Vector v = N_VGetSubvector_ManyVector(y, 1);
+    if (N_VGetLength(x) != N_VGetLength(v) || N_VGetVectorID(x) != N_VGetVectorID(v)) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The parts of %s differ (lengths %ld and %ld, vector ids %d and %d): "
+                          "x and v must be vectors of one kind and length.",
+                          name, static_cast<long>(N_VGetLength(x)),
+                          static_cast<long>(N_VGetLength(v)), static_cast<int>(N_VGetVectorID(x)),
+                          static_cast<int>(N_VGetVectorID(v)));
+    }
+  } else if (id == SUNDIALS_NVEC_SERIAL) {
+    const sunindextype len = N_VGetLength(y);
+    if (len <= 0 || len % 2 != 0) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "%s is a serial vector of length %ld: [x; v] needs an even, positive "
+                          "length 2n.",
+                          name, static_cast<long>(len));
+    }
+  } else {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "%s has vector id %d: the first-order adapter takes an NVECTOR_MANYVECTOR "
+                        "of two parts [x; v] or a serial vector of length 2n.",
+                        name, static_cast<int>(id));
+  }
+  if (fo != nullptr &&
+      (fo->many != (id == SUNDIALS_NVEC_MANYVECTOR) || N_VGetLength(y) != 2 * fo->n)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "%s (length %ld) is not shaped like y0 of CEodeInitFirstOrder (length %ld, "
+                        "%s).",
+                        name, static_cast<long>(N_VGetLength(y)), static_cast<long>(2 * fo->n),
+                        fo->many ? "ManyVector" : "serial");
+  }
+  return CE_SUCCESS;
+}
+
+// x and v of a user vector y: its parts, or windows on its serial data.
+void Split(FirstOrder* fo, N_Vector y, N_Vector* x, N_Vector* v) {
+  if (fo->many) {
+    *x = N_VGetSubvector_ManyVector(y, 0);
+    *v = N_VGetSubvector_ManyVector(y, 1);
+    return;
+  }
+  sunrealtype* d = N_VGetArrayPointer(y);
+  N_VSetArrayPointer(d, fo->xview);
+  N_VSetArrayPointer(d + fo->n, fo->vview);
+  *x = fo->xview;
+  *v = fo->vview;
+}
+
+void Destroy(FirstOrder* fo) {
+  N_Vector* all[] = {&fo->y, &fo->ydot, &fo->xdot, &fo->xview, &fo->vview};
+  for (N_Vector* w : all) {
+    if (*w != nullptr) N_VDestroy(*w);
+    *w = nullptr;
+  }
+  delete fo;
+}
+
+// The wrappers F sees. ManyVector: parts are swapped in per call (no copies);
+// serial: y and ydot own 2n entries.
+bool Build(FirstOrder* fo, N_Vector y0, SUNContext ctx) {
+  if (fo->many) {
+    N_Vector parts[2] = {N_VGetSubvector_ManyVector(y0, 0), N_VGetSubvector_ManyVector(y0, 1)};
+    fo->xdot = N_VClone(parts[0]);
+    fo->y = N_VNew_ManyVector(2, parts, ctx);
+    fo->ydot = N_VNew_ManyVector(2, parts, ctx);
+    return fo->xdot != nullptr && fo->y != nullptr && fo->ydot != nullptr;
+  }
+  fo->y = N_VNew_Serial(2 * fo->n, ctx);
+  fo->ydot = N_VNew_Serial(2 * fo->n, ctx);
+  fo->xview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0), ctx);
+  fo->vview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0) + fo->n, ctx);
+  return fo->y != nullptr && fo->ydot != nullptr && fo->xview != nullptr && fo->vview != nullptr;
+}
+
+// F at (t, [x; v]); the first half of ydot goes to xd, the second to a.
+int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_Vector a) {
+  if (fo->many) {
+    N_Vector* yp = Parts(fo->y);
+    N_Vector* dp = Parts(fo->ydot);
+    yp[0] = x;
+    yp[1] = v;
+    dp[0] = xd;
+    dp[1] = a;
+    return fo->F(t, fo->y, fo->ydot, fo->user_data);
+  }
+  const auto bytes = static_cast<size_t>(fo->n) * sizeof(sunrealtype);
+  sunrealtype* yd = N_VGetArrayPointer(fo->y);
+  std::memcpy(yd, N_VGetArrayPointer(x), bytes);
+  std::memcpy(yd + fo->n, N_VGetArrayPointer(v), bytes);
+  const int rv = fo->F(t, fo->y, fo->ydot, fo->user_data);
+  sunrealtype* dd = N_VGetArrayPointer(fo->ydot);
+  std::memcpy(N_VGetArrayPointer(a), dd + fo->n, bytes);
+  if (xd != nullptr) std::memcpy(N_VGetArrayPointer(xd), dd, bytes);
+  return rv;
+}
+
+// Largest |x'_i - v_i| relative to max(|v|, tiny) after F at (t, x, v).
+int FirstHalfMismatch(CEodeMemRec* ce, FirstOrder* fo, N_Vector x, N_Vector v, sunrealtype* rel) {
+  N_Vector xd = ce->tmp1;
+  const int rv = CallF(fo, ce->tcur, x, v, xd, ce->tmp2);
+  if (rv != 0) return rv;
+  N_VLinearSum(1, xd, -1, v, xd);
+  const sunrealtype vmax = N_VMaxNorm(v);
+  *rel = N_VMaxNorm(xd) / std::max(vmax, SUN_SMALL_REAL);
+  return 0;
+}
+
+// Once per (re)initialisation: F must return x' = v (generalised velocities x' = T(x) v
+// need the native form). At rest (v = 0) a unit velocity is tried as well.
+int CheckFirstHalf(CEodeMemRec* ce, FirstOrder* fo, const char* func) {
+  constexpr sunrealtype kTol = 16 * SUN_UNIT_ROUNDOFF;
+  sunrealtype rel = 0;
+  N_VScale(1, ce->D[1], ce->tmp3);
+  int rv = FirstHalfMismatch(ce, fo, ce->xcur, ce->tmp3, &rel);
+  if (rv == 0 && rel <= kTol && N_VMaxNorm(ce->tmp3) == 0) {
+    N_VConst(1, ce->tmp3);
+    rv = FirstHalfMismatch(ce, fo, ce->xcur, ce->tmp3, &rel);
+  }
+  if (rv != 0) {
+    return ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
+                        "F failed (returned %d) at t = %.17g when the adapter first called it.", rv,
+                        static_cast<double>(ce->tcur));
+  }
+  if (!(rel <= kTol)) {
+    return ProcessError(
+        ce, CE_ILL_INPUT, func,
+        "The first half of F's ydot is not v (max |ydot_x - v| / max |v| = %.3g at "
+        "t = %.17g): the adapter needs y = [x; v] with x' = v. For generalised "
+        "velocities (x' = T(x) v) use the native form, CEodeInit with f(t, x, v) = a.",
+        static_cast<double>(rel), static_cast<double>(ce->tcur));
+  }
+  fo->checked = true;
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data) {
+  auto* fo = static_cast<FirstOrder*>(data);
+  return CallF(fo, t, x, v, fo->many ? fo->xdot : nullptr, a);
+}
+
+void FirstOrderFree(CEodeMemRec* ce) {
+  FirstOrder* fo = Adapter(ce);
+  if (fo == nullptr) return;
+  ce->user_data = fo->user_data;
+  ce->fo = nullptr;
+  Destroy(fo);
+}
+
+bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data) {
+  if (ce->fo == nullptr) return false;
+  Adapter(ce)->user_data = user_data;
+  return true;
+}
+
+}  // namespace ceode
+
+extern "C" {
+
+int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vector y0) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (F == nullptr) {
+    return ceode::ProcessError(
+        ce, CE_ILL_INPUT, __func__,
+        "F = NULL: pass the first-order right-hand side F(t, y, ydot, data).");
+  }
+  if ((flag = ceode::CheckShape(ce, __func__, y0, "y0", nullptr)) != CE_SUCCESS) return flag;
+  auto* fo = new (std::nothrow) ceode::FirstOrder;
+  if (fo == nullptr) return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+  fo->F = F;
+  fo->many = N_VGetVectorID(y0) == SUNDIALS_NVEC_MANYVECTOR;
+  fo->n = N_VGetLength(y0) / 2;
+  fo->user_data = ce->fo != nullptr ? ceode::Adapter(ce)->user_data : ce->user_data;
+  if (!ceode::Build(fo, y0, ce->sunctx)) {
+    ceode::Destroy(fo);
+    return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+  }
+  N_Vector x0 = nullptr;
+  N_Vector v0 = nullptr;
+  ceode::Split(fo, y0, &x0, &v0);
+  // A previous adapter stays in place until this one is initialised (CEodeInit keeps it
+  // for f = FirstOrderRhs), so a failure leaves the memory as it was.
+  flag = CEodeInit(mem, ceode::FirstOrderRhs, t0, x0, v0);
+  if (flag != CE_SUCCESS) {
+    ceode::Destroy(fo);
+    return flag;
+  }
+  ceode::FirstOrderFree(ce);
+  ce->fo = fo;
+  ce->user_data = fo;
+  return CE_SUCCESS;
+}
+
+int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  ceode::FirstOrder* fo = ceode::Adapter(ce);
+  if (fo == nullptr) {
+    return ceode::ProcessError(ce, CE_NO_MALLOC, __func__,
+                               "No first-order problem: call CEodeInitFirstOrder first.");
+  }
+  if ((flag = ceode::CheckShape(ce, __func__, y0, "y0", fo)) != CE_SUCCESS) return flag;
+  N_Vector x0 = nullptr;
+  N_Vector v0 = nullptr;
+  ceode::Split(fo, y0, &x0, &v0);
+  flag = CEodeReInit(mem, t0, x0, v0);
+  if (flag == CE_SUCCESS) fo->checked = false;
+  return flag;
+}
+
+int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout, sunrealtype* tret,
+                          int itask) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  ceode::FirstOrder* fo = ceode::Adapter(ce);
+  if (fo == nullptr) {
+    return ceode::ProcessError(ce, CE_NO_MALLOC, __func__,
+                               "No first-order problem: call CEodeInitFirstOrder first.");
+  }
+  if ((flag = ceode::CheckShape(ce, __func__, yout, "yout", fo)) != CE_SUCCESS) return flag;
+  if (ce->mfn != nullptr || ce->phifn != nullptr || ce->jac != nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "A mass matrix, constraints or a velocity Jacobian is attached: "
+                               "with those use the native form (CEodeInit, CEodeEvolve).");
+  }
+  if (!fo->checked && (flag = ceode::CheckFirstHalf(ce, fo, __func__)) != CE_SUCCESS) {
+    return flag;
+  }
+  N_Vector x = nullptr;
+  N_Vector v = nullptr;
+  ceode::Split(fo, yout, &x, &v);
+  return CEodeEvolve(mem, tout, x, v, tret, itask);
+}
+
+}  // extern "C"
