@@ -16,8 +16,14 @@
 # CEODE / best-SUNDIALS time ratios at equal error for every work-precision
 # scene (docs/results/ratios.csv; the N-scaling CSV has no SUNDIALS curve and
 # is left out).
+# Then, when ../shared/third_party/sundials-6.4.1-src.tar.xz is present (or
+# SUNDIALS_O3_PREFIX names an install), the same scenes against SUNDIALS 6.4.1
+# built -O3 (scripts/build_sundials.sh, prefix ./build/sundials-6.4.1-O3), with
+# CEODE rebuilt on it in ./build/o3: outputs docs/results/<scene>_o3.*, and
+# ratios.csv gets one row per build (sundials_build column).
 # Exit code: 0 when every step and every scene's own checks passed.
-# Environment: JOBS (build parallelism, default 2), PYTHON (needs matplotlib).
+# Environment: JOBS (build parallelism, default 2), PYTHON (needs matplotlib),
+# SUNDIALS_O3_PREFIX (an existing -O3 SUNDIALS 6.4.1 install, e.g. /opt/sundials-6.4.1-O3).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -84,10 +90,9 @@ run_scene() {  # name, executable, extra arguments
   fi
   scenes+=("$OUT/$name.csv")
 }
-# Every scene of one build directory; suffix (may be empty) goes after each
-# scene name, so that a second build's results sit beside the first's.
-run_all_scenes() {  # build directory, suffix
-  local build=$1 suffix=$2 t name
+# Every scene and the per-step benchmark of one build dir; outputs <scene><suffix>.*
+run_build() {  # build dir, suffix
+  local bd=$1 sfx=$2 t name
   for t in "${targets[@]}"; do
     case $t in
       wp_chain_dae) name=chain_dae_wp ;;
@@ -95,21 +100,44 @@ run_all_scenes() {  # build directory, suffix
       chain_scaling) name=chain_dae ;;
       *) continue ;;
     esac
-    run_scene "$name$suffix" "$build/bench/$t"
+    run_scene "$name$sfx" "$bd/bench/$t"
   done
+  if [ -x "$bd/bench/bench_step" ]; then
+    step "per-step cost$sfx (Google Benchmark, median of 5)"
+    if ! "$bd/bench/bench_step" --benchmark_min_time=0.05 --benchmark_repetitions=5 \
+        --benchmark_report_aggregates_only=true --benchmark_out="$OUT/bench_step$sfx.json" \
+        --benchmark_out_format=json > "$OUT/bench_step$sfx.txt" 2>&1; then
+      step "bench_step$sfx FAILED"
+      status=1
+    fi
+    grep -E '_median' "$OUT/bench_step$sfx.txt" | sed 's/^/    /'
+  fi
 }
-run_all_scenes "$BUILD" ""
+run_build "$BUILD" ""
 
-if [ -x "$BUILD/bench/bench_step" ]; then
-  step "per-step cost (Google Benchmark, median of 5)"
-  if ! "$BUILD/bench/bench_step" --benchmark_min_time=0.05 --benchmark_repetitions=5 \
-      --benchmark_report_aggregates_only=true --benchmark_out="$OUT/bench_step.json" \
-      --benchmark_out_format=json > "$OUT/bench_step.txt" 2>&1; then
-    step "bench_step FAILED"
+# The same scenes against SUNDIALS 6.4.1 built -O3 (Debian's package is -O0):
+# CEODE and the scenes are configured again on it, so CEODE's own N_Vector
+# calls go through the optimised build too. SUNDIALS_O3_PREFIX may point at an
+# existing install; else scripts/build_sundials.sh builds one under ./build.
+O3_PREFIX=${SUNDIALS_O3_PREFIX:-$BUILD/sundials-6.4.1-O3}
+O3_BUILD=$BUILD/o3
+o3_note="SUNDIALS -O3: not run (no ../shared/third_party/sundials-6.4.1-src.tar.xz and no prefix)"
+if [ -e "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfig.cmake" ] ||
+    [ -e "$ROOT/../shared/third_party/sundials-6.4.1-src.tar.xz" ]; then
+  step "SUNDIALS 6.4.1 -O3 in $O3_PREFIX (scripts/build_sundials.sh)"
+  if scripts/build_sundials.sh 6.4.1 "$O3_PREFIX" "-O3" &&
+      cmake -S "$ROOT" -B "$O3_BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_BENCHMARKS=ON \
+        -DCMAKE_PREFIX_PATH="$O3_PREFIX" > "$BUILD/main_job_o3.log" 2>&1 &&
+      cmake --build "$O3_BUILD" -j"$JOBS" --target "${targets[@]}" >> "$BUILD/main_job_o3.log" 2>&1; then
+    run_build "$O3_BUILD" _o3
+    o3_note="SUNDIALS -O3: every scene also run against $O3_PREFIX (outputs *_o3.*)"
+  else
+    step "SUNDIALS -O3 build FAILED (log: $BUILD/main_job_o3.log)"
+    o3_note="SUNDIALS -O3: build FAILED, see $BUILD/main_job_o3.log"
     status=1
   fi
-  grep -E '_median' "$OUT/bench_step.txt" | sed 's/^/    /'
 fi
+step "$o3_note"
 
 step "plots"
 mine=()
@@ -118,10 +146,11 @@ wp=()
 for c in "${scenes[@]}"; do
   case $(basename "$c") in
     pendulum_dae.csv | chain_dae.csv) dae+=("$c") ;;
+    pendulum_dae_o3.csv | chain_dae_o3.csv) ;;  # plot_dae.py names its plots itself
     *) mine+=("$c") ;;
   esac
   # chain_dae.csv is the N-scaling study (CEODE only): no ratio to compute
-  [ "$(basename "$c")" = chain_dae.csv ] || wp+=("$c")
+  case $(basename "$c") in chain_dae.csv | chain_dae_o3.csv) ;; *) wp+=("$c") ;; esac
 done
 if ((${#mine[@]})); then "$PYTHON" scripts/plot_results.py "${mine[@]}" || status=1; fi
 # pendulum_dae (work-precision with drift) and chain_dae (time per step against N)
@@ -135,5 +164,6 @@ for c in "${scenes[@]}"; do
   n=$(basename "$c" .csv)
   printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem|checks off|[0-9]+ checks,|work-precision:' "$OUT/$n.txt" | tr '\n' ' ')"
 done
+echo "$o3_note"
 step "total $(elapsed) s; results in docs/results/ (exit $status)"
 exit $status

@@ -9,6 +9,11 @@ faster. Levels that one side never reaches are reported as such, with no
 ratio. The hand-written loop ("CEODE-hand") is reported beside, as the floor
 for per-step overhead, and takes no part in the CEODE figure.
 
+A CSV whose name ends in _o3.csv is the same scene run against SUNDIALS 6.4.1
+built -O3 (CEODE linked against it too); the others ran against Debian's
+libsundials-dev 6.4.1, which is built -O0. Column sundials_build says which;
+the -O3 rows come first in each scene and are the headline figures.
+
 Usage: ratios.py --out ratios.csv [--levels 1e-6,1e-9,1e-11] FILE.csv ...
 """
 import argparse
@@ -44,6 +49,8 @@ def main():
         scene, curves = read_curves(path)
         if scene is None:
             continue
+        o3 = os.path.splitext(os.path.basename(path))[0].endswith("_o3")
+        build = "6.4.1 -O3" if o3 else "Debian 6.4.1 -O0"
         for lv in levels:
             c = best(curves, is_ceode, lv)
             s = best(curves, is_sundials, lv)
@@ -51,6 +58,7 @@ def main():
             ratio = c[0] / s[0] if c and s else None
             rows.append({
                 "scene": scene,
+                "sundials_build": build,
                 "error_level": f"{lv:.0e}",
                 "ceode_best": c[1] if c else "not reached",
                 "ceode_seconds": f"{c[0]:.3e}" if c else "",
@@ -63,14 +71,16 @@ def main():
                     f"{who} from a measured point below the level (upper bound)"
                     for who, r in (("CEODE", c), ("SUNDIALS", s)) if r and r[2] == "point"),
             })
+    order = {r["scene"]: i for i, r in reversed(list(enumerate(rows)))}
+    rows.sort(key=lambda r: (order[r["scene"]], r["sundials_build"] != "6.4.1 -O3"))
     with open(args.out, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()) if rows else ["scene"])
         w.writeheader()
         w.writerows(rows)
-    print(f"{'scene':<17} {'error':>6} {'CEODE best':<20} {'s':>10} {'SUNDIALS best':<24} "
+    print(f"{'scene':<17} {'SUNDIALS':<17} {'error':>6} {'CEODE best':<20} {'s':>10} {'SUNDIALS best':<24} "
           f"{'s':>10} {'ratio':>7}")
     for r in rows:
-        print(f"{r['scene']:<17} {r['error_level']:>6} {r['ceode_best']:<20} "
+        print(f"{r['scene']:<17} {r['sundials_build']:<17} {r['error_level']:>6} {r['ceode_best']:<20} "
               f"{r['ceode_seconds']:>10} {r['sundials_best']:<24} {r['sundials_seconds']:>10} "
               f"{r['ratio_ceode_over_sundials'] or '-':>7}")
     print("ratio = CEODE time / best SUNDIALS time at equal error (< 1: CEODE faster)")

@@ -211,6 +211,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
     ceode::NlsFree(ce);
     ceode::LsFree(ce);
     ceode::ConstrFree(ce);
+    ceode::GuardFree(ce);
     ceode::FreeVectors(ce);
   }
   flag = ceode::AllocVectors(ce, x0);
@@ -246,6 +247,8 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   ce->guard_warned = false;
   ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
   ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = 0;
+  ce->nfe_guard = ce->nme_guard = ce->nsetups_guard = 0;
+  ceode::GuardRestart(ce);
   return CE_SUCCESS;
 }
 
@@ -325,6 +328,7 @@ void CEodeFree(void** mem) {
   ceode::NlsFree(ce);
   ceode::LsFree(ce);
   ceode::ConstrFree(ce);
+  ceode::GuardFree(ce);
   ceode::FreeVectors(ce);
   delete ce;
   *mem = nullptr;

@@ -217,12 +217,15 @@ struct CEodeMemRec {
   bool guard_warned = false;
   bool guard_pending = false;  // check at the next CEodeEvolve (start, new omega or mode)
   sunrealtype xl1_start = 0;   // ||x||_1 at the last (re)start, reference for explosive growth
+  void* guard = nullptr;       // the guard's own scratch, M copy and solver (ceode_guard.cpp)
 
   // Counters
   long int nst = 0;
   long int nfe = 0;
   long int nfe_start = 0;
-  long int nfe_guard = 0;  // f evaluations of the stability guard's power iteration
+  long int nfe_guard = 0;      // f evaluations of the stability guard (its Lanczos iteration)
+  long int nme_guard = 0;      // mass evaluations into the guard's own copy of M
+  long int nsetups_guard = 0;  // factorisations of the guard's own copy of M
   long int nni = 0;
   long int nnf = 0;
   long int nsetups = 0;
@@ -322,8 +325,12 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
                     const char* func);
 void ConstrFree(CEodeMemRec* ce);
 
-// ceode_stability.cpp
+// ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);
+void GuardFree(CEodeMemRec* ce);     // its workspace (at CEodeInit and CEodeFree)
+void GuardRestart(CEodeMemRec* ce);  // its copy of M is re-evaluated (CEodeReInit)
+
+// ceode_stability.cpp
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
 
 // ceode_validate.cpp: one validation point per attached object, called by its setter and again

@@ -35,11 +35,13 @@ struct ViewSlot {
 // The counters CEodeReInit zeroes; the stepper adds every inner run to them.
 struct Counters {
   long int nst, nfe, nfe_start, nni, nnf, nsetups, nls_solves, nje, nfeDQ, nme, nce;
+  long int nfe_guard, nme_guard, nsetups_guard;
 };
 
 Counters SaveCounters(const CEodeMemRec* ce) {
-  return {ce->nst,        ce->nfe, ce->nfe_start, ce->nni, ce->nnf, ce->nsetups,
-          ce->nls_solves, ce->nje, ce->nfeDQ,     ce->nme, ce->nce};
+  return {ce->nst,     ce->nfe,        ce->nfe_start, ce->nni,          ce->nnf,
+          ce->nsetups, ce->nls_solves, ce->nje,       ce->nfeDQ,        ce->nme,
+          ce->nce,     ce->nfe_guard,  ce->nme_guard, ce->nsetups_guard};
 }
 
 void AddCounters(CEodeMemRec* ce, const Counters& c) {
@@ -54,6 +56,9 @@ void AddCounters(CEodeMemRec* ce, const Counters& c) {
   ce->nfeDQ += c.nfeDQ;
   ce->nme += c.nme;
   ce->nce += c.nce;
+  ce->nfe_guard += c.nfe_guard;
+  ce->nme_guard += c.nme_guard;
+  ce->nsetups_guard += c.nsetups_guard;
 }
 
 int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data);

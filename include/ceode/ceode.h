@@ -153,6 +153,22 @@ SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector 
                                           sunrealtype* tret, int itask);
 /* ------------------------------------------------- end of the first-order adapter */
 
+/* ---- Stability guard: stable step and the guard's own counters (ceode_guard.cpp) ----
+ * The guard estimates omega_max at the current state by Lanczos on M^{-1} df/dx
+ * (directional differences of f) as theta + r: the top Ritz value plus its
+ * residual norm, an upper bound of omega_max^2 for a symmetric stiffness (at
+ * most 0.1 % above it), or CEodeSetMaxFrequency's value when one is given.
+ * CEodeGetStableStep returns hmax = safety * Omega_max / omega_max for the chosen
+ * set; safety in (0, 1], 0 selects the default 0.99 (the guard's own recommended
+ * step uses 0.99 too). hmax = 0 for a set unstable for every step, SUN_BIG_REAL
+ * when f does not depend on x. The guard's f and mass evaluations and the
+ * factorisations of its own copy of M are counted apart from the integration's
+ * (CEodeGetGuardStats; nfevals is CEodeGetNumGuardRhsEvals) and reset by CEodeReInit. */
+SUNDIALS_EXPORT int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax);
+SUNDIALS_EXPORT int CEodeGetGuardStats(void* mem, long int* nfevals, long int* nmevals,
+                                       long int* nlinsetups);
+/* ---- end of the stability guard block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,476 @@
+// The runtime stability guard (docs/theory.md, linear stability): an upper
+// estimate of the top frequency omega_max of M x'' = f(t, x, x'), compared with
+// the method's stability limit Omega_max. The guard has its own scratch vectors,
+// its own copy and factorisation of M and its own counters, so the integration
+// (its state, its solver's factorisation, nfe/nsetups/nje) is the same with the
+// guard on or off.
+#include <ceode/ceode_stability.h>
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_band.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+namespace {
+
+// Lanczos on the symmetric pencil (K, M), K = -df/dx, in the M inner product.
+constexpr int kMaxLanczos = 150;
+constexpr int kMinLanczos = 5;
+constexpr int kCheckEvery = 5;
+// Stop once the top Ritz pair's residual is below this fraction of its value:
+// the estimate theta + residual is then at most 0.1 % above omega_max^2.
+constexpr sunrealtype kLanczosTol = 1e-3;
+// Recommended steps and CEodeGetStableStep's default: this fraction of the limit,
+// so that a step at the recommendation stays stable even at a Jordan-block edge.
+constexpr sunrealtype kRecommendSafety = 0.99;
+
+struct GuardWork {
+  N_Vector q_prev = nullptr;  // Lanczos vectors q_{j-1}, q_j, and the next one
+  N_Vector q = nullptr;
+  N_Vector w = nullptr;
+  N_Vector mw = nullptr;  // M w, also the mass solve's solution
+  N_Vector xp = nullptr;  // perturbed position
+  N_Vector f0 = nullptr;  // f at the guard's point
+  SUNMatrix M = nullptr;  // the guard's own M(t, x) and its factorisation
+  SUNLinearSolver LS = nullptr;
+  SUNMatrix M_source = nullptr;  // the user's matrix M was cloned from
+  CEodeMassFn mfn_source = nullptr;
+  bool mass_ready = false;  // M evaluated and factored (constant M: once per run)
+  std::vector<sunrealtype> alpha, beta;
+};
+
+GuardWork* Work(CEodeMemRec* ce) { return static_cast<GuardWork*>(ce->guard); }
+
+int AllocWork(CEodeMemRec* ce, const char* func) {
+  if (ce->guard != nullptr) return CE_SUCCESS;
+  auto* g = new GuardWork;
+  ce->guard = g;
+  for (N_Vector* v : {&g->q_prev, &g->q, &g->w, &g->mw, &g->xp, &g->f0}) {
+    *v = N_VClone(ce->xcur);
+    if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
+  }
+  g->alpha.reserve(kMaxLanczos);
+  g->beta.reserve(kMaxLanczos);
+  return CE_SUCCESS;
+}
+
+// A solver for the guard's copy of M, of the kind the matrix type allows.
+SUNLinearSolver MassSolver(CEodeMemRec* ce, GuardWork* g) {
+  switch (SUNMatGetID(g->M)) {
+    case SUNMATRIX_DENSE:
+      return SUNLinSol_Dense(g->q, g->M, ce->sunctx);
+    case SUNMATRIX_BAND:
+      return SUNLinSol_Band(g->q, g->M, ce->sunctx);
+    case SUNMATRIX_SPARSE:
+      return SUNLinSol_KLU(g->q, g->M, ce->sunctx);
+    default:
+      return nullptr;
+  }
+}
+
+void FreeMass(GuardWork* g) {
+  if (g->LS != nullptr) SUNLinSolFree(g->LS);
+  if (g->M != nullptr) SUNMatDestroy(g->M);
+  g->LS = nullptr;
+  g->M = nullptr;
+  g->M_source = nullptr;
+  g->mass_ready = false;
+}
+
+// M(t, x) into the guard's own matrix and factored there; the solver's M and A
+// are not touched. Returns CE_SUCCESS with *usable = false for matrix types the
+// guard has no solver for.
+int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
+  *usable = true;
+  if (g->M_source != ce->M || g->mfn_source != ce->mfn) FreeMass(g);
+  if (ce->M == nullptr) return CE_SUCCESS;
+  if (g->mass_ready && ce->mass_constant) return CE_SUCCESS;
+  if (g->M == nullptr) {
+    g->M_source = ce->M;
+    g->mfn_source = ce->mfn;
+    g->M = SUNMatClone(ce->M);
+    if (g->M == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
+    g->LS = MassSolver(ce, g);
+    if (g->LS == nullptr || SUNLinSolInitialize(g->LS) != 0) {
+      *usable = false;
+      return CE_SUCCESS;
+    }
+  }
+  if (g->LS == nullptr) {
+    *usable = false;
+    return CE_SUCCESS;
+  }
+  SUNMatZero(g->M);
+  int rv = ce->mfn(ce->tcur, ce->xcur, g->M, ce->user_data, g->w, g->mw, g->xp);
+  ++ce->nme_guard;
+  if (rv != 0) {
+    return ProcessError(ce, CE_MASSFUNC_FAIL, func,
+                        "The mass matrix function failed (returned %d) in the stability guard at "
+                        "t = %.17g.",
+                        rv, static_cast<double>(ce->tcur));
+  }
+  rv = SUNLinSolSetup(g->LS, g->M);
+  ++ce->nsetups_guard;
+  if (rv != 0) {
+    return ProcessError(ce, CE_LSETUP_FAIL, func,
+                        "The stability guard could not factor M (returned %d): M is singular.", rv);
+  }
+  g->mass_ready = true;
+  return CE_SUCCESS;
+}
+
+// A pseudo-random start: a uniform chain's top mode is orthogonal to the ones
+// vector. Vectors spread over several processes start from ones (the same on
+// every rank count).
+void StartVector(N_Vector q) {
+  N_VConst(1, q);
+  sunrealtype* d = N_VGetArrayPointer(q);
+  const N_Vector_ID id = N_VGetVectorID(q);
+  if (d == nullptr ||
+      (id != SUNDIALS_NVEC_SERIAL && id != SUNDIALS_NVEC_OPENMP && id != SUNDIALS_NVEC_PTHREADS)) {
+    return;
+  }
+  std::uint64_t seed = 12345;
+  for (sunindextype i = 0; i < N_VGetLength(q); ++i) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    d[i] = 0.5 + static_cast<sunrealtype>(seed >> 33) / 4294967296.0;
+  }
+}
+
+// out = M in (in without a mass matrix).
+void MassTimes(const GuardWork* g, N_Vector in, N_Vector out) {
+  if (g->M == nullptr || SUNMatMatvec(g->M, in, out) != 0) N_VScale(1, in, out);
+}
+
+// u = K q = -(f(x + sig q) - f(x)) / sig, into g->w.
+int StiffnessTimes(CEodeMemRec* ce, GuardWork* g, const char* func) {
+  const sunrealtype qmax = N_VMaxNorm(g->q);
+  const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * (1 + N_VMaxNorm(ce->xcur)) / qmax;
+  N_VLinearSum(1, ce->xcur, sig, g->q, g->xp);
+  const int rv = ce->f(ce->tcur, g->xp, ce->D[1], g->w, ce->user_data);
+  ++ce->nfe_guard;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "f failed (returned %d) in the stability guard at t = %.17g.", rv,
+                        static_cast<double>(ce->tcur));
+  }
+  N_VLinearSum(-1 / sig, g->w, 1 / sig, g->f0, g->w);
+  return CE_SUCCESS;
+}
+
+// Top eigenvalue theta of the Lanczos tridiagonal and its residual norm
+// beta_k |e_k^T z| (z the unit Ritz vector).
+void TopRitz(const GuardWork* g, sunrealtype beta_k, sunrealtype* theta, sunrealtype* res) {
+  const int k = static_cast<int>(g->alpha.size());
+  const Eigen::VectorXd diag = Eigen::Map<const Eigen::VectorXd>(g->alpha.data(), k);
+  const Eigen::VectorXd sub = Eigen::Map<const Eigen::VectorXd>(g->beta.data(), k - 1);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(diag, sub, Eigen::ComputeEigenvectors);
+  *theta = es.eigenvalues()(k - 1);
+  *res = std::fabs(beta_k * es.eigenvectors()(k - 1, k - 1));
+}
+
+// One Lanczos step on q: alpha_j, the next vector in w, its M-norm beta_j.
+int LanczosStep(CEodeMemRec* ce, GuardWork* g, bool mass, sunrealtype beta_prev, const char* func,
+                sunrealtype* beta) {
+  int flag = StiffnessTimes(ce, g, func);
+  if (flag != CE_SUCCESS) return flag;
+  g->alpha.push_back(N_VDotProd(g->q, g->w));  // q^T K q = <q, M^{-1} K q>_M
+  if (mass) {
+    N_VConst(0, g->mw);
+    if (SUNLinSolSolve(g->LS, g->M, g->mw, g->w, 0) != 0) {
+      return ProcessError(ce, CE_LSOLVE_FAIL, func, "The stability guard's mass solve failed.");
+    }
+    std::swap(g->w, g->mw);
+  }
+  N_VLinearSum(1, g->w, -g->alpha.back(), g->q, g->w);
+  N_VLinearSum(1, g->w, -beta_prev, g->q_prev, g->w);
+  MassTimes(g, g->w, g->mw);
+  *beta = std::sqrt(std::max(N_VDotProd(g->w, g->mw), SUN_RCONST(0.0)));
+  return CE_SUCCESS;
+}
+
+// lam_hat >= omega_max^2: the top Ritz value plus its residual norm once that is
+// below kLanczosTol of it (for a symmetric pencil an eigenvalue lies within the
+// residual of theta); at the iteration cap theta + beta_k, the safer Lanczos bound.
+int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunrealtype* lam_hat) {
+  int flag = CE_SUCCESS;
+  g->alpha.clear();
+  g->beta.clear();
+  StartVector(g->q);
+  MassTimes(g, g->q, g->mw);
+  N_VScale(1 / std::sqrt(N_VDotProd(g->q, g->mw)), g->q, g->q);
+  N_VConst(0, g->q_prev);
+  sunrealtype beta_prev = 0;
+  sunrealtype theta = 0;
+  sunrealtype res = 0;
+  sunrealtype beta = 0;
+  sunrealtype amax = 0;  // scale of the operator seen so far
+  for (int j = 0; j < kMaxLanczos; ++j) {
+    if ((flag = LanczosStep(ce, g, mass, beta_prev, func, &beta)) != CE_SUCCESS) return flag;
+    amax = std::max(amax, std::fabs(g->alpha.back()));
+    // beta ~ 0: the Krylov space is invariant (e.g. n is small), theta is exact.
+    const bool breakdown = !(beta > 1e-9 * (amax + SUN_UNIT_ROUNDOFF));
+    // The Ritz values are only looked at every kCheckEvery steps: cheap next to f.
+    if (breakdown || j + 1 == kMaxLanczos || (j + 1 >= kMinLanczos && (j + 1) % kCheckEvery == 0)) {
+      TopRitz(g, beta, &theta, &res);
+      if (!std::isfinite(theta) || !std::isfinite(beta)) break;
+      if (breakdown || res <= kLanczosTol * (std::fabs(theta) + SUN_UNIT_ROUNDOFF)) {
+        *lam_hat = theta + res;
+        return CE_SUCCESS;
+      }
+    }
+    g->beta.push_back(beta);
+    std::swap(g->q_prev, g->q);  // q_prev <- q_j, q <- w / beta (w is free again)
+    std::swap(g->q, g->w);
+    N_VScale(1 / beta, g->q, g->q);
+    beta_prev = beta;
+  }
+  *lam_hat = theta + beta;
+  return CE_SUCCESS;
+}
+
+// The guard's estimate of omega_max at (tcur, xcur, D_1): the user's value when
+// given, else Lanczos; 0 when there is nothing to estimate (constraints, a mass
+// matrix type without a guard solver, f independent of x).
+int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
+  *omega = 0;
+  if (ce->omega_user > 0) {
+    *omega = ce->omega_user;
+    return CE_SUCCESS;
+  }
+  if (HasConstraints(ce)) return CE_SUCCESS;  // constrained frequencies need the user's value
+  int flag = AllocWork(ce, func);
+  GuardWork* g = Work(ce);
+  bool usable = true;
+  if (flag == CE_SUCCESS) flag = GuardMass(ce, g, func, &usable);
+  if (flag != CE_SUCCESS || !usable) return flag;
+  const int rv = ce->f(ce->tcur, ce->xcur, ce->D[1], g->f0, ce->user_data);
+  ++ce->nfe_guard;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "f failed (returned %d) in the stability guard at t = %.17g.", rv,
+                        static_cast<double>(ce->tcur));
+  }
+  sunrealtype lam = 0;
+  flag = LanczosTop(ce, g, ce->M != nullptr, func, &lam);
+  if (flag == CE_SUCCESS && lam > 0 && std::isfinite(lam)) *omega = std::sqrt(lam);
+  return flag;
+}
+
+// The method's limit, computed once per method: -1 when unstable for every step.
+sunrealtype Limit(CEodeMemRec* ce) {
+  if (ce->omega_limit == 0) {
+    sunrealtype lim = 0;
+    if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) return 0;
+    ce->omega_limit = lim > 0 ? lim : -1;
+  }
+  return ce->omega_limit;
+}
+
+// Named sets stable at Omega (with the recommendation's margin), into out.
+std::string StableSets(sunrealtype Omega) {
+  std::string out;
+  for (int i = 0; i < NumMethodSets(); ++i) {
+    const MethodSet& m = MethodSetAt(i);
+    sunrealtype lim = 0;
+    if (MethodStabilityLimit(m.degree, m.params.data(), &lim) != CE_SUCCESS) continue;
+    if (kRecommendSafety * lim < Omega) continue;
+    out += out.empty() ? "" : ", ";
+    out += m.name;
+  }
+  return out.empty() ? "none" : out;
+}
+
+// Weakly unstable for every h: what matters is the growth over the run, to the
+// stop time when one is set, else over a horizon of kHorizonSteps steps.
+sunrealtype RunSteps(const CEodeMemRec* ce) {
+  constexpr sunrealtype kHorizonSteps = 1e6;
+  return ce->tstop_set ? std::max((ce->tstop - ce->tcur) / ce->h, SUN_RCONST(1.0)) : kHorizonSteps;
+}
+
+// "grows by rho per step, doubling every N steps (T time units)", from rho at the run's Omega.
+std::string GrowthText(const CEodeMemRec* ce, sunrealtype rho) {
+  char buf[320];
+  const sunrealtype lr = std::log(rho);
+  if (!(lr > 4 * SUN_UNIT_ROUNDOFF)) {
+    return "the fastest mode's amplification matrix has spectral radius 1 here (the edge of the "
+           "limit): errors grow polynomially, not exponentially";
+  }
+  const sunrealtype doubling = std::log(2.0) / lr;
+  // Round-off (unit roundoff relative to the state) in that mode reaches the
+  // state's own size after about this many steps.
+  const sunrealtype to_size = -std::log(SUN_UNIT_ROUNDOFF) / lr;
+  int len = std::snprintf(buf, sizeof buf,
+                          "errors in the fastest mode grow by rho = %.9g per step (doubling every "
+                          "%.3g steps = %.3g time units; round-off there reaches the size of the "
+                          "solution after about %.3g steps",
+                          static_cast<double>(rho), static_cast<double>(doubling),
+                          static_cast<double>(doubling * ce->h), static_cast<double>(to_size));
+  if (ce->tstop_set && len > 0 && len < static_cast<int>(sizeof buf)) {
+    len += std::snprintf(buf + len, sizeof buf - len, "; the %.3g steps to the stop time: 10^%.3g",
+                         static_cast<double>(RunSteps(ce)),
+                         static_cast<double>(RunSteps(ce) * lr / std::log(10.0)));
+  }
+  if (len > 0 && len < static_cast<int>(sizeof buf) - 1)
+    std::snprintf(buf + len, sizeof buf - len, ")");
+  return buf;
+}
+
+// Which named sets the user can switch to, and what they conserve over long runs: the measured
+// long-run table (LongRunAdvice, src/ceode_long_run.cpp; docs/stability.md) decides.
+std::string SetAdvice(const CEodeMemRec* ce, sunrealtype Omega) {
+  constexpr sunrealtype kCdLimit = 2;  // G3_CD: Omega_max = 2
+  std::string out = "Named sets stable at this h: " + StableSets(Omega);
+  if (kRecommendSafety * kCdLimit >= Omega) {
+    char advice[512];
+    LongRunAdvice(ce->method_name.c_str(), Omega, advice, sizeof advice);
+    // Between LongRunAdvice's margin (0.9) and the guard's (0.99) its "reduce h" would
+    // contradict the list above; G3_CD is still stable there.
+    if (advice[0] != '\0' && std::strncmp(advice, "no named set", 12) != 0)
+      out += "; " + std::string(advice);
+    return out;
+  }
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "; G3_CD, the named set whose energy error stays bounded over long runs, needs "
+                "h <= %.6g",
+                static_cast<double>(kRecommendSafety * kCdLimit / ce->omega_est));
+  return out + buf;
+}
+
+void Report(CEodeMemRec* ce, const char* func, sunrealtype Omega, sunrealtype rho, bool refuse) {
+  const int flag = refuse ? CE_UNSTABLE : CE_WARNING;
+  const char* source =
+      ce->omega_user > 0 ? "given by CEodeSetMaxFrequency" : "an upper estimate by Lanczos";
+  const char* tail = refuse ? "" : " (CE_GUARD_REFUSE stops instead of warning)";
+  const std::string growth = GrowthText(ce, rho);
+  if (ce->omega_limit < 0) {
+    ProcessError(ce, flag, func,
+                 "At t = %.9g (step %ld): %s is unstable for every step size. With omega_max = %g "
+                 "(%s) and h = %g, Omega = %g: %s. %s%s.",
+                 static_cast<double>(ce->tcur), ce->nst, ce->method_name.c_str(),
+                 static_cast<double>(ce->omega_est), source, static_cast<double>(ce->h),
+                 static_cast<double>(Omega), growth.c_str(), SetAdvice(ce, Omega).c_str(), tail);
+    return;
+  }
+  ProcessError(ce, flag, func,
+               "At t = %.9g (step %ld): h * omega_max = %g * %g = %.6g exceeds the stability limit "
+               "Omega_max = %.6g of %s (omega_max %s): %s. h <= %.6g (%g Omega_max / omega_max) is "
+               "stable%s.",
+               static_cast<double>(ce->tcur), ce->nst, static_cast<double>(ce->h),
+               static_cast<double>(ce->omega_est), static_cast<double>(Omega),
+               static_cast<double>(ce->omega_limit), ce->method_name.c_str(), source,
+               growth.c_str(),
+               static_cast<double>(kRecommendSafety * ce->omega_limit / ce->omega_est),
+               static_cast<double>(kRecommendSafety), tail);
+}
+
+}  // namespace
+
+void GuardFree(CEodeMemRec* ce) {
+  GuardWork* g = Work(ce);
+  if (g == nullptr) return;
+  for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0}) {
+    if (v != nullptr) N_VDestroy(v);
+  }
+  FreeMass(g);
+  delete g;
+  ce->guard = nullptr;
+}
+
+void GuardRestart(CEodeMemRec* ce) {
+  if (ce->guard != nullptr) Work(ce)->mass_ready = false;
+}
+
+}  // namespace ceode
+
+namespace ceode {
+
+int GuardCheck(CEodeMemRec* ce, const char* func) {
+  if (ce->guard_mode == CE_GUARD_OFF) return CE_SUCCESS;
+  const int flag = Estimate(ce, func, &ce->omega_est);
+  if (flag != CE_SUCCESS) return flag;
+  // No oscillation to resolve (f independent of x), or no estimate possible.
+  if (!(ce->omega_est > 0) || !std::isfinite(ce->omega_est)) return CE_SUCCESS;
+  const sunrealtype lim = Limit(ce);
+  const sunrealtype Omega = ce->h * ce->omega_est;
+  // omega_est >= omega_max, so Omega <= lim keeps the true h * omega_max inside too.
+  if (lim == 0 || (lim > 0 && Omega <= lim)) return CE_SUCCESS;
+  sunrealtype rho = 1;
+  if (CEodeSpectralRadius(ce->degree, ce->params, Omega, 0, &rho) != CE_SUCCESS) rho = 1;
+  if (lim < 0 && !(RunSteps(ce) * std::log(rho) >= std::log(2.0))) return CE_SUCCESS;
+  const bool refuse = ce->guard_mode == CE_GUARD_REFUSE;
+  if (!refuse && ce->guard_warned) return CE_SUCCESS;  // warn once per run
+  ce->guard_warned = true;
+  Report(ce, func, Omega, rho, refuse);
+  if (!refuse) return CE_SUCCESS;
+  // The next CEodeEvolve restarts here and checks again, so a refused run cannot
+  // be resumed by simply calling CEodeEvolve once more.
+  ce->started = false;
+  return CE_UNSTABLE;
+}
+
+}  // namespace ceode
+
+extern "C" {
+
+int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (hmax == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "hmax = NULL.");
+  if (safety == 0) safety = ceode::kRecommendSafety;
+  if (!(safety > 0 && safety <= 1)) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "safety = %g: pass a factor in (0, 1], or 0 for the default %g.",
+                               static_cast<double>(safety),
+                               static_cast<double>(ceode::kRecommendSafety));
+  }
+  if (ceode::HasConstraints(ce) && !(ce->omega_user > 0)) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "With constraints the guard cannot estimate omega_max: give it "
+                               "with CEodeSetMaxFrequency.");
+  }
+  flag = ceode::Estimate(ce, __func__, &ce->omega_est);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype lim = ceode::Limit(ce);
+  if (lim == 0) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "The stability limit of %s could not be computed.",
+                               ce->method_name.c_str());
+  }
+  if (lim < 0) {
+    *hmax = 0;  // unstable for every step
+  } else {
+    *hmax = ce->omega_est > 0 ? safety * lim / ce->omega_est : SUN_BIG_REAL;
+  }
+  return CE_SUCCESS;
+}
+
+int CEodeGetGuardStats(void* mem, long int* nfevals, long int* nmevals, long int* nlinsetups) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (nfevals == nullptr || nmevals == nullptr || nlinsetups == nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "An output pointer is NULL.");
+  }
+  *nfevals = ce->nfe_guard;
+  *nmevals = ce->nme_guard;
+  *nlinsetups = ce->nsetups_guard;
+  return CE_SUCCESS;
+}
+
+}  // extern "C"
