@@ -96,6 +96,7 @@ run_build() {  # build dir, suffix
   for t in "${targets[@]}"; do
     case $t in
       wp_chain_dae) name=chain_dae_wp ;;
+      wp_high_order) continue ;;  # its own schema and plot: run once below
       wp_*) name=${t#wp_} ;;
       chain_scaling) name=chain_dae ;;
       *) continue ;;
@@ -114,6 +115,20 @@ run_build() {  # build dir, suffix
   fi
 }
 run_build "$BUILD" ""
+
+# CEODE's high-degree sets against the order-8 integrators users pick outside
+# SUNDIALS (GSL rk8pd, Boost.Odeint rkf78 and Bulirsch-Stoer; ARKODE ERK 8).
+if [ -x "$BUILD/bench/wp_high_order" ]; then
+  step "scene wp_high_order ..."
+  if "$BUILD/bench/wp_high_order" --csv "$OUT/wp_high_order.csv" > "$OUT/wp_high_order.txt" 2>&1; then
+    "$PYTHON" scripts/plot_wp_high_order.py "$OUT/wp_high_order.csv" "$OUT/wp_high_order.png" ||
+      status=1
+    step "scene wp_high_order done"
+  else
+    step "scene wp_high_order FAILED its checks; see $OUT/wp_high_order.txt"
+    status=1
+  fi
+fi
 
 # The same scenes against SUNDIALS 6.4.1 built -O3 (Debian's package is -O0):
 # CEODE and the scenes are configured again on it, so CEODE's own N_Vector
