@@ -22,11 +22,7 @@ using ceode_test::Mem;
 using ceode_test::SerialVector;
 using ceode_test::Vector;
 
-// gtest alone (no gmock): a substring check that prints both strings on failure.
-::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
-}
+using ceode_test::Contains;
 
 struct Reported {
   int code;

@@ -25,6 +25,12 @@
 
 namespace ceode_test {
 
+// gtest alone (no gmock): a substring check that prints both strings on failure.
+inline ::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
+}
+
 // ---------------------------------------------------------------------------
 // RAII handles: a failing ASSERT must not leak under the sanitizers.
 
