@@ -235,6 +235,16 @@ struct CEodeMemRec {
   long int nme = 0;
   long int nce = 0;
 
+  // Implicit-step mode and velocity-dependence detection (ceode_pc.cpp)
+  int implicit_mode = CE_IMPLICIT_NEWTON;
+  int pc_corrections = 0;     // 0: 1 for degree <= 4, 2 above
+  int vel_request = -1;       // CEodeSetVelocityDependence's value; -1: never called
+  bool vel_warned = false;    // the undeclared-dependence warning is given once
+  sunrealtype coupling = 0;   // last estimate of kappa ||M^{-1} df/dv|| (0: none)
+  long int npc_steps = 0;     // steps solved by prediction-correction
+  long int nnls_steps = 0;    // steps solved by the nonlinear solver
+  long int nfe_coupling = 0;  // f evaluations of the detection and the coupling estimate
+
   // Error reporting
   CEodeErrHandlerFn ehfun = nullptr;
   void* eh_data = nullptr;
@@ -316,6 +326,13 @@ int NlsInitialize(CEodeMemRec* ce, const char* func);
 int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                   const char* func);
 void NlsFree(CEodeMemRec* ce);
+
+// ceode_pc.cpp: after the unconstrained start, the velocity-dependence check and the choice of
+// the implicit solve (prediction-correction or the nonlinear solver); the PC solve itself.
+int ChooseImplicitSolve(CEodeMemRec* ce, const char* func);
+int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+            const char* func);
+void ImplicitStatsReset(CEodeMemRec* ce);  // CEodeReInit
 
 // ceode_constraints.cpp
 bool HasConstraints(const CEodeMemRec* ce);

@@ -125,7 +125,10 @@ int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->vel_dependent = depends != SUNFALSE;
+  // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp); any other nonzero value declares it.
+  ce->vel_request = depends;
+  ce->vel_dependent = depends != SUNFALSE && depends != CE_VELOCITY_DETECT;
+  ce->vel_warned = false;
   Restart(ce);
   return CE_SUCCESS;
 }

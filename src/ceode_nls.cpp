@@ -196,6 +196,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
                         newton ? "Newton" : "fixed-point", ce->maxcor, static_cast<double>(t));
   }
   N_VLinearSum(1, ce->apred, 1, ce->ycor, a);
+  ++ce->nnls_steps;
   return CE_SUCCESS;
 }
 

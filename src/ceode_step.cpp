@@ -357,6 +357,7 @@ int StartMethod(CEodeMemRec* ce) {
   const long int nfe0 = ce->nfe;
   flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
   ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
+  if (flag == CE_SUCCESS) flag = ChooseImplicitSolve(ce, func);  // may replace solve_accel
   if (flag == CE_SUCCESS) ce->started = true;
   return flag;
 }

@@ -1,0 +1,217 @@
+// The velocity-dependent step without a nonlinear solve (docs/theory.md section 4.3):
+// prediction-correction P(EC)^k, the choice between it and the nonlinear solver
+// (CE_IMPLICIT_AUTO), and the start's check that f depends on x' at all.
+#include <algorithm>
+#include <cmath>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+namespace {
+
+// AUTO takes prediction-correction while one correction shrinks the predictor's error by at
+// least this factor: then the k corrections leave an error below the method's own (section 4.3).
+constexpr sunrealtype kPcCouplingLimit = SUN_RCONST(0.05);
+constexpr int kPowerSteps = 3;  // power steps of the coupling estimate (one f each)
+// f changed by more than this many units of round-off of |f|: a real velocity dependence.
+constexpr sunrealtype kDependenceUlps = 16;
+
+int PCCorrections(const CEodeMemRec* ce) {
+  if (ce->pc_corrections > 0) return ce->pc_corrections;
+  // Measured (test_pc): one correction keeps the order everywhere, but from degree 5 on its
+  // velocity error is up to 12 times Newton's; two make the answers Newton's to one order more.
+  return ce->degree <= 4 ? 1 : 2;
+}
+
+// A fixed direction with unequal entries, so that no simple structure of df/dv (dampers on
+// relative velocities, a sum of columns) hides the dependence; all ones on vectors without
+// local data (one process).
+void ProbeDirection(N_Vector w) {
+  sunrealtype* wd = N_VGetArrayPointer(w);
+  if (wd == nullptr || !sun::IsLocal(w)) {
+    N_VConst(1, w);
+    return;
+  }
+  const sunindextype n = N_VGetLength(w);
+  for (sunindextype i = 0; i < n; ++i) {
+    wd[i] = SUN_RCONST(0.75) + SUN_RCONST(0.25) * std::sin(SUN_RCONST(1.3) * i + SUN_RCONST(0.7));
+  }
+}
+
+int CountedRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
+               const char* func) {
+  const int rv = ce->f(t, x, v, f, ce->user_data);
+  ++ce->nfe_coupling;  // apart from the steps' evaluations, like the guard's
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The right-hand side function failed (returned %d) at t = %.17g while "
+                        "CEODE probed its velocity dependence.",
+                        rv, static_cast<double>(t));
+  }
+  return CE_SUCCESS;
+}
+
+// f(t0, x0, v0) itself (no mass solve) into fbase: the start's a0 when there is no M.
+int BaseForce(CEodeMemRec* ce, N_Vector fbase, const char* func) {
+  if (ce->M == nullptr) {
+    N_VScale(1, ce->D[2], fbase);
+    return CE_SUCCESS;
+  }
+  return CountedRhs(ce, ce->tcur, ce->xcur, ce->D[1], fbase, func);
+}
+
+// u = (f(t0, x0, v0 + sig w) - fbase) / sig for w with max |w_i| = 1: df/dv w.
+int DirectionalDifference(CEodeMemRec* ce, N_Vector w, N_Vector fbase, N_Vector u,
+                          const char* func) {
+  const sunrealtype sig =
+      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(ce->D[1]));
+  N_VLinearSum(1, ce->D[1], sig, w, ce->vtmp);
+  const int flag = CountedRhs(ce, ce->tcur, ce->xcur, ce->vtmp, u, func);
+  if (flag == CE_SUCCESS) N_VLinearSum(1 / sig, u, -1 / sig, fbase, u);
+  return flag;
+}
+
+// kappa ||M^{-1} df/dv||: power steps from the probe direction; w, u, fbase are scratch.
+int EstimateCoupling(CEodeMemRec* ce, N_Vector w, N_Vector u, N_Vector fbase, const char* func) {
+  int flag = BaseForce(ce, fbase, func);
+  ProbeDirection(w);
+  N_VScale(1 / N_VMaxNorm(w), w, w);
+  sunrealtype rho = 0;
+  for (int i = 0; i < kPowerSteps && flag == CE_SUCCESS; ++i) {
+    flag = DirectionalDifference(ce, w, fbase, u, func);
+    if (flag == CE_SUCCESS) flag = MassSolve(ce, u, func);
+    const sunrealtype r = flag == CE_SUCCESS ? MaxNormOrNaN(u) : 0;
+    if (!(r > 0) || !std::isfinite(r)) break;
+    rho = std::max(rho, r);
+    N_VScale(1 / r, u, w);
+  }
+  ce->coupling = std::fabs(ce->co.kappa) * rho;
+  return flag;
+}
+
+// The implicit path was off: one directional difference says whether f depends on x'. Detection
+// switches the implicit step on; a user who never declared anything is warned once.
+int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
+  const bool detect = ce->vel_request == CE_VELOCITY_DETECT;
+  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && !ce->vel_warned))) {
+    return CE_SUCCESS;
+  }
+  N_Vector w = ce->ycor, u = ce->atmp, fbase = ce->ftmp;
+  int flag = BaseForce(ce, fbase, func);
+  ProbeDirection(w);
+  N_VScale(1 / N_VMaxNorm(w), w, w);
+  if (flag == CE_SUCCESS) flag = DirectionalDifference(ce, w, fbase, u, func);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype sig =
+      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(ce->D[1]));
+  const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
+  const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
+  if (!(df > floor)) return CE_SUCCESS;  // also for NaN: the start's checks report those
+  ce->coupling = std::fabs(ce->co.kappa) * MaxNormOrNaN(u);
+  if (!detect) {
+    ce->vel_warned = true;
+    ProcessError(ce, CE_WARNING, func,
+                 "f depends on the velocity x' (a change of x' by %.2g changed f by %.2g at "
+                 "t0 = %.17g; kappa*|df/dv w| = %.2g) but CEodeSetVelocityDependence was not "
+                 "called: the explicit step feeds f the previous step's velocity, which drops "
+                 "every method to first order. Call CEodeSetVelocityDependence(mem, SUNTRUE), "
+                 "or CE_VELOCITY_DETECT to let CEODE switch the implicit step on; SUNFALSE "
+                 "keeps the explicit step and silences this check.",
+                 static_cast<double>(sig), static_cast<double>(df), static_cast<double>(ce->tcur),
+                 static_cast<double>(ce->coupling));
+    return CE_SUCCESS;
+  }
+  ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
+  flag = LsInitialize(ce, func);
+  return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
+}
+
+}  // namespace
+
+int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
+  if (HasConstraints(ce)) return CE_SUCCESS;
+  int flag = CheckVelocityDependence(ce, func);
+  if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
+  bool pc = ce->implicit_mode == CE_IMPLICIT_PC;
+  if (ce->implicit_mode == CE_IMPLICIT_AUTO) {
+    flag = EstimateCoupling(ce, ce->ycor, ce->atmp, ce->ftmp, func);
+    pc = flag == CE_SUCCESS && ce->coupling <= kPcCouplingLimit;
+  }
+  ce->solve_accel = pc ? SolvePC : SolveImplicit;
+  return flag;
+}
+
+// P(EC)^k: the predicted acceleration gives the velocity, each evaluation-correction
+// a = M^{-1} f(t, x, V0 + kappa a) replaces it; no convergence test. The velocity of the
+// update follows from the last a by the method's own relation.
+int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
+            const char* func) {
+  const StepCoeffs& co = ce->co;
+  VelocityOffset(ce->degree, co, ce->D, ce->V0);
+  PredictAccel(ce, a);
+  const int k = PCCorrections(ce);
+  int flag = CE_SUCCESS;
+  for (int i = 0; i < k && flag == CE_SUCCESS; ++i) {
+    N_VLinearSum(1, ce->V0, co.kappa, a, ce->vtmp);
+    flag = EvalAccel(ce, t, x, ce->vtmp, a, func);
+  }
+  ++ce->npc_steps;
+  return flag;
+}
+
+void ImplicitStatsReset(CEodeMemRec* ce) {
+  ce->npc_steps = ce->nnls_steps = ce->nfe_coupling = 0;
+  ce->coupling = 0;
+  ce->vel_warned = false;
+}
+
+}  // namespace ceode
+
+extern "C" {
+
+int CEodeSetImplicitMode(void* mem, int mode) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (mode != CE_IMPLICIT_NEWTON && mode != CE_IMPLICIT_PC && mode != CE_IMPLICIT_AUTO) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "mode = %d: use CE_IMPLICIT_NEWTON, CE_IMPLICIT_PC or "
+                               "CE_IMPLICIT_AUTO.",
+                               mode);
+  }
+  ce->implicit_mode = mode;
+  ceode::Restart(ce);  // the choice is made at the start
+  return CE_SUCCESS;
+}
+
+int CEodeSetPCCorrections(void* mem, int k) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (k < 0 || k > 2) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "k = %d: use 1 or 2 corrections (0: 1 for degree <= 4, 2 above).",
+                               k);
+  }
+  ce->pc_corrections = k;
+  return CE_SUCCESS;
+}
+
+int CEodeGetImplicitStats(void* mem, long int* npcsteps, long int* nnlssteps, long int* nfecoupling,
+                          sunrealtype* coupling) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (npcsteps == nullptr || nnlssteps == nullptr || nfecoupling == nullptr ||
+      coupling == nullptr) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "An output pointer is NULL.");
+  }
+  *npcsteps = ce->npc_steps;
+  *nnlssteps = ce->nnls_steps;
+  *nfecoupling = ce->nfe_coupling;
+  *coupling = ce->coupling;
+  return CE_SUCCESS;
+}
+
+}  // extern "C"
