@@ -35,7 +35,7 @@ struct Config {
   long int msbj = 0;  // 0: default
 };
 
-struct Run {
+struct Outcome {
   int flag = CE_SUCCESS;
   double err_x = 0, err_v = 0;
   std::vector<double> x, v;  // at every step
@@ -50,8 +50,8 @@ void CollectWarnings(int code, const char*, const char*, char* msg, void* data) 
 
 // Newton with a dense matrix and difference-quotient Jacobian is attached in every mode, so that
 // the runs differ only in the mode.
-Run Integrate(const ExactProblem& prob, const Config& c) {
-  Run r;
+Outcome Integrate(const ExactProblem& prob, const Config& c) {
+  Outcome r;
   Context ctx;
   Vector x = SerialVector(1, ctx, prob.x0);
   Vector v = SerialVector(1, ctx, prob.v0);
@@ -140,10 +140,10 @@ Fit FitBothModes(const SetCase& c) {
     Config cfg;
     cfg.method = c.method;
     cfg.h = h;
-    const Run newton = Integrate(prob, cfg);
+    const Outcome newton = Integrate(prob, cfg);
     cfg.mode = CE_IMPLICIT_PC;
     cfg.corrections = c.corrections;
-    const Run pc = Integrate(prob, cfg);
+    const Outcome pc = Integrate(prob, cfg);
     EXPECT_EQ(newton.flag, CE_SUCCESS);
     EXPECT_EQ(pc.flag, CE_SUCCESS);
     EXPECT_EQ(pc.npc, pc.nst);  // every step by prediction-correction
@@ -185,5 +185,194 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, PredictorCorrector, ::testing::ValuesIn(kSet
                          [](const ::testing::TestParamInfo<SetCase>& info) {
                            return std::string(info.param.label);
                          });
+
+// ---------------------------------------------------------------------------
+// The automatic choice.
+
+// x'' = -w^2 x - c x', overdamped (c > 2w): closed form with two real decay rates.
+struct Overdamped : ExactProblem {
+  sunrealtype w = 1;
+  sunrealtype c = 100;
+  static int F(sunrealtype /*t*/, N_Vector x, N_Vector v, N_Vector f, void* data) {
+    const auto* p = static_cast<const Overdamped*>(data);
+    N_VLinearSum(-p->w * p->w, x, -p->c, v, f);
+    return 0;
+  }
+  CEodeRhsFn Rhs() const override { return F; }
+  bool VelocityDependent() const override { return true; }
+  void Exact(sunrealtype t, sunrealtype* x, sunrealtype* v) const override {
+    const sunrealtype d = std::sqrt(c * c - 4 * w * w);
+    const sunrealtype r1 = (-c + d) / 2, r2 = (-c - d) / 2;
+    const sunrealtype B = (v0 - r1 * x0) / (r2 - r1), A = x0 - B;
+    *x = A * std::exp(r1 * t) + B * std::exp(r2 * t);
+    *v = A * r1 * std::exp(r1 * t) + B * r2 * std::exp(r2 * t);
+  }
+};
+
+// kappa = h beta = 0.025 for G3_CD at h = 0.05: kappa |df/dv| = 2.5, fifty times the PC limit,
+// where a fixed-point correction amplifies the predictor's error instead of reducing it. The
+// start is on the slow mode (x'(0) = r1 x(0)), so the error measures the step, not a transient.
+TEST(AutomaticChoice, TakesNewtonForStiffDampingAndStaysStableAndAccurate) {
+  Overdamped prob;
+  const sunrealtype d = std::sqrt(prob.c * prob.c - 4 * prob.w * prob.w);
+  prob.v0 = (-prob.c + d) / 2 * prob.x0;
+  Config c;
+  c.h = SUN_RCONST(0.05);
+  c.mode = CE_IMPLICIT_AUTO;
+  const Outcome autorun = Integrate(prob, c);
+  c.mode = CE_IMPLICIT_NEWTON;
+  const Outcome newton = Integrate(prob, c);
+  c.mode = CE_IMPLICIT_PC;
+  const Outcome pc = Integrate(prob, c);
+  std::printf(
+      "[ auto     ] stiff: coupling %.4f, AUTO err x %.3e v %.3e; forced PC: flag %d, "
+      "err x %.3e\n",
+      autorun.coupling, autorun.err_x, autorun.err_v, pc.flag, pc.err_x);
+  ASSERT_EQ(autorun.flag, CE_SUCCESS);
+  ASSERT_EQ(newton.flag, CE_SUCCESS);
+  EXPECT_NEAR(autorun.coupling, 2.5, 0.025);  // 1 DOF, linear: the estimate is exact
+  EXPECT_EQ(autorun.npc, 0);
+  EXPECT_EQ(autorun.nnls, autorun.nst);
+  EXPECT_EQ(autorun.nfe_coupling, 3);          // three power steps, the start's a0 as base
+  EXPECT_EQ(MaxDiff(autorun.x, newton.x), 0);  // the same solver, bit for bit
+  EXPECT_LT(autorun.err_x, 1e-7);              // measured 3.8e-9
+  EXPECT_LT(autorun.err_v, 1e-9);              // measured 3.8e-11
+  // Why Newton: forced prediction-correction blows up at this step.
+  EXPECT_TRUE(pc.flag == CE_UNSTABLE || !(pc.err_x < 1));
+}
+
+TEST(AutomaticChoice, TakesPredictionCorrectionForMildDamping) {
+  DampedForced prob;  // 2 zeta w = 0.2
+  Config c;
+  c.mode = CE_IMPLICIT_AUTO;
+  const Outcome autorun = Integrate(prob, c);
+  c.mode = CE_IMPLICIT_PC;
+  const Outcome pc = Integrate(prob, c);
+  ASSERT_EQ(autorun.flag, CE_SUCCESS);
+  EXPECT_NEAR(autorun.coupling, 0.005 * 0.2, 1e-6);
+  EXPECT_EQ(autorun.npc, autorun.nst);
+  EXPECT_EQ(autorun.nnls, 0);
+  EXPECT_EQ(MaxDiff(autorun.x, pc.x), 0);
+  // One f per step in the steps themselves: half of Newton's two iterations.
+  EXPECT_EQ(autorun.nfe, autorun.nst + 1);  // + the start's a0
+}
+
+TEST(AutomaticChoice, EstimatesTheCouplingAgainAfterAStepChange) {
+  Overdamped prob;
+  Config c;
+  c.mode = CE_IMPLICIT_AUTO;
+  c.h = SUN_RCONST(0.0005);  // kappa |df/dv| = 0.025: PC
+  const Outcome fine = Integrate(prob, c);
+  EXPECT_EQ(fine.npc, fine.nst);
+  c.h = SUN_RCONST(0.002);  // 0.1: Newton
+  const Outcome coarse = Integrate(prob, c);
+  EXPECT_EQ(coarse.nnls, coarse.nst);
+  EXPECT_NEAR(coarse.coupling, 4 * fine.coupling, 1e-3 * coarse.coupling);
+}
+
+// ---------------------------------------------------------------------------
+// The Newton matrix on the ODE path: refreshed every msbj steps, not every step.
+
+TEST(NewtonMatrixOnTheOdePath, IsRebuiltOnlyEveryJacEvalFrequencySteps) {
+  DampedForced prob;
+  for (long int msbj : {5L, 20L, 100L}) {
+    SCOPED_TRACE(msbj);
+    Config c;
+    c.msbj = msbj;
+    const Outcome r = Integrate(prob, c);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    ASSERT_EQ(r.nst, 1000);
+    const long int expected = (r.nst + msbj - 1) / msbj;  // at steps 0, msbj, 2 msbj, ...
+    EXPECT_EQ(r.nje, expected);
+    EXPECT_EQ(r.nsetups, expected);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// A velocity dependence nobody declared.
+
+TEST(UndeclaredVelocityDependence, IsReportedOnceWithTheSetterToCall) {
+  DampedForced prob;
+  Config c;
+  c.vel = -1;  // CEodeSetVelocityDependence never called
+  const Outcome r = Integrate(prob, c);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_TRUE(ceode_test::Contains(r.warnings[0], "f depends on the velocity"));
+  EXPECT_TRUE(ceode_test::Contains(r.warnings[0], "CEodeSetVelocityDependence(mem, SUNTRUE)"));
+  EXPECT_EQ(r.nfe_coupling, 1);  // one directional difference, a0 as the base
+  EXPECT_EQ(r.npc + r.nnls, 0);  // the explicit step, as asked
+}
+
+TEST(UndeclaredVelocityDependence, IsNotReportedForAVelocityIndependentForce) {
+  Harmonic prob;
+  Config c;
+  c.vel = -1;
+  const Outcome r = Integrate(prob, c);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_EQ(r.nfe_coupling, 1);
+}
+
+TEST(UndeclaredVelocityDependence, IsNotProbedWhenTheUserDeclaredNone) {
+  DampedForced prob;
+  Config c;
+  c.vel = SUNFALSE;
+  const Outcome r = Integrate(prob, c);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_EQ(r.nfe_coupling, 0);
+}
+
+// Detection switches the implicit step on: the same numbers as a declared dependence, and the
+// order that the forgotten declaration loses.
+TEST(VelocityDetection, SwitchesOnTheImplicitStepAndKeepsTheSecondOrder) {
+  DampedForced prob;
+  const std::vector<double> hs = ConvergenceSteps(0.04);
+  std::vector<double> e_detect, e_forgot;
+  for (double h : hs) {
+    Config c;
+    c.h = h;
+    const Outcome declared = Integrate(prob, c);
+    c.vel = CE_VELOCITY_DETECT;
+    const Outcome detect = Integrate(prob, c);
+    c.vel = -1;
+    const Outcome forgot = Integrate(prob, c);
+    ASSERT_EQ(detect.flag, CE_SUCCESS);
+    EXPECT_TRUE(detect.warnings.empty());
+    EXPECT_EQ(detect.nnls, detect.nst);
+    EXPECT_EQ(MaxDiff(detect.x, declared.x), 0);
+    e_detect.push_back(detect.err_x);
+    e_forgot.push_back(forgot.err_x);
+  }
+  const double p_detect = FitOrder(hs, e_detect), p_forgot = FitOrder(hs, e_forgot);
+  std::printf("[ detect   ] order in x: detected %.3f, undeclared %.3f\n", p_detect, p_forgot);
+  EXPECT_NEAR(p_detect, 2, kOrderTol);
+  EXPECT_NEAR(p_forgot, 1, 0.2);
+}
+
+TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
+  Harmonic prob;
+  Config c;
+  c.vel = CE_VELOCITY_DETECT;
+  const Outcome r = Integrate(prob, c);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  EXPECT_EQ(r.npc + r.nnls, 0);
+  EXPECT_TRUE(r.warnings.empty());
+}
+
+TEST(ImplicitModeSetters, RefuseUnknownValuesWithAClearMessage) {
+  Context ctx;
+  Mem mem(CEodeCreate(ctx));
+  std::vector<std::string> msgs;
+  EXPECT_EQ(CEodeSetImplicitMode(mem.get(), 7), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeSetPCCorrections(mem.get(), 3), CE_ILL_INPUT);
+  const char* msg = nullptr;
+  CEodeGetLastErrorMessage(mem.get(), &msg);
+  EXPECT_TRUE(ceode_test::Contains(msg, "use 1 or 2 corrections"));
+  long int a = 0, b = 0, c = 0;
+  EXPECT_EQ(CEodeGetImplicitStats(mem.get(), &a, &b, &c, nullptr), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeSetImplicitMode(nullptr, CE_IMPLICIT_PC), CE_MEM_NULL);
+}
 
 }  // namespace
