@@ -127,6 +127,25 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
 }
 
+// out = sum_j c_j X_j. On serial vectors one loop of the library's own code, with the
+// additions in N_VLinearCombination_Serial's order: at n of a few, a generic vector operation
+// (Debian's SUNDIALS is built -O0) costs more than the step's f (bench_implicit_step).
+void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_Vector* X,
+                         N_Vector out) {
+  if (!ce->fused_ready) {
+    N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
+    return;
+  }
+  const sunrealtype* x[kMaxDegree];
+  for (int j = 0; j < m; ++j) x[j] = N_VGetArrayPointer(X[j]);
+  sunrealtype* o = N_VGetArrayPointer(out);
+  for (sunindextype i = 0; i < ce->n; ++i) {
+    sunrealtype s = c[0] * x[0][i];
+    for (int j = 1; j < m; ++j) s += c[j] * x[j][i];
+    o[i] = s;
+  }
+}
+
 }  // namespace
 
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
@@ -144,16 +163,29 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
 
 // P(EC)^k: the predicted acceleration gives the velocity, each evaluation-correction
 // a = M^{-1} f(t, x, V0 + kappa a) replaces it; no convergence test. The velocity of the
-// update follows from the last a by the method's own relation.
+// update follows from the last a by the method's own relation. Each velocity is one linear
+// combination of the history (and a): V0 + kappa * (PredictAccel's Taylor polynomial) for the
+// first, so that a step of k corrections makes k vector passes besides f and the update.
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
             const char* func) {
   const StepCoeffs& co = ce->co;
-  VelocityOffset(ce->degree, co, ce->D, ce->V0);
-  PredictAccel(ce, a);
+  const int d = ce->degree;
+  sunrealtype c[kMaxDegree];
+  N_Vector X[kMaxDegree];
+  sunrealtype tw[kMaxDegree];
+  TaylorWeights(co.h, d - 2, tw);  // the predictor's weights of D_2 .. D_{d-1}
+  for (int j = 1; j < d; ++j) {
+    c[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * tw[j - 2] : 0);
+    X[j - 1] = ce->D[j];
+  }
+  VelocityCombination(ce, d - 1, c, X, ce->vtmp);
   const int k = PCCorrections(ce);
-  int flag = CE_SUCCESS;
-  for (int i = 0; i < k && flag == CE_SUCCESS; ++i) {
-    N_VLinearSum(1, ce->V0, co.kappa, a, ce->vtmp);
+  int flag = EvalAccel(ce, t, x, ce->vtmp, a, func);
+  if (flag == CE_SUCCESS && k == 2) {
+    for (int j = 1; j < d; ++j) c[j - 1] = co.V0[j];
+    c[d - 1] = co.kappa;
+    X[d - 1] = a;
+    VelocityCombination(ce, d, c, X, ce->vtmp);
     flag = EvalAccel(ce, t, x, ce->vtmp, a, func);
   }
   ++ce->npc_steps;
