@@ -237,13 +237,15 @@ struct CEodeMemRec {
 
   // Implicit-step mode and velocity-dependence detection (ceode_pc.cpp)
   int implicit_mode = CE_IMPLICIT_NEWTON;
-  int pc_corrections = 0;     // 0: 1 for degree <= 4, 2 above
-  int vel_request = -1;       // CEodeSetVelocityDependence's value; -1: never called
-  bool vel_warned = false;    // the undeclared-dependence warning is given once
-  sunrealtype coupling = 0;   // last estimate of kappa ||M^{-1} df/dv|| (0: none)
-  long int npc_steps = 0;     // steps solved by prediction-correction
-  long int nnls_steps = 0;    // steps solved by the nonlinear solver
-  long int nfe_coupling = 0;  // f evaluations of the detection and the coupling estimate
+  int pc_corrections = 0;              // 0: 1 for degree <= 4, 2 above
+  int vel_request = -1;                // CEodeSetVelocityDependence's value; -1: never called
+  CEodeRhsFn vel_checked_f = nullptr;  // f already probed for an undeclared dependence
+  sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
+  long int npc_steps = 0;              // steps solved by prediction-correction
+  long int nnls_steps = 0;             // steps solved by the nonlinear solver
+  long int nfe_coupling = 0;           // f evaluations of the detection and the coupling estimate
+  bool nls_jcur = false;  // the direct Newton iteration's "matrix is current" (ceode_nls.cpp)
+  N_Vector nls_delta = nullptr;  // its correction vector
 
   // Error reporting
   CEodeErrHandlerFn ehfun = nullptr;

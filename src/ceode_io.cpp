@@ -128,7 +128,7 @@ int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
   // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp); any other nonzero value declares it.
   ce->vel_request = depends;
   ce->vel_dependent = depends != SUNFALSE && depends != CE_VELOCITY_DETECT;
-  ce->vel_warned = false;
+  ce->vel_checked_f = nullptr;
   Restart(ce);
   return CE_SUCCESS;
 }

@@ -74,14 +74,10 @@ int LinearSolve(N_Vector b, void* mem) {
   return rv;
 }
 
-// CVODE-style test: the estimated remaining error del * min(1, crate) below tol.
-int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtype tol, N_Vector ewt,
-             void* mem) {
-  auto* ce = static_cast<CEodeMemRec*>(mem);
-  int m = 0;
-  SUNNonlinSolGetCurIter(nls, &m);
+// CVODE-style test of iteration m: the estimated remaining error delnrm * min(1, crate) below
+// tol (delnrm: the weighted RMS norm of the last correction).
+int ConvTestNorm(CEodeMemRec* ce, int m, sunrealtype delnrm, sunrealtype tol) {
   ++ce->nni;
-  const sunrealtype delnrm = N_VWrmsNorm(del, ewt);
   if (!std::isfinite(delnrm)) {
     // A non-finite f is the user's to fix: a fresh Jacobian or a retry cannot
     // help, and "did not converge, reduce h" would send the user the wrong way.
@@ -102,10 +98,159 @@ int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtyp
   return SUN_NLS_CONTINUE;
 }
 
+int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtype tol, N_Vector ewt,
+             void* mem) {
+  int m = 0;
+  SUNNonlinSolGetCurIter(nls, &m);
+  return ConvTestNorm(static_cast<CEodeMemRec*>(mem), m, N_VWrmsNorm(del, ewt), tol);
+}
+
+// ---- The direct Newton iteration (small serial systems, a direct linear solver) ----
+// SUNNonlinSol_Newton's algorithm (SUNDIALS 6.4 and 7.x alike: residual, -F, solve, update,
+// test; one retry with a fresh matrix when the matrix was not current) with CEODE's residual,
+// solve and test, on raw arrays in N_Vector serial's order of operations: the same numbers as
+// the generic path, without its dispatch, which at n of a few costs more than f (docs/api.md).
+constexpr sunindextype kDirectNewtonMaxN = 64;
+
+bool DirectNewtonApplies(const CEodeMemRec* ce) {
+  return ce->own_nls && ce->fused_ready && ce->n <= kDirectNewtonMaxN && ce->A != nullptr &&
+         ce->LS != nullptr && SUNLinSolGetType(ce->LS) == SUNLINEARSOLVER_DIRECT &&
+         SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
+}
+
+// The raw arrays of the direct iteration, looked up once per step.
+struct Raw {
+  sunindextype n;
+  sunrealtype *apred, *atmp, *vtmp, *V0, *ftmp, *lstmp, *ewt, *ycor, *delta;
+};
+
+Raw RawArrays(const CEodeMemRec* ce) {
+  return {ce->n,
+          N_VGetArrayPointer(ce->apred),
+          N_VGetArrayPointer(ce->atmp),
+          N_VGetArrayPointer(ce->vtmp),
+          N_VGetArrayPointer(ce->V0),
+          N_VGetArrayPointer(ce->ftmp),
+          N_VGetArrayPointer(ce->lstmp),
+          N_VGetArrayPointer(ce->ewt),
+          N_VGetArrayPointer(ce->ycor),
+          N_VGetArrayPointer(ce->nls_delta)};
+}
+
+// ewt = 1 / (reltol |apred| + atol), atol from max |apred| (SolveImplicit's N_VMaxNorm, N_VAbs,
+// N_VScale, N_VAddConst, N_VInv, in their order).
+void DirectWeights(const CEodeMemRec* ce, const Raw& r) {
+  sunrealtype amax = 0;
+  for (sunindextype i = 0; i < r.n; ++i) amax = std::max(amax, std::fabs(r.apred[i]));
+  const sunrealtype atol =
+      ce->nls_abstol > 0 ? ce->nls_abstol : ce->nls_reltol * (amax > 0 ? amax : 1);
+  for (sunindextype i = 0; i < r.n; ++i) {
+    r.ewt[i] = 1 / ((ce->nls_reltol * std::fabs(r.apred[i])) + atol);
+  }
+}
+
+// F(ycor) = M a - f(t, x, V0 + kappa a), a = apred + ycor (NewtonResidual's operations).
+int DirectResidual(CEodeMemRec* ce, const Raw& r) {
+  const sunrealtype* y = r.ycor;
+  const sunrealtype kappa = ce->co.kappa;
+  for (sunindextype i = 0; i < r.n; ++i) {
+    r.atmp[i] = r.apred[i] + y[i];
+    r.vtmp[i] = (kappa * r.atmp[i]) + r.V0[i];
+  }
+  const int rv = ce->f(ce->t_eval, ce->x_eval, ce->vtmp, ce->ftmp, ce->user_data);
+  ++ce->nfe;
+  if (rv != 0) {
+    ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
+                 "The right-hand side function failed (returned %d) inside the nonlinear solve at "
+                 "t = %.17g.",
+                 rv, static_cast<double>(ce->t_eval));
+    ce->cb_flag = CE_RHSFUNC_FAIL;
+    return rv > 0 ? 1 : -1;
+  }
+  sunrealtype* Fd = r.delta;
+  if (ce->M != nullptr && SUNMatMatvec(ce->M, ce->atmp, ce->nls_delta) != 0) return -1;
+  const sunrealtype* lhs = ce->M != nullptr ? Fd : r.atmp;
+  for (sunindextype i = 0; i < r.n; ++i) Fd[i] = lhs[i] - r.ftmp[i];
+  return 0;
+}
+
+// delta <- (M - kappa J)^{-1} (-delta), ycor += delta, then the test (one Newton iteration).
+int DirectIterate(CEodeMemRec* ce, const Raw& r, int m) {
+  sunrealtype* d = r.delta;
+  for (sunindextype i = 0; i < r.n; ++i) d[i] = -d[i];
+  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, ce->nls_delta, SUN_RCONST(0.05));
+  ++ce->nls_solves;
+  if (rv != 0) {
+    if (rv < 0) {
+      ce->cb_flag = CE_LSOLVE_FAIL;
+      ProcessError(ce, CE_LSOLVE_FAIL, kFunc, "The Newton linear solve failed (returned %d).", rv);
+    }
+    return rv > 0 ? 1 : -1;
+  }
+  sunrealtype sum = 0;
+  for (sunindextype i = 0; i < r.n; ++i) {
+    d[i] = r.lstmp[i];
+    r.ycor[i] = r.ycor[i] + d[i];
+    const sunrealtype p = d[i] * r.ewt[i];
+    sum += p * p;
+  }
+  return ConvTestNorm(ce, m, std::sqrt(sum / static_cast<sunrealtype>(r.n)), 1);
+}
+
+// One SUNNonlinSolSolve: the Newton loop and its one retry with a fresh matrix.
+int DirectNewton(CEodeMemRec* ce, const Raw& r, bool setup) {
+  bool jbad = false;
+  for (;;) {
+    int rv = DirectResidual(ce, r);
+    if (rv == 0 && setup) {
+      sunbooleantype jcur = SUNFALSE;
+      rv = LinearSetup(jbad ? SUNTRUE : SUNFALSE, &jcur, ce);
+      ce->nls_jcur = jcur != SUNFALSE;
+    }
+    for (int m = 0; rv == 0;) {
+      rv = DirectIterate(ce, r, m);
+      if (rv == SUN_NLS_SUCCESS) {
+        ce->nls_jcur = false;
+        return SUN_NLS_SUCCESS;
+      }
+      if (rv != SUN_NLS_CONTINUE) break;
+      if (++m >= ce->maxcor) {
+        rv = SUN_NLS_CONV_RECVR;
+        break;
+      }
+      rv = DirectResidual(ce, r);
+    }
+    if (rv > 0 && !ce->nls_jcur) {
+      setup = jbad = true;
+      for (sunindextype i = 0; i < r.n; ++i) r.ycor[i] = 0;
+      continue;
+    }
+    return rv;
+  }
+}
+
+// Weights: relative to the predicted acceleration, floored by its largest entry.
+void ErrorWeights(CEodeMemRec* ce, bool direct, const Raw& raw) {
+  if (direct) {
+    DirectWeights(ce, raw);
+    return;
+  }
+  const sunrealtype amax = N_VMaxNorm(ce->apred);
+  const sunrealtype atol =
+      ce->nls_abstol > 0 ? ce->nls_abstol : ce->nls_reltol * (amax > 0 ? amax : 1);
+  N_VAbs(ce->apred, ce->ewt);
+  N_VScale(ce->nls_reltol, ce->ewt, ce->ewt);
+  N_VAddConst(ce->ewt, atol, ce->ewt);
+  N_VInv(ce->ewt, ce->ewt);
+}
+
 }  // namespace
 
 int NlsInitialize(CEodeMemRec* ce, const char* func) {
   if (!ce->vel_dependent || HasConstraints(ce)) return CE_SUCCESS;
+  if (ce->nls_delta == nullptr && (ce->nls_delta = N_VClone(ce->ycor)) == nullptr) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
   if (ce->NLS == nullptr) {
     ce->NLS = ce->LS != nullptr ? SUNNonlinSol_Newton(ce->ycor, ce->sunctx)
                                 : SUNNonlinSol_FixedPoint(ce->ycor, 0, ce->sunctx);
@@ -141,6 +286,8 @@ int NlsInitialize(CEodeMemRec* ce, const char* func) {
 }
 
 void NlsFree(CEodeMemRec* ce) {
+  if (ce->nls_delta != nullptr) N_VDestroy(ce->nls_delta);
+  ce->nls_delta = nullptr;
   if (ce->NLS != nullptr && ce->own_nls) SUNNonlinSolFree(ce->NLS);
   if (ce->own_nls) ce->NLS = nullptr;
   ce->own_nls = false;
@@ -156,14 +303,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   VelocityOffset(ce->degree, co, ce->D, ce->V0);
   PredictAccel(ce, ce->apred);
 
-  // Weights: relative to the predicted acceleration, floored by its largest entry.
-  const sunrealtype amax = N_VMaxNorm(ce->apred);
-  const sunrealtype atol =
-      ce->nls_abstol > 0 ? ce->nls_abstol : ce->nls_reltol * (amax > 0 ? amax : 1);
-  N_VAbs(ce->apred, ce->ewt);
-  N_VScale(ce->nls_reltol, ce->ewt, ce->ewt);
-  N_VAddConst(ce->ewt, atol, ce->ewt);
-  N_VInv(ce->ewt, ce->ewt);
+  const bool direct = DirectNewtonApplies(ce);
+  const Raw raw = direct ? RawArrays(ce) : Raw{};
+  ErrorWeights(ce, direct, raw);
 
   ce->t_eval = t;
   ce->x_eval = x;
@@ -176,7 +318,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
     N_VConst(0, ce->ycor);
-    rv = SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1, setup ? SUNTRUE : SUNFALSE, ce);
+    rv = direct ? DirectNewton(ce, raw, setup)
+                : SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1,
+                                    setup ? SUNTRUE : SUNFALSE, ce);
     if (rv == SUN_NLS_SUCCESS || rv < 0 || ce->cb_flag < 0) break;
     ++ce->nnf;
     if (!newton || setup) break;  // a fresh Jacobian was already used

@@ -91,10 +91,11 @@ int EstimateCoupling(CEodeMemRec* ce, N_Vector w, N_Vector u, N_Vector fbase, co
 }
 
 // The implicit path was off: one directional difference says whether f depends on x'. Detection
-// switches the implicit step on; a user who never declared anything is warned once.
+// switches the implicit step on (checked at every restart); a user who never declared anything
+// is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
 int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   const bool detect = ce->vel_request == CE_VELOCITY_DETECT;
-  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && !ce->vel_warned))) {
+  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != ce->f))) {
     return CE_SUCCESS;
   }
   N_Vector w = ce->ycor, u = ce->atmp, fbase = ce->ftmp;
@@ -103,6 +104,7 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   N_VScale(1 / N_VMaxNorm(w), w, w);
   if (flag == CE_SUCCESS) flag = DirectionalDifference(ce, w, fbase, u, func);
   if (flag != CE_SUCCESS) return flag;
+  if (!detect) ce->vel_checked_f = ce->f;  // once per right-hand side, not at every restart
   const sunrealtype sig =
       std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(ce->D[1]));
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
@@ -110,7 +112,6 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   if (!(df > floor)) return CE_SUCCESS;  // also for NaN: the start's checks report those
   ce->coupling = std::fabs(ce->co.kappa) * MaxNormOrNaN(u);
   if (!detect) {
-    ce->vel_warned = true;
     ProcessError(ce, CE_WARNING, func,
                  "f depends on the velocity x' (a change of x' by %.2g changed f by %.2g at "
                  "t0 = %.17g; kappa*|df/dv w| = %.2g) but CEodeSetVelocityDependence was not "
@@ -136,8 +137,9 @@ void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_V
     N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
     return;
   }
-  const sunrealtype* x[kMaxDegree];
+  const sunrealtype* x[kMaxDegree] = {};
   for (int j = 0; j < m; ++j) x[j] = N_VGetArrayPointer(X[j]);
+  if (m < 1 || x[0] == nullptr) return;  // m >= 2 here (degree >= 3)
   sunrealtype* o = N_VGetArrayPointer(out);
   for (sunindextype i = 0; i < ce->n; ++i) {
     sunrealtype s = c[0] * x[0][i];
@@ -170,9 +172,9 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
             const char* func) {
   const StepCoeffs& co = ce->co;
   const int d = ce->degree;
-  sunrealtype c[kMaxDegree];
-  N_Vector X[kMaxDegree];
-  sunrealtype tw[kMaxDegree];
+  sunrealtype c[kMaxDegree] = {};
+  N_Vector X[kMaxDegree] = {};
+  sunrealtype tw[kMaxDegree] = {};
   TaylorWeights(co.h, d - 2, tw);  // the predictor's weights of D_2 .. D_{d-1}
   for (int j = 1; j < d; ++j) {
     c[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * tw[j - 2] : 0);
@@ -195,7 +197,6 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
 void ImplicitStatsReset(CEodeMemRec* ce) {
   ce->npc_steps = ce->nnls_steps = ce->nfe_coupling = 0;
   ce->coupling = 0;
-  ce->vel_warned = false;
 }
 
 }  // namespace ceode

@@ -3,6 +3,9 @@
 // the start's check for an undeclared velocity dependence (docs/theory.md section 4.3).
 // Reference: the closed-form solution of the damped forced oscillator (test_util.hpp).
 #include <gtest/gtest.h>
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunmatrix/sunmatrix_band.h>
+#include <sunnonlinsol/sunnonlinsol_newton.h>
 
 #include <cmath>
 #include <cstdio>
@@ -186,6 +189,58 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, PredictorCorrector, ::testing::ValuesIn(kSet
                            return std::string(info.param.label);
                          });
 
+// M x'' = 3 f(t, x, x') with M = 3: the same motion, with the mass solve inside every correction.
+struct ScaledMass {
+  DampedForced prob;
+  static int Rhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
+    auto* s = static_cast<ScaledMass*>(data);
+    DampedForced::F(t, x, v, f, &s->prob);
+    N_VScale(3, f, f);
+    return 0;
+  }
+  static int Mass(sunrealtype, N_Vector, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+    SM_ELEMENT_D(M, 0, 0) = 3;
+    return 0;
+  }
+};
+
+TEST(PredictionCorrectionWithAMassMatrix, GivesTheMotionOfTheUnitMass) {
+  ScaledMass sm;
+  Context ctx;
+  Vector x = SerialVector(1, ctx, sm.prob.x0);
+  Vector v = SerialVector(1, ctx, sm.prob.v0);
+  Matrix M(SUNDenseMatrix(1, 1, ctx));
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), ScaledMass::Rhs, 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &sm), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G4_A34"), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMassFn(mem.get(), ScaledMass::Mass, M.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_AUTO), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  Config c;
+  c.method = "G4_A34";
+  c.mode = CE_IMPLICIT_PC;
+  const Outcome unit = Integrate(sm.prob, c);
+  ASSERT_EQ(unit.flag, CE_SUCCESS);
+  long int npc = 0, nnls = 0, nfe_probe = 0, nsetups = 0;
+  sunrealtype coupling = 0;
+  CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfe_probe, &coupling);
+  CEodeGetNumLinSolvSetups(mem.get(), &nsetups);
+  EXPECT_EQ(npc, 1000);
+  EXPECT_EQ(nfe_probe, 4);  // f(t0, x0, v0) itself (M is not I), then three power steps
+  // kappa = h beta / (2 gamma) = 0.01 / 3 for G4_A34, |M^{-1} df/dv| = 2 zeta w = 0.2.
+  EXPECT_NEAR(coupling, 0.01 / 3 * 0.2, 1e-9);
+  EXPECT_EQ(nsetups, 1);  // M is factored once, every correction reuses it
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0), unit.x.back(), 1e-13);
+}
+
 // ---------------------------------------------------------------------------
 // The automatic choice.
 
@@ -288,6 +343,105 @@ TEST(NewtonMatrixOnTheOdePath, IsRebuiltOnlyEveryJacEvalFrequencySteps) {
   }
 }
 
+TEST(NewtonMatrixOnTheOdePath, IsRebuiltWhenTheStepChanges) {
+  DampedForced prob;
+  Context ctx;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetJacEvalFrequency(mem.get(), 1000), CE_SUCCESS);
+  sunrealtype t = 0;
+  long int nje = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  CEodeGetNumJacEvals(mem.get(), &nje);
+  EXPECT_EQ(nje, 1);  // 100 steps, one matrix
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.005)), CE_SUCCESS);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  CEodeGetNumJacEvals(mem.get(), &nje);
+  EXPECT_EQ(nje, 2);  // a new kappa: one more
+}
+
+// ---------------------------------------------------------------------------
+// The direct Newton iteration of small serial systems against SUNNonlinSol_Newton: a Newton
+// solver handed in by the user keeps the generic path, CEODE's own takes the direct one.
+
+struct ChainRun {
+  int flag = CE_SUCCESS;
+  std::vector<sunrealtype> x;
+  long int nni = 0, nje = 0, nfe = 0, nnf = 0;
+};
+
+ChainRun RunChainNewton(const char* method, bool user_nls, bool band, sunrealtype h) {
+  ChainRun r;
+  Context ctx;
+  ceode_test::DampedChain prob;
+  prob.c3 = 20;  // strongly nonlinear dampers: several iterations per step
+  const sunindextype n = prob.n;
+  Vector x = SerialVector(n, ctx);
+  Vector v = SerialVector(n, ctx);
+  prob.Initial(x.get(), v.get());
+  Matrix A(band ? SUNBandMatrix(n, 1, 1, ctx) : SUNDenseMatrix(n, n, ctx));
+  LinearSolver LS(band ? SUNLinSol_Band(x.get(), A.get(), ctx)
+                       : SUNLinSol_Dense(x.get(), A.get(), ctx));
+  SUNNonlinearSolver nls = user_nls ? SUNNonlinSol_Newton(x.get(), ctx) : nullptr;
+  Mem mem(CEodeCreate(ctx));
+  auto ok = [&r](int flag) {
+    if (flag < 0 && r.flag == CE_SUCCESS) r.flag = flag;
+    return flag >= 0;
+  };
+  bool good = ok(CEodeInit(mem.get(), ceode_test::DampedChain::Rhs, 0, x.get(), v.get())) &&
+              ok(CEodeSetUserData(mem.get(), &prob)) &&
+              ok(CEodeSetMethodByName(mem.get(), method)) && ok(CEodeSetFixedStep(mem.get(), h)) &&
+              ok(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0)) &&
+              ok(CEodeSetVelocityDependence(mem.get(), SUNTRUE)) &&
+              ok(CEodeSetLinearSolver(mem.get(), LS.get(), A.get())) &&
+              (!user_nls || ok(CEodeSetNonlinearSolver(mem.get(), nls)));
+  CEodeSetErrFile(mem.get(), nullptr);  // the failing runs are expected
+  for (int k = 1; good && k <= 20; ++k) {
+    sunrealtype t = 0;
+    good = ok(CEodeEvolve(mem.get(), SUN_RCONST(0.1) * k, x.get(), v.get(), &t, CE_NORMAL));
+    for (sunindextype i = 0; i < n; ++i) r.x.push_back(NV_Ith_S(x.get(), i));
+  }
+  CEodeGetNumNonlinSolvIters(mem.get(), &r.nni);
+  CEodeGetNumJacEvals(mem.get(), &r.nje);
+  CEodeGetNumRhsEvals(mem.get(), &r.nfe);
+  CEodeGetNumNonlinSolvConvFails(mem.get(), &r.nnf);
+  mem.reset();
+  if (nls != nullptr) SUNNonlinSolFree(nls);
+  return r;
+}
+
+TEST(DirectNewtonIteration, GivesSUNNonlinSolNewtonsNumbersBitForBit) {
+  for (const char* method : {"G3_CD", "G4_A34", "G5_TOP"}) {
+    for (bool band : {false, true}) {
+      for (sunrealtype h : {SUN_RCONST(1e-3), SUN_RCONST(5e-3), SUN_RCONST(2e-2)}) {
+        SCOPED_TRACE(std::string(method) + (band ? " band" : " dense") + " h=" + std::to_string(h));
+        const ChainRun generic = RunChainNewton(method, true, band, h);
+        const ChainRun direct = RunChainNewton(method, false, band, h);
+        // Larger steps are too large for these dampers (CE_CONV_FAILURE for G3_CD and G4_A34 at
+        // 5e-3, for all at 2e-2): then both fail at the same step in the same way.
+        if (h < 0.002) EXPECT_EQ(generic.flag, CE_SUCCESS);
+        EXPECT_EQ(direct.flag, generic.flag);
+        EXPECT_EQ(MaxDiff(generic.x, direct.x), 0);
+        EXPECT_EQ(generic.nni, direct.nni);
+        EXPECT_EQ(generic.nje, direct.nje);
+        EXPECT_EQ(generic.nfe, direct.nfe);
+        EXPECT_EQ(generic.nnf, direct.nnf);
+        std::printf("[ direct   ] %-6s %-5s h=%-6g iterations %ld, Jacobians %ld, conv fails %ld\n",
+                    method, band ? "band" : "dense", h, direct.nni, direct.nje, direct.nnf);
+      }
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------
 // A velocity dependence nobody declared.
 
@@ -302,6 +456,31 @@ TEST(UndeclaredVelocityDependence, IsReportedOnceWithTheSetterToCall) {
   EXPECT_TRUE(ceode_test::Contains(r.warnings[0], "CEodeSetVelocityDependence(mem, SUNTRUE)"));
   EXPECT_EQ(r.nfe_coupling, 1);  // one directional difference, a0 as the base
   EXPECT_EQ(r.npc + r.nnls, 0);  // the explicit step, as asked
+}
+
+TEST(UndeclaredVelocityDependence, IsProbedOnlyOnceAcrossReInitAndStepChanges) {
+  DampedForced prob;
+  Context ctx;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Mem mem(CEodeCreate(ctx));
+  std::vector<std::string> warnings;
+  ASSERT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), CollectWarnings, &warnings), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.005)), CE_SUCCESS);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  ASSERT_EQ(CEodeReInit(mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  long int npc = 0, nnls = 0, nfe_probe = 0;
+  sunrealtype coupling = 0;
+  CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfe_probe, &coupling);
+  EXPECT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(nfe_probe, 0);  // counted since CEodeReInit: no new probe
 }
 
 TEST(UndeclaredVelocityDependence, IsNotReportedForAVelocityIndependentForce) {
