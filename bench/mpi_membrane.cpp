@@ -21,6 +21,8 @@
 //
 //   mpiexec -n 2 mpi_membrane [--n N] [--steps S] [--reps R] [--method NAME] [--csv FILE]
 //   mpiexec -n 2 mpi_membrane --quick        (N = 10^4, 100 steps, 1 repetition: ctest)
+//   ... --only serial|one|many                 (that configuration alone, for a profiler; no
+//   checks)
 // Defaults: N = 10^6 (1000 x 1000), 300 steps, 3 repetitions, G3_CD at 0.9 of its limit.
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
@@ -36,6 +38,17 @@
 #include "ceode_sundials_compat.h"
 #include "mpi_membrane_model.h"
 
+// CEODE's global reductions (every norm or dot product on NVECTOR_PARALLEL is an MPI_Allreduce),
+// counted through MPI's profiling interface so that the report can state them per step. A global
+// because that interface passes no user pointer.
+long g_allreduce_calls = 0;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+extern "C" int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type,
+                             MPI_Op op, MPI_Comm comm) {
+  ++g_allreduce_calls;
+  return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
+}
+
 namespace {
 
 struct Options {
@@ -46,6 +59,7 @@ struct Options {
   std::string csv;
   double h_factor = 0.9;
   bool quick = false;
+  std::string only;  // "serial", "one" or "many": that configuration alone (profiling, no checks)
 };
 
 bool ParseArgs(int argc, char** argv, Options* o) {
@@ -65,13 +79,17 @@ bool ParseArgs(int argc, char** argv, Options* o) {
       o->reps = std::atoi(argv[++i]);
     } else if (a == "--method" && more) {
       o->method = argv[++i];
+    } else if (a == "--only" && more) {
+      o->only = argv[++i];
     } else if (a == "--csv" && more) {
       o->csv = argv[++i];
     } else {
       return false;
     }
   }
-  return o->n >= 4 && o->steps >= 4 && o->reps >= 1;
+  const bool only_ok =
+      o->only.empty() || o->only == "serial" || o->only == "one" || o->only == "many";
+  return o->n >= 4 && o->steps >= 4 && o->reps >= 1 && only_ok;
 }
 
 // All ranks of comm meet here without spinning: a rank that waits for a long computation on
@@ -89,15 +107,22 @@ void SleepyBarrier(MPI_Comm comm) {
 struct Timing {
   int flag = CE_SUCCESS;
   double seconds = 0;  // the slowest rank's wall time over the timed steps
+  double cpu = 0;      // the slowest rank's CPU time (less sensitive to a loaded machine)
   long timed_steps = 0;
+  long allreduces = 0;  // MPI_Allreduce calls in the timed steps (this rank)
+  long exchanges = 0;   // halo exchanges in the timed steps (this rank)
 };
+
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 constexpr long kWarmSteps = 2;  // the start (and the guard's check) happen here, untimed
 
-// Integrates the membrane on x, v (either vector kind) to steps * h; the state ends in x.
-Timing Integrate(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, double h,
-                 MPI_Comm timing_comm) {
-  Timing tm;
+// A CEODE memory for the membrane on x, v (either vector kind), at the initial state.
+void* CreateSolver(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, double h) {
   membrane::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
   void* mem = CEodeCreate(x->sunctx);
   int flag = mem == nullptr ? CE_MEM_FAIL : CEodeInit(mem, membrane::Rhs, 0, x, v);
@@ -105,17 +130,34 @@ Timing Integrate(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, d
   if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, h);
   if (flag == CE_SUCCESS) flag = CEodeSetUserData(mem, s);
   if (flag == CE_SUCCESS) flag = CEodeSetMaxNumSteps(mem, o.steps + 10);
+  if (flag != CE_SUCCESS) CEodeFree(&mem);
+  return mem;
+}
+
+// Integrates the membrane to steps * h; the state ends in x.
+Timing Integrate(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, double h,
+                 MPI_Comm timing_comm) {
+  Timing tm;
+  void* mem = CreateSolver(x, v, s, o, h);
+  int flag = mem == nullptr ? CE_ILL_INPUT : CE_SUCCESS;
   sunrealtype t = 0;
   if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, kWarmSteps * h, x, v, &t, CE_NORMAL);
   MPI_Barrier(timing_comm);
+  const long red0 = g_allreduce_calls;
+  const long exch0 = s->nexchange;
   const double t0 = MPI_Wtime();
-  if (flag == CE_SUCCESS)
+  const double c0 = CpuSeconds();
+  if (flag == CE_SUCCESS) {
     flag = CEodeEvolve(mem, static_cast<double>(o.steps) * h, x, v, &t, CE_NORMAL);
-  double dt = MPI_Wtime() - t0;
-  MPI_Allreduce(MPI_IN_PLACE, &dt, 1, MPI_DOUBLE, MPI_MAX, timing_comm);
+  }
+  double dt[2] = {MPI_Wtime() - t0, CpuSeconds() - c0};
+  tm.allreduces = g_allreduce_calls - red0;
+  tm.exchanges = s->nexchange - exch0;
+  MPI_Allreduce(MPI_IN_PLACE, dt, 2, MPI_DOUBLE, MPI_MAX, timing_comm);
   MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MIN, timing_comm);
   tm.flag = flag;
-  tm.seconds = dt;
+  tm.seconds = dt[0];
+  tm.cpu = dt[1];
   tm.timed_steps = o.steps - kWarmSteps;
   CEodeFree(&mem);
   return tm;
@@ -177,14 +219,22 @@ Compare Diff(const double* a, const double* b, long n) {
 struct Config {
   std::string name;
   int ranks = 1;
-  std::vector<double> per_step;
+  std::vector<double> per_step;      // wall time
+  std::vector<double> cpu_per_step;  // CPU time
   int flag = CE_SUCCESS;
+  double allreduces_per_step = 0;  // rank 0's, last repetition
+  double exchanges_per_step = 0;
   double Best() const { return *std::min_element(per_step.begin(), per_step.end()); }
+  double BestCpu() const { return *std::min_element(cpu_per_step.begin(), cpu_per_step.end()); }
 };
 
 void Record(Config* c, const Timing& tm) {
   c->flag = tm.flag != CE_SUCCESS ? tm.flag : c->flag;
-  c->per_step.push_back(tm.seconds / static_cast<double>(tm.timed_steps));
+  const auto steps = static_cast<double>(tm.timed_steps);
+  c->per_step.push_back(tm.seconds / steps);
+  c->cpu_per_step.push_back(tm.cpu / steps);
+  c->allreduces_per_step = static_cast<double>(tm.allreduces) / steps;
+  c->exchanges_per_step = static_cast<double>(tm.exchanges) / steps;
 }
 
 std::string LoadAverage() {
@@ -247,12 +297,19 @@ std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, in
     cfg[2].name = "parallel";
     cfg[2].ranks = size;
   }
+  const auto run = [&o](const char* name) { return o.only.empty() || o.only == name; };
   for (int r = 0; r < o.reps; ++r) {
-    if (rank == 0) Record(&cfg[0], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
+    if (rank == 0 && run("serial")) {
+      Record(&cfg[0], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
+    }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (rank == 0) Record(&cfg[1], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
+    if (rank == 0 && run("one")) {
+      Record(&cfg[1], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
+    }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (size > 1) Record(&cfg[2], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+    if (size > 1 && run("many")) {
+      Record(&cfg[2], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+    }
   }
   return cfg;
 }
@@ -302,28 +359,35 @@ Verdict Check(const Problem& p, const std::vector<double>& gathered, const Optio
   return v;
 }
 
-void Report(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg,
-            const Verdict& v, const std::string& load0, int size) {
-  const long n = static_cast<long>(p.whole.nx) * p.whole.ny;
-  const long timed = o.steps - kWarmSteps;
-  std::printf(
-      "membrane on NVECTOR_PARALLEL: N = %ld (%d x %d), %s at h = %.6g (%.2f of the limit), "
-      "%ld timed steps, best of %d\n",
-      n, p.whole.nx, p.whole.ny, o.method.c_str(), h, o.h_factor, timed, o.reps);
-  std::printf("%-10s %5s %12s %14s %s\n", "vector", "ranks", "ms/step", "ns/(DOF step)",
-              "repetitions (ms/step)");
+void Table(const std::vector<Config>& cfg, long n, int size) {
+  std::printf("%-10s %5s %10s %14s %12s  %s\n", "vector", "ranks", "ms/step", "ns/(DOF step)",
+              "CPU ms/step", "repetitions (wall ms/step)");
   for (const Config& c : cfg) {
     std::string reps;
     for (double s : c.per_step) reps += " " + std::to_string(s * 1e3).substr(0, 7);
-    std::printf("%-10s %5d %12.4f %14.3f%s\n", c.name.c_str(), c.ranks, c.Best() * 1e3,
-                c.Best() * 1e9 / static_cast<double>(n), reps.c_str());
+    std::printf("%-10s %5d %10.4f %14.3f %12.4f %s\n", c.name.c_str(), c.ranks, c.Best() * 1e3,
+                c.Best() * 1e9 / static_cast<double>(n), c.BestCpu() * 1e3, reps.c_str());
   }
-  if (size > 1) {
-    std::printf(
-        "speedup 1 -> %d ranks (NVECTOR_PARALLEL): %.3f (target >= 1.6 at N = 10^6 on 2 "
-        "ranks; timing, not a check)\n",
-        size, cfg[1].Best() / cfg[2].Best());
-  }
+  if (size == 1) return;
+  std::printf(
+      "communication per step on %d ranks: %.3g MPI_Allreduce (CEODE's norms), %.3g "
+      "halo exchanges (f)\n",
+      size, cfg[2].allreduces_per_step, cfg[2].exchanges_per_step);
+  std::printf(
+      "speedup 1 -> %d ranks (NVECTOR_PARALLEL): %.3f wall, %.3f CPU time of the slowest "
+      "rank (target >= 1.6 wall at N = 10^6 on 2 ranks; a timing, not a check)\n",
+      size, cfg[1].Best() / cfg[2].Best(), cfg[1].BestCpu() / cfg[2].BestCpu());
+}
+
+void Report(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg,
+            const Verdict& v, const std::string& load0, int size) {
+  const long n = static_cast<long>(p.whole.nx) * p.whole.ny;
+  std::printf(
+      "membrane on NVECTOR_PARALLEL: N = %ld (%d x %d), %s at h = %.6g (%.2f of the "
+      "limit), %ld timed steps, best of %d; %d MPI ranks\n",
+      n, p.whole.nx, p.whole.ny, o.method.c_str(), h, o.h_factor, o.steps - kWarmSteps, o.reps,
+      size);
+  Table(cfg, n, size);
   std::printf("bitwise: 1 rank vs serial: %ld of %ld entries differ (max |diff| %.3g)", v.one.ndiff,
               n, v.one.maxdiff);
   if (size > 1) {
@@ -339,15 +403,28 @@ void Report(const Options& o, const Problem& p, double h, const std::vector<Conf
   std::printf("checks: %s\n", v.ok ? "passed" : "FAILED");
 }
 
+// --only: the one configuration's figures (under a profiler), no comparison to check.
+void ReportOnly(const std::vector<Config>& cfg) {
+  for (const Config& c : cfg) {
+    if (c.per_step.empty()) continue;
+    std::printf(
+        "%s on %d rank(s) only: %.4f ms/step wall, %.4f CPU; %.3g MPI_Allreduce and %.3g "
+        "halo exchanges per step; checks skipped (--only)\n",
+        c.name.c_str(), c.ranks, c.Best() * 1e3, c.BestCpu() * 1e3, c.allreduces_per_step,
+        c.exchanges_per_step);
+  }
+}
+
 void WriteCsv(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg) {
   FILE* f = std::fopen(o.csv.c_str(), "w");
   if (f == nullptr) return;
-  std::fprintf(f, "vector,ranks,n,nx,ny,method,h,timed_steps,rep,seconds_per_step\n");
+  std::fprintf(
+      f, "vector,ranks,n,nx,ny,method,h,timed_steps,rep,seconds_per_step,cpu_seconds_per_step\n");
   for (const Config& c : cfg) {
     for (size_t r = 0; r < c.per_step.size(); ++r) {
-      std::fprintf(f, "%s,%d,%ld,%d,%d,%s,%.9g,%ld,%zu,%.6e\n", c.name.c_str(), c.ranks,
+      std::fprintf(f, "%s,%d,%ld,%d,%d,%s,%.9g,%ld,%zu,%.6e,%.6e\n", c.name.c_str(), c.ranks,
                    static_cast<long>(p.whole.nx) * p.whole.ny, p.whole.nx, p.whole.ny,
-                   o.method.c_str(), h, o.steps - kWarmSteps, r, c.per_step[r]);
+                   o.method.c_str(), h, o.steps - kWarmSteps, r, c.per_step[r], c.cpu_per_step[r]);
     }
   }
   std::fclose(f);
@@ -365,7 +442,7 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       std::fprintf(stderr,
                    "usage: mpiexec -n P mpi_membrane [--quick] [--n N] [--steps S] "
-                   "[--reps R] [--method NAME] [--csv FILE]\n");
+                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many]\n");
     }
     MPI_Finalize();
     return 2;
@@ -379,7 +456,9 @@ int main(int argc, char** argv) {
   if (bad == 0) {
     const std::vector<Config> cfg = Measure(&p, o, h, rank, size);
     const std::vector<double> gathered = Gather(p, rank, size);
-    if (rank == 0) {
+    if (rank == 0 && !o.only.empty()) {
+      ReportOnly(cfg);
+    } else if (rank == 0) {
       const Verdict v = Check(p, gathered, o, h, cfg);
       Report(o, p, h, cfg, v, load0, size);
       if (!o.csv.empty()) WriteCsv(o, p, h, cfg);
