@@ -29,6 +29,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -210,11 +211,17 @@ struct Compare {
   double maxdiff = 0;
 };
 
+uint64_t Bits(double d) {
+  uint64_t u = 0;
+  std::memcpy(&u, &d, sizeof u);
+  return u;
+}
+
 // Bitwise comparison (so -0 and +0 differ, a NaN never matches), and the largest |a - b|.
 Compare Diff(const double* a, const double* b, long n) {
   Compare c;
   for (long i = 0; i < n; ++i) {
-    if (std::memcmp(&a[i], &b[i], sizeof(double)) != 0) ++c.ndiff;
+    if (Bits(a[i]) != Bits(b[i])) ++c.ndiff;
     const double d = std::fabs(a[i] - b[i]);
     if (!(d <= c.maxdiff)) c.maxdiff = d;
   }
