@@ -29,6 +29,7 @@ struct Strip {
   int ny = 0;
   int row0 = 0;
   int nrows = 0;
+  int nactive = 1;         // ranks that own rows: min(size, ny); the others own none
   double k = 0;            // stiffness 1/dx^2
   std::vector<double> lo;  // the row below row0 (from rank - 1)
   std::vector<double> hi;  // the row above row0 + nrows - 1 (from rank + 1)
@@ -55,6 +56,7 @@ inline Strip MakeStrip(MPI_Comm comm, int nx, int ny) {
   s.nx = nx;
   s.ny = ny;
   RowRange(ny, s.size, s.rank, &s.row0, &s.nrows);
+  s.nactive = std::min(s.size, ny);
   s.k = static_cast<double>(nx + 1) * (nx + 1);
   s.lo.assign(static_cast<size_t>(nx), 0.0);
   s.hi.assign(static_cast<size_t>(nx), 0.0);
@@ -85,11 +87,11 @@ inline int StartHalo(Strip* s, const double* u, MPI_Request* req) {
   int n = 0;
   if (!s->exchange) return 0;
   const int nx = s->nx;
-  if (s->rank > 0) {
+  if (s->rank > 0 && s->nrows > 0) {
     MPI_Irecv(s->lo.data(), nx, MPI_DOUBLE, s->rank - 1, 0, s->comm, &req[n++]);
     MPI_Isend(u, nx, MPI_DOUBLE, s->rank - 1, 1, s->comm, &req[n++]);
   }
-  if (s->rank + 1 < s->size) {
+  if (s->rank + 1 < s->nactive) {
     MPI_Irecv(s->hi.data(), nx, MPI_DOUBLE, s->rank + 1, 1, s->comm, &req[n++]);
     MPI_Isend(u + static_cast<long>(s->nrows - 1) * nx, nx, MPI_DOUBLE, s->rank + 1, 0, s->comm,
               &req[n++]);

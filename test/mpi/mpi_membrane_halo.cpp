@@ -5,8 +5,9 @@
 //
 // Grid 37 x 23 (23 rows: uneven strips on 2 and 3 ranks, and on 3 ranks a middle strip with two
 // neighbours), 200 steps at 0.9 of each set's stability limit, the two modes of
-// InitialModes. Reference: the serial run of the same program (no reference file: the claim is
-// equality). A negative control shows the comparison notices a wrong halo.
+// InitialModes; and a 9 x 2 grid, on 3 ranks one without rows. Reference: the serial run of the same
+// program (no reference file: the claim is equality). A negative control shows the comparison
+// notices a wrong halo.
 //
 // One GoogleTest program run by every rank (mpiexec -n 2 / -n 3); the tests are collective.
 #include <ceode/ceode.h>
@@ -23,9 +24,12 @@
 
 namespace {
 
-constexpr int kNx = 37;
-constexpr int kNy = 23;
-constexpr long kN = static_cast<long>(kNx) * kNy;
+struct Grid {
+  int nx;
+  int ny;
+  long Size() const { return static_cast<long>(nx) * ny; }
+};
+constexpr Grid kGrid{37, 23};
 constexpr long kSteps = 200;
 
 struct Case {
@@ -66,14 +70,14 @@ int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused) {
 }
 
 // The serial reference on one rank, the whole grid on NVECTOR_SERIAL.
-std::vector<double> SerialRun(const Case& c, bool fused) {
+std::vector<double> SerialRun(const Case& c, bool fused, Grid g = kGrid) {
   SUNContext ctx = nullptr;
   EXPECT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx), 0);
-  membrane::Strip s = membrane::MakeStrip(MPI_COMM_NULL, kNx, kNy);
-  N_Vector x = N_VNew_Serial(kN, ctx);
+  membrane::Strip s = membrane::MakeStrip(MPI_COMM_NULL, g.nx, g.ny);
+  N_Vector x = N_VNew_Serial(g.Size(), ctx);
   EXPECT_EQ(Integrate(x, &s, c, fused), CE_SUCCESS);
   const double* d = N_VGetArrayPointer(x);
-  std::vector<double> out(d, d + kN);
+  std::vector<double> out(d, d + g.Size());
   N_VDestroy(x);
   SUNContext_Free(&ctx);
   return out;
@@ -86,16 +90,16 @@ struct ParallelResult {
 };
 
 // Every rank: its strip on NVECTOR_PARALLEL over MPI_COMM_WORLD; the state gathered on rank 0.
-ParallelResult ParallelRun(const Case& c, bool exchange) {
+ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid) {
   MPI_Comm comm = MPI_COMM_WORLD;
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   SUNContext ctx = nullptr;
   EXPECT_EQ(SUNContext_Create(CEODE_SUN_COMM_ARG(comm), &ctx), 0);
-  membrane::Strip s = membrane::MakeStrip(comm, kNx, kNy);
+  membrane::Strip s = membrane::MakeStrip(comm, g.nx, g.ny);
   s.exchange = exchange;
-  N_Vector x = N_VNew_Parallel(comm, membrane::LocalLength(s), kN, ctx);
+  N_Vector x = N_VNew_Parallel(comm, membrane::LocalLength(s), g.Size(), ctx);
   ParallelResult r;
   r.flag = Integrate(x, &s, c, true);
   MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
@@ -103,11 +107,11 @@ ParallelResult ParallelRun(const Case& c, bool exchange) {
   std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
   for (int q = 0; q < size; ++q) {
     int row0 = 0, nrows = 0;
-    membrane::RowRange(kNy, size, q, &row0, &nrows);
-    counts[q] = nrows * kNx;
-    displs[q] = row0 * kNx;
+    membrane::RowRange(g.ny, size, q, &row0, &nrows);
+    counts[q] = nrows * g.nx;
+    displs[q] = row0 * g.nx;
   }
-  if (rank == 0) r.x.resize(kN);
+  if (rank == 0) r.x.resize(static_cast<size_t>(g.Size()));
   MPI_Gatherv(N_VGetArrayPointer(x), static_cast<int>(membrane::LocalLength(s)), MPI_DOUBLE,
               r.x.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, comm);
   N_VDestroy(x);
@@ -153,7 +157,7 @@ TEST_P(MembraneOnRanks, GivesTheSerialNumbersBitForBit) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size > 1) EXPECT_GT(par.exchanges, 0) << "no halo was exchanged: the test would be vacuous";
-  EXPECT_EQ(BitwiseDifferences(serial, par.x), 0) << "of " << kN << " entries";
+  EXPECT_EQ(BitwiseDifferences(serial, par.x), 0) << "of " << kGrid.Size() << " entries";
 }
 
 TEST_P(MembraneOnRanks, FusedAndGenericSerialKernelsAgreeBitForBit) {
@@ -162,7 +166,7 @@ TEST_P(MembraneOnRanks, FusedAndGenericSerialKernelsAgreeBitForBit) {
     fused = SerialRun(GetParam(), true);
     generic = SerialRun(GetParam(), false);
   }
-  EXPECT_EQ(BitwiseDifferences(fused, generic), 0) << "of " << kN << " entries";
+  EXPECT_EQ(BitwiseDifferences(fused, generic), 0) << "of " << kGrid.Size() << " entries";
 }
 
 INSTANTIATE_TEST_SUITE_P(Sets, MembraneOnRanks,
@@ -170,6 +174,18 @@ INSTANTIATE_TEST_SUITE_P(Sets, MembraneOnRanks,
                                          Case{"G5_TOP", false}, Case{"G6_O6", false},
                                          Case{"G4_A34", true}),
                          CaseName);
+
+// Fewer grid rows than ranks: the ranks past the last row own nothing and take no part in the halo
+// exchange (on 2 ranks every rank owns a row; the case bites on 3).
+TEST(MembraneOnRanksEdgeCase, WithMoreRanksThanRowsGivesTheSerialNumbers) {
+  const Case c{"G4_A34", false};
+  const Grid thin{9, 2};
+  const std::vector<double> serial =
+      OnRankZero() ? SerialRun(c, true, thin) : std::vector<double>{};
+  const ParallelResult par = ParallelRun(c, true, thin);
+  ASSERT_EQ(par.flag, CE_SUCCESS);
+  EXPECT_EQ(BitwiseDifferences(serial, par.x), 0) << "of " << thin.Size() << " entries";
+}
 
 // Negative control: with the halo rows never exchanged (stale zeros), the strips' edge rows see
 // a fixed edge that is not there, and the comparison must notice.
