@@ -1,0 +1,493 @@
+// CEODE on NVECTOR_PARALLEL (issue 11, docs/mpi.md): the membrane of bench/mpi_membrane_model.h
+// (5-point Laplacian, lumped unit masses, fixed edges; N = nx * ny DOF) with its rows split into
+// one strip per rank and a halo exchange inside f, against the same problem on one
+// NVECTOR_SERIAL vector.
+//
+// In one run (mpiexec -n 2), side by side and interleaved repetition by repetition:
+//   serial  NVECTOR_SERIAL, the whole grid on rank 0 (CEODE's fused serial kernel);
+//   1 rank  NVECTOR_PARALLEL on MPI_COMM_SELF, the whole grid on rank 0 (the generic path);
+//   P ranks NVECTOR_PARALLEL on MPI_COMM_WORLD, one strip per rank;
+// while one configuration runs, the ranks it does not use sleep (no busy polling), so a
+// 1-rank timing is not slowed by an idle rank spinning on the second core.
+// Time per step is the fastest repetition's (the slowest rank's) wall time over the timed
+// steps; the speedup is 1-rank time over P-rank time. The guard's start-up check and the first
+// steps are outside the timed interval.
+//
+// Checks (exit code 1 when one fails; never on a timing): the gathered P-rank state and the
+// 1-rank state are bitwise equal to the serial state; for G3_CD the serial state matches the exact
+// solution of the central-difference recurrence on the two excited modes (x_n = cos(n theta)
+// x_0 with cos(theta) = 1 - (omega h)^2 / 2) to 1e-9 relative; other sets are held to 1e-3
+// against the exact ODE solution.
+//
+//   mpiexec -n 2 mpi_membrane [--n N] [--steps S] [--reps R] [--method NAME] [--csv FILE]
+//   mpiexec -n 2 mpi_membrane --quick        (N = 10^4, 100 steps, 1 repetition: ctest)
+//   ... --only serial|one|many                 (that configuration alone, for a profiler; no
+//   checks)
+// Defaults: N = 10^6 (1000 x 1000), 300 steps, 3 repetitions, G3_CD at 0.9 of its limit.
+#include <ceode/ceode.h>
+#include <ceode/ceode_stability.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "ceode_sundials_compat.h"
+#include "mpi_membrane_model.h"
+
+// CEODE's global reductions (every norm or dot product on NVECTOR_PARALLEL is an MPI_Allreduce),
+// counted through MPI's profiling interface so that the report can state them per step. A global
+// because that interface passes no user pointer.
+long g_allreduce_calls = 0;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+extern "C" int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type,
+                             MPI_Op op, MPI_Comm comm) {
+  ++g_allreduce_calls;
+  return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
+}
+
+namespace {
+
+struct Options {
+  long n = 1000000;
+  long steps = 300;
+  int reps = 3;
+  std::string method = "G3_CD";
+  std::string csv;
+  double h_factor = 0.9;
+  bool quick = false;
+  std::string only;  // "serial", "one" or "many": that configuration alone (profiling, no checks)
+};
+
+bool ParseArgs(int argc, char** argv, Options* o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool more = i + 1 < argc;
+    if (a == "--quick") {
+      o->quick = true;
+      o->n = 10000;
+      o->steps = 100;
+      o->reps = 1;
+    } else if (a == "--n" && more) {
+      o->n = std::atol(argv[++i]);
+    } else if (a == "--steps" && more) {
+      o->steps = std::atol(argv[++i]);
+    } else if (a == "--reps" && more) {
+      o->reps = std::atoi(argv[++i]);
+    } else if (a == "--method" && more) {
+      o->method = argv[++i];
+    } else if (a == "--only" && more) {
+      o->only = argv[++i];
+    } else if (a == "--csv" && more) {
+      o->csv = argv[++i];
+    } else {
+      return false;
+    }
+  }
+  const bool only_ok =
+      o->only.empty() || o->only == "serial" || o->only == "one" || o->only == "many";
+  return o->n >= 4 && o->steps >= 4 && o->reps >= 1 && only_ok;
+}
+
+// All ranks of comm meet here without spinning: a rank that waits for a long computation on
+// another rank sleeps 0.2 ms between tests instead of busy-polling a core.
+void SleepyBarrier(MPI_Comm comm) {
+  MPI_Request req;
+  MPI_Ibarrier(comm, &req);
+  int done = 0;
+  const timespec pause{0, 200000};
+  for (MPI_Test(&req, &done, MPI_STATUS_IGNORE); !done; MPI_Test(&req, &done, MPI_STATUS_IGNORE)) {
+    nanosleep(&pause, nullptr);
+  }
+}
+
+struct Timing {
+  int flag = CE_SUCCESS;
+  double seconds = 0;  // the slowest rank's wall time over the timed steps
+  double cpu = 0;      // the slowest rank's CPU time (less sensitive to a loaded machine)
+  long timed_steps = 0;
+  long allreduces = 0;        // MPI_Allreduce calls in the timed steps (this rank)
+  long exchanges = 0;         // halo exchanges in the timed steps (this rank)
+  long start_allreduces = 0;  // ... in CEODE's start, the guard's check and the first steps
+  long start_exchanges = 0;
+};
+
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+constexpr long kWarmSteps = 2;  // the start (and the guard's check) happen here, untimed
+
+// A CEODE memory for the membrane on x, v (either vector kind), at the initial state.
+void* CreateSolver(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, double h) {
+  membrane::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
+  void* mem = CEodeCreate(x->sunctx);
+  int flag = mem == nullptr ? CE_MEM_FAIL : CEodeInit(mem, membrane::Rhs, 0, x, v);
+  if (flag == CE_SUCCESS) flag = CEodeSetMethodByName(mem, o.method.c_str());
+  if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, h);
+  if (flag == CE_SUCCESS) flag = CEodeSetUserData(mem, s);
+  if (flag == CE_SUCCESS) flag = CEodeSetMaxNumSteps(mem, o.steps + 10);
+  if (flag != CE_SUCCESS) CEodeFree(&mem);
+  return mem;
+}
+
+// Integrates the membrane to steps * h; the state ends in x.
+Timing Integrate(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, double h,
+                 MPI_Comm timing_comm) {
+  Timing tm;
+  const long red_start = g_allreduce_calls;
+  const long exch_start = s->nexchange;
+  void* mem = CreateSolver(x, v, s, o, h);
+  int flag = mem == nullptr ? CE_ILL_INPUT : CE_SUCCESS;
+  sunrealtype t = 0;
+  if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, kWarmSteps * h, x, v, &t, CE_NORMAL);
+  const long red0 = g_allreduce_calls;
+  const long exch0 = s->nexchange;
+  tm.start_allreduces = red0 - red_start;
+  tm.start_exchanges = exch0 - exch_start;
+  MPI_Barrier(timing_comm);
+  const double t0 = MPI_Wtime();
+  const double c0 = CpuSeconds();
+  if (flag == CE_SUCCESS) {
+    flag = CEodeEvolve(mem, static_cast<double>(o.steps) * h, x, v, &t, CE_NORMAL);
+  }
+  double dt[2] = {MPI_Wtime() - t0, CpuSeconds() - c0};
+  tm.allreduces = g_allreduce_calls - red0;
+  tm.exchanges = s->nexchange - exch0;
+  MPI_Allreduce(MPI_IN_PLACE, dt, 2, MPI_DOUBLE, MPI_MAX, timing_comm);
+  MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MIN, timing_comm);
+  tm.flag = flag;
+  tm.seconds = dt[0];
+  tm.cpu = dt[1];
+  tm.timed_steps = o.steps - kWarmSteps;
+  CEodeFree(&mem);
+  return tm;
+}
+
+// The step: h_factor times the set's stability limit Omega_max / omega_max (exact omega_max).
+double StepSize(const Options& o, const membrane::Strip& s) {
+  int degree = 0;
+  sunrealtype params[16];
+  sunrealtype Omega = 0;
+  if (CEodeGetMethodParams(o.method.c_str(), &degree, params, 16) != CE_SUCCESS ||
+      CEodeStabilityLimit(degree, params, 0, &Omega) != CE_SUCCESS || Omega <= 0) {
+    return -1;
+  }
+  return o.h_factor * Omega / membrane::OmegaMax(s);
+}
+
+// The exact solution at t = steps * h: of the central-difference recurrence (discrete = true)
+// or of the ODE; its largest deviation from x (the whole grid), relative to the amplitude.
+double SolutionError(const membrane::Strip& s, const double* x, long steps, double h,
+                     bool discrete) {
+  const auto modes = membrane::InitialModes(s);
+  std::vector<double> factor;
+  double amp = 0;
+  for (const auto& m : modes) {
+    const double w = membrane::Omega(s, m);
+    const double theta = std::acos(1 - 0.5 * (w * h) * (w * h));
+    factor.push_back(m.amplitude * (discrete ? std::cos(steps * theta) : std::cos(w * steps * h)));
+    amp += std::fabs(m.amplitude);
+  }
+  double err = 0;
+  for (int i = 0; i < s.ny; ++i) {
+    for (int j = 0; j < s.nx; ++j) {
+      double e = 0;
+      for (size_t k = 0; k < modes.size(); ++k) e += factor[k] * membrane::Phi(s, modes[k], i, j);
+      err = std::max(err, std::fabs(x[static_cast<long>(i) * s.nx + j] - e));
+    }
+  }
+  return err / amp;
+}
+
+struct Compare {
+  long ndiff = 0;
+  double maxdiff = 0;
+};
+
+uint64_t Bits(double d) {
+  uint64_t u = 0;
+  std::memcpy(&u, &d, sizeof u);
+  return u;
+}
+
+// Bitwise comparison (so -0 and +0 differ, a NaN never matches), and the largest |a - b|.
+Compare Diff(const double* a, const double* b, long n) {
+  Compare c;
+  for (long i = 0; i < n; ++i) {
+    if (Bits(a[i]) != Bits(b[i])) ++c.ndiff;
+    const double d = std::fabs(a[i] - b[i]);
+    if (!(d <= c.maxdiff)) c.maxdiff = d;
+  }
+  return c;
+}
+
+// One configuration's repetitions (seconds per step) and its last run's flag.
+struct Config {
+  std::string name;
+  int ranks = 1;
+  std::vector<double> per_step;      // wall time
+  std::vector<double> cpu_per_step;  // CPU time
+  int flag = CE_SUCCESS;
+  double allreduces_per_step = 0;  // rank 0's, last repetition
+  double exchanges_per_step = 0;
+  long start_allreduces = 0;
+  long start_exchanges = 0;
+  double Best() const { return *std::min_element(per_step.begin(), per_step.end()); }
+  double BestCpu() const { return *std::min_element(cpu_per_step.begin(), cpu_per_step.end()); }
+};
+
+void Record(Config* c, const Timing& tm) {
+  c->flag = tm.flag != CE_SUCCESS ? tm.flag : c->flag;
+  const auto steps = static_cast<double>(tm.timed_steps);
+  c->per_step.push_back(tm.seconds / steps);
+  c->cpu_per_step.push_back(tm.cpu / steps);
+  c->allreduces_per_step = static_cast<double>(tm.allreduces) / steps;
+  c->exchanges_per_step = static_cast<double>(tm.exchanges) / steps;
+  c->start_allreduces = tm.start_allreduces;
+  c->start_exchanges = tm.start_exchanges;
+}
+
+std::string LoadAverage() {
+  std::string text = "?";
+  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
+    char buf[128] = {0};
+    if (std::fgets(buf, sizeof buf, f) != nullptr) text = std::string(buf, std::strcspn(buf, "\n"));
+    std::fclose(f);
+  }
+  return text;
+}
+
+// Everything one rank owns: the strips and vectors of the three configurations.
+struct Problem {
+  membrane::Strip whole;  // the serial and the 1-rank runs (rank 0)
+  membrane::Strip self;
+  membrane::Strip world;  // one strip per rank
+  SUNContext ctx_serial = nullptr;
+  SUNContext ctx_self = nullptr;
+  SUNContext ctx_world = nullptr;
+  N_Vector xs = nullptr, vs = nullptr, x1 = nullptr, v1 = nullptr, xp = nullptr, vp = nullptr;
+};
+
+void Setup(Problem* p, int nx, int ny, int rank, int size) {
+  MPI_Comm world = MPI_COMM_WORLD;
+  MPI_Comm self = MPI_COMM_SELF;
+  p->whole = membrane::MakeStrip(MPI_COMM_NULL, nx, ny);
+  p->self = membrane::MakeStrip(self, nx, ny);
+  p->world = membrane::MakeStrip(world, nx, ny);
+  const long n = static_cast<long>(nx) * ny;
+  if (SUNContext_Create(CEODE_SUN_COMM_ARG(world), &p->ctx_world) != 0) MPI_Abort(world, 1);
+  if (size > 1) {
+    p->xp = N_VNew_Parallel(world, membrane::LocalLength(p->world), n, p->ctx_world);
+    p->vp = N_VClone(p->xp);
+  }
+  if (rank != 0) return;
+  if (SUNContext_Create(SUN_COMM_NULL, &p->ctx_serial) != 0) MPI_Abort(world, 1);
+  if (SUNContext_Create(CEODE_SUN_COMM_ARG(self), &p->ctx_self) != 0) MPI_Abort(world, 1);
+  p->xs = N_VNew_Serial(n, p->ctx_serial);
+  p->vs = N_VClone(p->xs);
+  p->x1 = N_VNew_Parallel(self, n, n, p->ctx_self);
+  p->v1 = N_VClone(p->x1);
+}
+
+void Teardown(Problem* p) {
+  for (N_Vector* v : {&p->xs, &p->vs, &p->x1, &p->v1, &p->xp, &p->vp}) {
+    if (*v != nullptr) N_VDestroy(*v);
+  }
+  for (SUNContext* c : {&p->ctx_serial, &p->ctx_self, &p->ctx_world}) {
+    if (*c != nullptr) SUNContext_Free(c);
+  }
+}
+
+// The repetitions, interleaved so that a change of machine load hits every configuration.
+std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, int size) {
+  std::vector<Config> cfg(size > 1 ? 3 : 2);
+  cfg[0].name = "serial";
+  cfg[1].name = "parallel";
+  if (size > 1) {
+    cfg[2].name = "parallel";
+    cfg[2].ranks = size;
+  }
+  const auto run = [&o](const char* name) { return o.only.empty() || o.only == name; };
+  for (int r = 0; r < o.reps; ++r) {
+    if (rank == 0 && run("serial")) {
+      Record(&cfg[0], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
+    }
+    SleepyBarrier(MPI_COMM_WORLD);
+    if (rank == 0 && run("one")) {
+      Record(&cfg[1], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
+    }
+    SleepyBarrier(MPI_COMM_WORLD);
+    if (size > 1 && run("many")) {
+      Record(&cfg[2], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+    }
+  }
+  return cfg;
+}
+
+// The P-rank state on rank 0, in global order (the strips are contiguous blocks).
+std::vector<double> Gather(const Problem& p, int rank, int size) {
+  std::vector<double> all;
+  if (size == 1) return all;
+  std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+  for (int r = 0; r < size; ++r) {
+    int row0 = 0, nrows = 0;
+    membrane::RowRange(p.world.ny, size, r, &row0, &nrows);
+    counts[r] = nrows * p.world.nx;
+    displs[r] = row0 * p.world.nx;
+  }
+  if (rank == 0) all.resize(static_cast<size_t>(p.world.nx) * p.world.ny);
+  MPI_Gatherv(N_VGetArrayPointer(p.xp), static_cast<int>(membrane::LocalLength(p.world)),
+              MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  return all;
+}
+
+}  // namespace
+
+namespace {
+
+struct Verdict {
+  bool ok = true;
+  Compare one;   // 1 rank against serial
+  Compare many;  // P ranks against serial
+  double error = 0;
+  bool discrete = false;
+};
+
+// Rank 0: bitwise equality of the parallel states with the serial one, and the accuracy check.
+Verdict Check(const Problem& p, const std::vector<double>& gathered, const Options& o, double h,
+              const std::vector<Config>& cfg) {
+  Verdict v;
+  const long n = static_cast<long>(p.whole.nx) * p.whole.ny;
+  const double* xs = N_VGetArrayPointer(p.xs);
+  v.one = Diff(xs, N_VGetArrayPointer(p.x1), n);
+  if (!gathered.empty()) v.many = Diff(xs, gathered.data(), n);
+  v.discrete = o.method == "G3_CD";
+  v.error = SolutionError(p.whole, xs, o.steps, h, v.discrete);
+  const double tol = v.discrete ? 1e-9 : 1e-3;
+  for (const Config& c : cfg) v.ok = v.ok && c.flag == CE_SUCCESS;
+  v.ok = v.ok && v.one.ndiff == 0 && v.many.ndiff == 0 && v.error <= tol;
+  return v;
+}
+
+void Table(const std::vector<Config>& cfg, long n, int size) {
+  std::printf("%-10s %5s %10s %14s %12s  %s\n", "vector", "ranks", "ms/step", "ns/(DOF step)",
+              "CPU ms/step", "repetitions (wall ms/step)");
+  for (const Config& c : cfg) {
+    std::string reps;
+    for (double s : c.per_step) reps += " " + std::to_string(s * 1e3).substr(0, 7);
+    std::printf("%-10s %5d %10.4f %14.3f %12.4f %s\n", c.name.c_str(), c.ranks, c.Best() * 1e3,
+                c.Best() * 1e9 / static_cast<double>(n), c.BestCpu() * 1e3, reps.c_str());
+  }
+  if (size == 1) return;
+  std::printf(
+      "communication per step on %d ranks: %.3g MPI_Allreduce (CEODE's norms), %.3g "
+      "halo exchanges (f); before the timed steps (CEODE's start, the guard's check, %ld "
+      "steps): %ld MPI_Allreduce, %ld halo exchanges\n",
+      size, cfg[2].allreduces_per_step, cfg[2].exchanges_per_step, kWarmSteps,
+      cfg[2].start_allreduces, cfg[2].start_exchanges);
+  std::printf(
+      "speedup 1 -> %d ranks (NVECTOR_PARALLEL): %.3f wall, %.3f CPU time of the slowest "
+      "rank (target >= 1.6 wall at N = 10^6 on 2 ranks; a timing, not a check)\n",
+      size, cfg[1].Best() / cfg[2].Best(), cfg[1].BestCpu() / cfg[2].BestCpu());
+}
+
+void Report(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg,
+            const Verdict& v, const std::string& load0, int size) {
+  const long n = static_cast<long>(p.whole.nx) * p.whole.ny;
+  std::printf(
+      "membrane on NVECTOR_PARALLEL: N = %ld (%d x %d), %s at h = %.6g (%.2f of the "
+      "limit), %ld timed steps, best of %d; %d MPI ranks\n",
+      n, p.whole.nx, p.whole.ny, o.method.c_str(), h, o.h_factor, o.steps - kWarmSteps, o.reps,
+      size);
+  Table(cfg, n, size);
+  std::printf("bitwise: 1 rank vs serial: %ld of %ld entries differ (max |diff| %.3g)", v.one.ndiff,
+              n, v.one.maxdiff);
+  if (size > 1) {
+    std::printf("; %d ranks vs serial: %ld differ (max |diff| %.3g)", size, v.many.ndiff,
+                v.many.maxdiff);
+  }
+  std::printf(
+      "\naccuracy: max |x - exact| / amplitude = %.3e against the exact %s solution "
+      "(tolerance %g)\n",
+      v.error, v.discrete ? "central-difference" : "ODE", v.discrete ? 1e-9 : 1e-3);
+  std::printf("load average (1/5/15 min, running/total): %s at the start, %s at the end\n",
+              load0.c_str(), LoadAverage().c_str());
+  std::printf("checks: %s\n", v.ok ? "passed" : "FAILED");
+}
+
+// --only: the one configuration's figures (under a profiler), no comparison to check.
+void ReportOnly(const std::vector<Config>& cfg) {
+  for (const Config& c : cfg) {
+    if (c.per_step.empty()) continue;
+    std::printf(
+        "%s on %d rank(s) only: %.4f ms/step wall, %.4f CPU; %.3g MPI_Allreduce and %.3g "
+        "halo exchanges per step; checks skipped (--only)\n",
+        c.name.c_str(), c.ranks, c.Best() * 1e3, c.BestCpu() * 1e3, c.allreduces_per_step,
+        c.exchanges_per_step);
+  }
+}
+
+void WriteCsv(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg) {
+  FILE* f = std::fopen(o.csv.c_str(), "w");
+  if (f == nullptr) return;
+  std::fprintf(
+      f, "vector,ranks,n,nx,ny,method,h,timed_steps,rep,seconds_per_step,cpu_seconds_per_step\n");
+  for (const Config& c : cfg) {
+    for (size_t r = 0; r < c.per_step.size(); ++r) {
+      std::fprintf(f, "%s,%d,%ld,%d,%d,%s,%.9g,%ld,%zu,%.6e,%.6e\n", c.name.c_str(), c.ranks,
+                   static_cast<long>(p.whole.nx) * p.whole.ny, p.whole.nx, p.whole.ny,
+                   o.method.c_str(), h, o.steps - kWarmSteps, r, c.per_step[r], c.cpu_per_step[r]);
+    }
+  }
+  std::fclose(f);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  Options o;
+  if (!ParseArgs(argc, argv, &o)) {
+    if (rank == 0) {
+      std::fprintf(stderr,
+                   "usage: mpiexec -n P mpi_membrane [--quick] [--n N] [--steps S] "
+                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many]\n");
+    }
+    MPI_Finalize();
+    return 2;
+  }
+  const std::string load0 = LoadAverage();
+  const int side = static_cast<int>(std::lround(std::sqrt(static_cast<double>(o.n))));
+  Problem p;
+  Setup(&p, side, side, rank, size);
+  const double h = StepSize(o, p.whole);
+  int bad = h > 0 ? 0 : 1;
+  if (bad == 0) {
+    const std::vector<Config> cfg = Measure(&p, o, h, rank, size);
+    const std::vector<double> gathered = Gather(p, rank, size);
+    if (rank == 0 && !o.only.empty()) {
+      ReportOnly(cfg);
+    } else if (rank == 0) {
+      const Verdict v = Check(p, gathered, o, h, cfg);
+      Report(o, p, h, cfg, v, load0, size);
+      if (!o.csv.empty()) WriteCsv(o, p, h, cfg);
+      bad = v.ok ? 0 : 1;
+    }
+  } else if (rank == 0) {
+    std::fprintf(stderr, "unknown method %s or no stability limit\n", o.method.c_str());
+  }
+  MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  Teardown(&p);
+  MPI_Finalize();
+  return bad;
+}

@@ -1,0 +1,218 @@
+// The membrane of bench/mpi_membrane_model.h (5-point Laplacian, lumped unit masses) with its
+// rows split into strips over the MPI ranks and a halo exchange in f: CEODE on NVECTOR_PARALLEL
+// must reproduce the NVECTOR_SERIAL run to the bit, with the fused serial kernel and with the
+// generic N_Vector path.
+//
+// Grid 37 x 23 (23 rows: uneven strips on 2 and 3 ranks, and on 3 ranks a middle strip with two
+// neighbours), 200 steps at 0.9 of each set's stability limit, the two modes of
+// InitialModes; and a 9 x 2 grid, on 3 ranks one without rows. Reference: the serial run of the same
+// program (no reference file: the claim is equality). A negative control shows the comparison
+// notices a wrong halo.
+//
+// One GoogleTest program run by every rank (mpiexec -n 2 / -n 3); the tests are collective.
+#include <ceode/ceode.h>
+#include <ceode/ceode_stability.h>
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "ceode_sundials_compat.h"
+#include "mpi_membrane_model.h"
+
+namespace {
+
+struct Grid {
+  int nx;
+  int ny;
+  long Size() const { return static_cast<long>(nx) * ny; }
+};
+constexpr Grid kGrid{37, 23};
+constexpr long kSteps = 200;
+
+struct Case {
+  const char* method;
+  bool compensated;
+};
+
+std::string CaseName(const testing::TestParamInfo<Case>& info) {
+  return std::string(info.param.method) + (info.param.compensated ? "_compensated" : "");
+}
+
+double StepSize(const char* method, const membrane::Strip& s) {
+  int degree = 0;
+  sunrealtype params[16];
+  sunrealtype Omega = 0;
+  EXPECT_EQ(CEodeGetMethodParams(method, &degree, params, 16), CE_SUCCESS);
+  EXPECT_EQ(CEodeStabilityLimit(degree, params, 0, &Omega), CE_SUCCESS);
+  return 0.9 * Omega / membrane::OmegaMax(s);
+}
+
+// Integrates kSteps steps on x (either vector kind); returns CEODE's flag.
+int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused) {
+  N_Vector v = N_VClone(x);
+  membrane::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
+  const double h = StepSize(c.method, *s);
+  void* mem = CEodeCreate(x->sunctx);
+  int flag = CEodeInit(mem, membrane::Rhs, 0, x, v);
+  if (flag == CE_SUCCESS) flag = CEodeSetMethodByName(mem, c.method);
+  if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, h);
+  if (flag == CE_SUCCESS) flag = CEodeSetUserData(mem, s);
+  if (flag == CE_SUCCESS) flag = CEodeSetCompensatedSummation(mem, c.compensated ? 1 : 0);
+  if (flag == CE_SUCCESS) flag = CEodeSetFusedKernel(mem, fused ? 1 : 0);
+  sunrealtype t = 0;
+  if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, kSteps * h, x, v, &t, CE_NORMAL);
+  CEodeFree(&mem);
+  N_VDestroy(v);
+  return flag;
+}
+
+// The serial reference on one rank, the whole grid on NVECTOR_SERIAL.
+std::vector<double> SerialRun(const Case& c, bool fused, Grid g = kGrid) {
+  SUNContext ctx = nullptr;
+  EXPECT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx), 0);
+  membrane::Strip s = membrane::MakeStrip(MPI_COMM_NULL, g.nx, g.ny);
+  N_Vector x = N_VNew_Serial(g.Size(), ctx);
+  EXPECT_EQ(Integrate(x, &s, c, fused), CE_SUCCESS);
+  const double* d = N_VGetArrayPointer(x);
+  std::vector<double> out(d, d + g.Size());
+  N_VDestroy(x);
+  SUNContext_Free(&ctx);
+  return out;
+}
+
+struct ParallelResult {
+  std::vector<double> x;  // gathered on rank 0
+  int flag = CE_SUCCESS;  // the worst rank's
+  long exchanges = 0;     // halo exchanges summed over the ranks
+};
+
+// Every rank: its strip on NVECTOR_PARALLEL over MPI_COMM_WORLD; the state gathered on rank 0.
+ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid) {
+  MPI_Comm comm = MPI_COMM_WORLD;
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  SUNContext ctx = nullptr;
+  EXPECT_EQ(SUNContext_Create(CEODE_SUN_COMM_ARG(comm), &ctx), 0);
+  membrane::Strip s = membrane::MakeStrip(comm, g.nx, g.ny);
+  s.exchange = exchange;
+  N_Vector x = N_VNew_Parallel(comm, membrane::LocalLength(s), g.Size(), ctx);
+  ParallelResult r;
+  r.flag = Integrate(x, &s, c, true);
+  MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
+  MPI_Allreduce(&s.nexchange, &r.exchanges, 1, MPI_LONG, MPI_SUM, comm);
+  std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+  for (int q = 0; q < size; ++q) {
+    int row0 = 0, nrows = 0;
+    membrane::RowRange(g.ny, size, q, &row0, &nrows);
+    counts[q] = nrows * g.nx;
+    displs[q] = row0 * g.nx;
+  }
+  if (rank == 0) r.x.resize(static_cast<size_t>(g.Size()));
+  MPI_Gatherv(N_VGetArrayPointer(x), static_cast<int>(membrane::LocalLength(s)), MPI_DOUBLE,
+              r.x.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, comm);
+  N_VDestroy(x);
+  SUNContext_Free(&ctx);
+  return r;
+}
+
+// The bit pattern (so that -0 and +0 differ and a NaN never matches itself).
+uint64_t Bits(double d) {
+  uint64_t u = 0;
+  std::memcpy(&u, &d, sizeof u);
+  return u;
+}
+
+// Entries whose bits differ (rank 0's count, broadcast so that every rank asserts the same).
+long BitwiseDifferences(const std::vector<double>& a, const std::vector<double>& b) {
+  long n = 0;
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) {
+    n = a.size() == b.size() ? 0 : -1;
+    for (size_t i = 0; n >= 0 && i < a.size(); ++i) {
+      if (Bits(a[i]) != Bits(b[i])) ++n;
+    }
+  }
+  MPI_Bcast(&n, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  return n;
+}
+
+bool OnRankZero() {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank == 0;
+}
+
+class MembraneOnRanks : public testing::TestWithParam<Case> {};
+
+TEST_P(MembraneOnRanks, GivesTheSerialNumbersBitForBit) {
+  const std::vector<double> serial =
+      OnRankZero() ? SerialRun(GetParam(), true) : std::vector<double>{};
+  const ParallelResult par = ParallelRun(GetParam(), true);
+  ASSERT_EQ(par.flag, CE_SUCCESS);
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size > 1) EXPECT_GT(par.exchanges, 0) << "no halo was exchanged: the test would be vacuous";
+  EXPECT_EQ(BitwiseDifferences(serial, par.x), 0) << "of " << kGrid.Size() << " entries";
+}
+
+TEST_P(MembraneOnRanks, FusedAndGenericSerialKernelsAgreeBitForBit) {
+  std::vector<double> fused, generic;
+  if (OnRankZero()) {
+    fused = SerialRun(GetParam(), true);
+    generic = SerialRun(GetParam(), false);
+  }
+  EXPECT_EQ(BitwiseDifferences(fused, generic), 0) << "of " << kGrid.Size() << " entries";
+}
+
+INSTANTIATE_TEST_SUITE_P(Sets, MembraneOnRanks,
+                         testing::Values(Case{"G3_CD", false}, Case{"G4_A34", false},
+                                         Case{"G5_TOP", false}, Case{"G6_O6", false},
+                                         Case{"G4_A34", true}),
+                         CaseName);
+
+// Fewer grid rows than ranks: the ranks past the last row own nothing and take no part in the halo
+// exchange (on 2 ranks every rank owns a row; the case bites on 3).
+TEST(MembraneOnRanksEdgeCase, WithMoreRanksThanRowsGivesTheSerialNumbers) {
+  const Case c{"G4_A34", false};
+  const Grid thin{9, 2};
+  const std::vector<double> serial =
+      OnRankZero() ? SerialRun(c, true, thin) : std::vector<double>{};
+  const ParallelResult par = ParallelRun(c, true, thin);
+  ASSERT_EQ(par.flag, CE_SUCCESS);
+  EXPECT_EQ(BitwiseDifferences(serial, par.x), 0) << "of " << thin.Size() << " entries";
+}
+
+// Negative control: with the halo rows never exchanged (stale zeros), the strips' edge rows see
+// a fixed edge that is not there, and the comparison must notice.
+TEST(MembraneOnRanksControl, WithoutTheHaloExchangeDiffersFromSerial) {
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size == 1) GTEST_SKIP() << "one rank has no halo";
+  const Case c{"G3_CD", false};
+  const std::vector<double> serial = OnRankZero() ? SerialRun(c, true) : std::vector<double>{};
+  const ParallelResult par = ParallelRun(c, false);
+  ASSERT_EQ(par.flag, CE_SUCCESS);
+  EXPECT_GT(BitwiseDifferences(serial, par.x), 0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  testing::InitGoogleTest(&argc, argv);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  // one report: the other ranks run the same collective tests silently
+  if (rank != 0)
+    delete testing::UnitTest::GetInstance()->listeners().Release(
+        testing::UnitTest::GetInstance()->listeners().default_result_printer());
+  int failed = RUN_ALL_TESTS() != 0 ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return failed;
+}
