@@ -104,20 +104,26 @@ int RunMri(SUNContext ctx, ARKRhsFn slow, MRIStepInnerStepper inner, N_Vector y,
 
 struct OrderRun {
   double err;
-  long nst, nrestarts, nfe_guard;
+  long nst, nrestarts, nfe_guard, nfe_start;
 };
 
-OrderRun RunProblemA(SUNContext ctx, int nslow) {
+// velocity: declare (unneeded) velocity dependence, which takes the implicit path and so
+// the full consistent start at every restart.
+OrderRun RunProblemA(SUNContext ctx, int nslow, const char* method = "G4_A34",
+                     bool velocity = false) {
   ManyState st(ctx, 2);
   double q, s, p;
   ExactA(0, &q, &s, &p);
   sunrealtype* x = N_VGetArrayPointer(st.x.get());
   sunrealtype* v = N_VGetArrayPointer(st.v.get());
   x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
-  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3);
-  OrderRun r{-1, 0, 0, 0};
+  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3, method);
+  OrderRun r{-1, 0, 0, 0, 0};
   MRIStepInnerStepper raw = nullptr;
-  if (!ce || CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) return r;
+  if (!ce || (velocity && CEodeSetVelocityDependence(ce.get(), SUNTRUE) != CE_SUCCESS) ||
+      CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) {
+    return r;
+  }
   Inner inner(raw);
   if (RunMri(ctx, SlowA, raw, st.y.get(), 2.0, nslow) < 0) return r;
   ExactA(2.0, &q, &s, &p);
@@ -125,6 +131,7 @@ OrderRun RunProblemA(SUNContext ctx, int nslow) {
   CEodeGetNumSteps(ce.get(), &r.nst);
   CEodeGetNumInnerRestarts(ce.get(), &r.nrestarts);
   CEodeGetNumGuardRhsEvals(ce.get(), &r.nfe_guard);
+  CEodeGetNumStartRhsEvals(ce.get(), &r.nfe_start);
   return r;
 }
 
@@ -156,6 +163,37 @@ TEST(MriInnerStepper, AccumulatesCountersOverRestartsAndEstimatesOmegaOnce) {
   // The power iteration ran once: twice the restarts, the same guard cost.
   EXPECT_GT(r40.nfe_guard, 0);
   EXPECT_EQ(r40.nfe_guard, r80.nfe_guard);
+}
+
+// The restart after a stage that ended on the state the next one starts from reuses the end
+// point's g and carries the jerk over (docs/porting.md, "What a restart costs"): G3 sets
+// evaluate nothing, G4 sets one directional difference for the jump of x' (problem A's
+// forcing moves s, so r_x jumps at every stage). Only the first start is a full one.
+TEST(MriInnerStepper, RestartsCostOneEvaluationForG4AndNoneForG3AfterTheFirstStart) {
+  Context ctx;
+  const OrderRun g4 = RunProblemA(ctx, 40, "G4_A34");
+  ASSERT_GT(g4.err, 0);
+  ASSERT_EQ(g4.nrestarts, 120);
+  EXPECT_EQ(g4.nfe_start, 3 + (g4.nrestarts - 1));
+  const OrderRun g3 = RunProblemA(ctx, 40, "G3_CD");
+  ASSERT_GT(g3.err, 0);
+  ASSERT_EQ(g3.nrestarts, 120);
+  EXPECT_EQ(g3.nfe_start, 1);
+}
+
+// The carried-over history is as good as a full start: the same MRI errors (to 1 %) as the
+// full consistent start that the implicit path takes at every restart (3 evaluations each).
+TEST(MriInnerStepper, CheapRestartsGiveTheErrorsOfFullRestarts) {
+  Context ctx;
+  for (int nslow : {40, 160}) {
+    const OrderRun cheap = RunProblemA(ctx, nslow, "G4_A34");
+    const OrderRun full = RunProblemA(ctx, nslow, "G4_A34", true);
+    ASSERT_GT(cheap.err, 0);
+    ASSERT_GT(full.err, 0);
+    EXPECT_EQ(full.nfe_start, 3 * full.nrestarts);
+    EXPECT_LT(cheap.nfe_start, full.nfe_start / 2);
+    EXPECT_NEAR(cheap.err, full.err, 0.01 * full.err) << nslow << " slow steps";
+  }
 }
 
 // Problem B: forcing on both halves and a velocity-dependent fast part,
