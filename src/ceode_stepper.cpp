@@ -180,6 +180,10 @@ void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealt
 
 // out = r_x(t).
 void ForcingX(const Stepper* st, sunrealtype t, N_Vector out) {
+  if (st->nforcing == 0) {  // N_VLinearCombination needs at least one vector
+    N_VConst(0, out);
+    return;
+  }
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
   N_VLinearCombination(st->nforcing, val, const_cast<N_Vector*>(st->Fx), out);
