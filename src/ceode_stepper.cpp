@@ -314,11 +314,12 @@ int StepperReset(Stepper* st, sunrealtype tR, N_Vector yR, const char* func) {
                         "The state vector changed type since the first call (serial vs "
                         "ManyVector): pass the same kind of vector every time.");
   }
-  // A reset to the state the stepper already stands on (MRIStep does this at every stage) keeps
-  // what the next restart may reuse; any other state drops it.
+  // A reset to the state the stepper already stands on (MRIStep does this at every stage; the
+  // time may differ by rounding) keeps what the next restart may reuse; any other state drops it.
   if (st->end_valid) {
     N_VLinearSum(1, yR, -1, st->y_own, st->ytmp);
-    st->end_valid = tR == st->t_own && N_VMaxNorm(st->ytmp) == 0;
+    const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(tR) + std::fabs(st->t_own));
+    st->end_valid = std::fabs(tR - st->t_own) <= tol && N_VMaxNorm(st->ytmp) == 0;
   }
   N_VScale(1, yR, st->y_own);
   st->t_own = tR;

@@ -181,6 +181,46 @@ TEST(MriInnerStepper, RestartsCostOneEvaluationForG4AndNoneForG3AfterTheFirstSta
   EXPECT_EQ(g3.nfe_start, 1);
 }
 
+// A reset to another state (here MRIStepReset halfway with v moved by 1e-6) cannot reuse the
+// end of the last inner integration: that one restart is a full one (3 evaluations for G4_A34),
+// a reset to the very state the stepper stands on changes nothing.
+long StartEvalsWithAResetHalfway(SUNContext ctx, double dv) {
+  ManyState st(ctx, 2);
+  double q, s, p;
+  ExactA(0, &q, &s, &p);
+  sunrealtype* x = N_VGetArrayPointer(st.x.get());
+  sunrealtype* v = N_VGetArrayPointer(st.v.get());
+  x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
+  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3);
+  MRIStepInnerStepper raw = nullptr;
+  if (!ce || CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) return -1;
+  Inner inner(raw);
+  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowA, nullptr, 0, st.y.get(), raw, ctx));
+  MRIStepCoupling C = MRIStepCoupling_LoadTable(ARKODE_MRI_GARK_ERK33a);
+  int flag = mri ? MRIStepSetCoupling(mri.get(), C) : -1;
+  MRIStepCoupling_Free(C);
+  if (flag == 0) flag = MRIStepSetFixedStep(mri.get(), 0.05);
+  if (flag == 0) flag = MRIStepSetStopTime(mri.get(), 1.0);  // no interpolated output at t = 1
+  sunrealtype t = 0;
+  if (flag == 0) flag = MRIStepEvolve(mri.get(), 1.0, st.y.get(), &t, ARK_NORMAL);
+  if (flag == ARK_TSTOP_RETURN) flag = 0;  // SUNDIALS 7 says it stopped at tstop
+  v[0] += dv;
+  if (flag == 0) flag = MRIStepReset(mri.get(), t, st.y.get());
+  if (flag == 0) flag = MRIStepEvolve(mri.get(), 2.0, st.y.get(), &t, ARK_NORMAL);
+  long nfe_start = -1;
+  if (flag == 0) CEodeGetNumStartRhsEvals(ce.get(), &nfe_start);
+  return nfe_start;
+}
+
+TEST(MriInnerStepper, AResetToAnotherStateRestartsInFull) {
+  Context ctx;
+  const long same = StartEvalsWithAResetHalfway(ctx, 0.0);
+  const long moved = StartEvalsWithAResetHalfway(ctx, 1e-6);
+  ASSERT_GT(same, 0);
+  EXPECT_EQ(same, 3 + 119);  // 120 restarts, only the first one full
+  EXPECT_EQ(moved, same + 2);
+}
+
 // The carried-over history is as good as a full start: the same MRI errors (to 1 %) as the
 // full consistent start that the implicit path takes at every restart (3 evaluations each).
 TEST(MriInnerStepper, CheapRestartsGiveTheErrorsOfFullRestarts) {
