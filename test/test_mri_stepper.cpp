@@ -287,6 +287,51 @@ TEST(MriInnerStepper, MatchesAnRk4InnerStepperWhenBothHalvesAreForcedAndFDepends
   EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move
 }
 
+// Problem C: a nonlinear, time-dependent fast part without velocity dependence (the cheap
+// restart carries g_t and g_x x' over), q'' = -omega^2 sin q + 0.3 cos 2t, forced on both
+// halves by SlowB. CEODE (1 start evaluation per restart) and RK4 inside must agree.
+int FastC(sunrealtype t, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
+  NV_Ith_S(f, 0) = -kOmega * kOmega * std::sin(NV_Ith_S(x, 0)) + 0.3 * std::cos(2 * t);
+  return 0;
+}
+
+int FastCFirstOrder(sunrealtype t, N_Vector y, N_Vector ydot, void* /*data*/) {
+  NV_Ith_S(ydot, 0) = NV_Ith_S(y, 1);
+  NV_Ith_S(ydot, 1) = -kOmega * kOmega * std::sin(NV_Ith_S(y, 0)) + 0.3 * std::cos(2 * t);
+  return 0;
+}
+
+TEST(MriInnerStepper, CheapRestartsMatchAnRk4InnerStepperOnANonlinearTimeDependentFastPart) {
+  Context ctx;
+  constexpr double kH = 1e-4;
+  Vector x0 = SerialVector(1, ctx, 1.0), v0 = SerialVector(1, ctx, 0.0);
+  Vector yc = SerialVector(2, ctx), yr = SerialVector(2, ctx);
+  NV_Ith_S(yc.get(), 0) = NV_Ith_S(yr.get(), 0) = 1.0;
+  Mem ce = FastMemory(ctx, FastC, x0.get(), v0.get(), kH);
+  ASSERT_TRUE(ce);
+  MRIStepInnerStepper raw = nullptr;
+  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
+  Inner inner(raw);
+  ASSERT_EQ(RunMri(ctx, SlowB, raw, yc.get(), 1.0, 20), 0);
+  long nfe_start = 0, nrestarts = 0;
+  CEodeGetNumStartRhsEvals(ce.get(), &nfe_start);
+  CEodeGetNumInnerRestarts(ce.get(), &nrestarts);
+  EXPECT_EQ(nfe_start, 3 + (nrestarts - 1));
+
+  std::unique_ptr<void, ArkDeleter> ark(ARKStepCreate(FastCFirstOrder, nullptr, 0, yr.get(), ctx));
+  ASSERT_TRUE(ark);
+  ASSERT_EQ(ARKStepSetTableNum(ark.get(), ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4), 0);
+  ASSERT_EQ(ARKStepSetFixedStep(ark.get(), kH), 0);
+  ASSERT_EQ(ARKStepSetMaxNumSteps(ark.get(), 1000000), 0);
+  MRIStepInnerStepper rk = nullptr;
+  ASSERT_EQ(ARKStepCreateMRIStepInnerStepper(ark.get(), &rk), 0);
+  ASSERT_EQ(RunMri(ctx, SlowB, rk, yr.get(), 1.0, 20), 0);
+  MRIStepInnerStepper_Free(&rk);
+  EXPECT_NEAR(NV_Ith_S(yc.get(), 0), NV_Ith_S(yr.get(), 0), 1e-9);
+  EXPECT_NEAR(NV_Ith_S(yc.get(), 1), NV_Ith_S(yr.get(), 1), 1e-8);
+  EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move
+}
+
 // ---------------------------------------------------------------------------
 // Bad input: a flag and a message naming the cause, nothing crashes.
 
