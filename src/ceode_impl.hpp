@@ -253,6 +253,12 @@ struct CEodeMemRec {
   FILE* errfp = nullptr;
   bool to_context = ceode::sun::kContextErrors;  // SUNDIALS 7: through the SUNContext
   std::string last_msg;
+
+  // --- inner stepper (src/ceode_stepper.cpp) ---
+  // D_2..D_{d-1} at tcur were supplied by the owner of this memory (the MRI inner stepper, from
+  // the previous inner run and the known forcing jump): the next start evaluates nothing and only
+  // forms x(t0 + h). Cleared by that start.
+  bool start_preset = false;
 };
 
 namespace ceode {

@@ -313,14 +313,16 @@ int AllocHistory(CEodeMemRec* ce, const char* func) {
 int OdeStart(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
   const sunrealtype t = ce->tcur;
-  int flag = EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
+  const bool preset = ce->start_preset;  // the inner stepper's restart (src/ceode_stepper.cpp)
+  ce->start_preset = false;
+  int flag = preset ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
     flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
                         "The initial acceleration is NaN or Inf: f (or the mass solve) returned "
                         "non-finite values at t0 = %.17g.",
                         static_cast<double>(t));
   }
-  if (flag == CE_SUCCESS && !ce->zero_start) {
+  if (flag == CE_SUCCESS && !ce->zero_start && !preset) {
     flag = StartDerivatives(ce, t, ce->xnew, ce->vtmp, ce->atmp,
                             [&](sunrealtype ts, N_Vector xs, N_Vector vs, N_Vector as) {
                               return EvalAccel(ce, ts, xs, vs, as, func);

@@ -89,6 +89,16 @@ struct Stepper {
   N_Vector Fx[kMaxForcing] = {};
   N_Vector Fv[kMaxForcing] = {};
   long int nrestarts = 0;
+  // What the next restart can reuse (docs/porting.md, "What a restart costs"): at t_end, the
+  // end of the last inner run, the fast acceleration g and, for degree 4, the g part of the
+  // jerk along the old x' and r_x(t_end). Valid while the state has not been changed since.
+  bool end_valid = false;
+  int end_degree = 0;
+  sunrealtype t_end = 0;
+  N_Vector g_end = nullptr;
+  N_Vector j_end = nullptr;
+  N_Vector rx_end = nullptr;
+  N_Vector ytmp = nullptr;  // for the comparison of a reset state with the owned one
 };
 
 void FreeSlot(ViewSlot* s) {
@@ -108,7 +118,8 @@ void DestroyStepper(Stepper* st) {
   FreeSlot(&st->io_view);
   FreeSlot(&st->io2_view);
   for (ViewSlot& s : st->forcing_view) FreeSlot(&s);
-  for (N_Vector w : {st->y_own, st->u, st->rx, st->vg}) {
+  for (N_Vector w :
+       {st->y_own, st->u, st->rx, st->vg, st->g_end, st->j_end, st->rx_end, st->ytmp}) {
     if (w != nullptr) N_VDestroy(w);
   }
   delete st;
@@ -169,9 +180,41 @@ void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealt
 
 // out = r_x(t).
 void ForcingX(const Stepper* st, sunrealtype t, N_Vector out) {
+  if (st->nforcing == 0) {  // N_VLinearCombination needs at least one vector
+    N_VConst(0, out);
+    return;
+  }
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
   N_VLinearCombination(st->nforcing, val, const_cast<N_Vector*>(st->Fx), out);
+}
+
+// Weights of the m-th time derivative of r(t) at t.
+void ForcingDerivWeights(const Stepper* st, sunrealtype t, int m, sunrealtype* w) {
+  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
+  for (int k = 0; k < st->nforcing; ++k) {
+    sunrealtype c = k >= m ? 1 : 0;
+    for (int i = 0; i < m && k >= m; ++i) c *= static_cast<sunrealtype>(k - i) / st->tscale;
+    for (int i = m; i < k; ++i) c *= tau;
+    w[k] = c;
+  }
+}
+
+// out = r_v^(m)(t) + r_x^(m+1)(t): the forcing's part of the m-th derivative of x'' = G.
+void ForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector out) {
+  if (st->nforcing == 0) {
+    N_VConst(0, out);
+    return;
+  }
+  sunrealtype c[2 * kMaxForcing];
+  N_Vector X[2 * kMaxForcing];
+  ForcingDerivWeights(st, t, m, c);
+  ForcingDerivWeights(st, t, m + 1, c + st->nforcing);
+  for (int k = 0; k < st->nforcing; ++k) {
+    X[k] = st->Fv[k];
+    X[st->nforcing + k] = st->Fx[k];
+  }
+  N_VLinearCombination(2 * st->nforcing, c, X, out);
 }
 
 // CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
@@ -208,7 +251,13 @@ int Allocate(Stepper* st, N_Vector y, const char* func) {
   st->u = N_VClone(ce->xcur);
   st->rx = N_VClone(ce->xcur);
   st->vg = N_VClone(ce->xcur);
-  if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr) {
+  st->g_end = N_VClone(ce->xcur);
+  st->j_end = N_VClone(ce->xcur);
+  st->rx_end = N_VClone(ce->xcur);
+  st->ytmp = N_VClone(y);
+  if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr ||
+      st->g_end == nullptr || st->j_end == nullptr || st->rx_end == nullptr ||
+      st->ytmp == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   return CE_SUCCESS;
@@ -265,6 +314,13 @@ int StepperReset(Stepper* st, sunrealtype tR, N_Vector yR, const char* func) {
                         "The state vector changed type since the first call (serial vs "
                         "ManyVector): pass the same kind of vector every time.");
   }
+  // A reset to the state the stepper already stands on (MRIStep does this at every stage; the
+  // time may differ by rounding) keeps what the next restart may reuse; any other state drops it.
+  if (st->end_valid) {
+    N_VLinearSum(1, yR, -1, st->y_own, st->ytmp);
+    const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(tR) + std::fabs(st->t_own));
+    st->end_valid = std::fabs(tR - st->t_own) <= tol && N_VMaxNorm(st->ytmp) == 0;
+  }
   N_VScale(1, yR, st->y_own);
   st->t_own = tR;
   st->have_state = true;
@@ -314,6 +370,66 @@ void StepperSetStopTime(Stepper* st, sunrealtype tstop) {
 }
 #endif
 
+// The cheap restart needs the history to be the explicit path's (D_2 = G at the end point,
+// exactly) and a degree whose top derivative can be carried over (3: none, 4: the jerk).
+bool CanReuse(const Stepper* st) {
+  const CEodeMemRec* ce = st->ce;
+  return !ce->vel_dependent && !ce->zero_start && (ce->degree == 3 || ce->degree == 4);
+}
+
+// After an inner run that ended on a step: strip the old forcing from the history at t_end.
+// g(t, x) = D_2 - r_v - r_x' and the g part of the jerk, D_3 - r_v' - r_x''.
+void CaptureEnd(Stepper* st) {
+  CEodeMemRec* ce = st->ce;
+  st->end_valid = false;
+  if (!CanReuse(st) || !ce->started) return;
+  const sunrealtype t = ce->tcur;
+  ForcingAccel(st, t, 0, st->vg);
+  N_VLinearSum(1, ce->D[2], -1, st->vg, st->g_end);
+  if (ce->degree == 4) {
+    ForcingAccel(st, t, 1, st->vg);
+    N_VLinearSum(1, ce->D[3], -1, st->vg, st->j_end);
+    ForcingX(st, t, st->rx_end);
+  }
+  st->t_end = t;
+  st->end_degree = ce->degree;
+  st->end_valid = true;
+}
+
+// The start's derivatives at t0 from the last run's end and the new forcing (its derivatives
+// are known exactly). x and v are continuous, so g(t0, x0) is unchanged: D_2 costs nothing.
+// x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so the g part of the jerk,
+// g_t + g_x x', gains g_x delta: one forward difference, none when delta = 0.
+int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
+  CEodeMemRec* ce = st->ce;
+  ForcingAccel(st, t0, 0, st->vg);
+  N_VLinearSum(1, st->g_end, 1, st->vg, ce->D[2]);
+  if (ce->degree == 4) {
+    ForcingAccel(st, t0, 1, st->vg);
+    N_VLinearSum(1, st->j_end, 1, st->vg, ce->D[3]);
+    ForcingX(st, t0, st->rx);
+    N_VLinearSum(1, st->rx, -1, st->rx_end, st->rx);
+    const sunrealtype dn = N_VMaxNorm(st->rx);
+    if (dn > 0) {
+      const sunrealtype eps =
+          std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(sunrealtype(1), N_VMaxNorm(own.x) / dn);
+      N_VLinearSum(1, own.x, eps, st->rx, st->vg);
+      const int rv = st->g(t0, st->vg, own.v, ce->atmp, st->g_data);
+      ++ce->nfe;
+      ++ce->nfe_start;
+      if (rv != 0) {
+        return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                            "The right-hand side failed (returned %d) at t = %.17g.", rv,
+                            static_cast<double>(t0));
+      }
+      N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end, ce->atmp);
+      N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
+    }
+  }
+  ce->start_preset = true;
+  return CE_SUCCESS;
+}
+
 // Restart CEODE at (t0, x, u = v + r_x(t0)) with the largest step <= h_max that
 // lands on tout, keeping the counters and the guard's frequency.
 int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& own,
@@ -334,7 +450,10 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   AddCounters(ce, saved);
   ce->guard_warned = warned;
   ++st->nrestarts;
-  (void)func;
+  const bool reuse = st->end_valid && CanReuse(st) && st->end_degree == ce->degree &&
+                     std::fabs(t0 - st->t_end) <= 1e-8 * ce->h;
+  st->end_valid = false;
+  if (flag == CE_SUCCESS && reuse) flag = PresetStart(st, t0, own, func);
   return flag;
 }
 
@@ -350,6 +469,7 @@ int StateFromMemory(Stepper* st, N_Vector y, const char* func) {
   N_VScale(1, st->ce->D[1], own.v);
   st->t_own = st->ce->tcur;
   st->have_state = true;
+  st->end_valid = false;
   return CE_SUCCESS;
 }
 
@@ -382,7 +502,11 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
     flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL);
+    ce->start_preset = false;
     if (flag < 0) return flag;
+    // The output is the method's own state at tcur (no interpolation) only if the run ended on
+    // a step; only then is the history's D_2 the acceleration at the returned state.
+    if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) CaptureEnd(st);
     // The first run estimated omega_max; later restarts check h against it without
     // a new power iteration.
     if (!st->omega_fixed && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {

@@ -104,20 +104,26 @@ int RunMri(SUNContext ctx, ARKRhsFn slow, MRIStepInnerStepper inner, N_Vector y,
 
 struct OrderRun {
   double err;
-  long nst, nrestarts, nfe_guard;
+  long nst, nrestarts, nfe_guard, nfe_start;
 };
 
-OrderRun RunProblemA(SUNContext ctx, int nslow) {
+// velocity: declare (unneeded) velocity dependence, which takes the implicit path and so
+// the full consistent start at every restart.
+OrderRun RunProblemA(SUNContext ctx, int nslow, const char* method = "G4_A34",
+                     bool velocity = false) {
   ManyState st(ctx, 2);
   double q, s, p;
   ExactA(0, &q, &s, &p);
   sunrealtype* x = N_VGetArrayPointer(st.x.get());
   sunrealtype* v = N_VGetArrayPointer(st.v.get());
   x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
-  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3);
-  OrderRun r{-1, 0, 0, 0};
+  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3, method);
+  OrderRun r{-1, 0, 0, 0, 0};
   MRIStepInnerStepper raw = nullptr;
-  if (!ce || CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) return r;
+  if (!ce || (velocity && CEodeSetVelocityDependence(ce.get(), SUNTRUE) != CE_SUCCESS) ||
+      CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) {
+    return r;
+  }
   Inner inner(raw);
   if (RunMri(ctx, SlowA, raw, st.y.get(), 2.0, nslow) < 0) return r;
   ExactA(2.0, &q, &s, &p);
@@ -125,6 +131,7 @@ OrderRun RunProblemA(SUNContext ctx, int nslow) {
   CEodeGetNumSteps(ce.get(), &r.nst);
   CEodeGetNumInnerRestarts(ce.get(), &r.nrestarts);
   CEodeGetNumGuardRhsEvals(ce.get(), &r.nfe_guard);
+  CEodeGetNumStartRhsEvals(ce.get(), &r.nfe_start);
   return r;
 }
 
@@ -156,6 +163,77 @@ TEST(MriInnerStepper, AccumulatesCountersOverRestartsAndEstimatesOmegaOnce) {
   // The power iteration ran once: twice the restarts, the same guard cost.
   EXPECT_GT(r40.nfe_guard, 0);
   EXPECT_EQ(r40.nfe_guard, r80.nfe_guard);
+}
+
+// The restart after a stage that ended on the state the next one starts from reuses the end
+// point's g and carries the jerk over (docs/porting.md, "What a restart costs"): G3 sets
+// evaluate nothing, G4 sets one directional difference for the jump of x' (problem A's
+// forcing moves s, so r_x jumps at every stage). Only the first start is a full one.
+TEST(MriInnerStepper, RestartsCostOneEvaluationForG4AndNoneForG3AfterTheFirstStart) {
+  Context ctx;
+  const OrderRun g4 = RunProblemA(ctx, 40, "G4_A34");
+  ASSERT_GT(g4.err, 0);
+  ASSERT_EQ(g4.nrestarts, 120);
+  EXPECT_EQ(g4.nfe_start, 3 + (g4.nrestarts - 1));
+  const OrderRun g3 = RunProblemA(ctx, 40, "G3_CD");
+  ASSERT_GT(g3.err, 0);
+  ASSERT_EQ(g3.nrestarts, 120);
+  EXPECT_EQ(g3.nfe_start, 1);
+}
+
+// A reset to another state (here MRIStepReset halfway with v moved by 1e-6) cannot reuse the
+// end of the last inner integration: that one restart is a full one (3 evaluations for G4_A34),
+// a reset to the very state the stepper stands on changes nothing.
+long StartEvalsWithAResetHalfway(SUNContext ctx, double dv) {
+  ManyState st(ctx, 2);
+  double q, s, p;
+  ExactA(0, &q, &s, &p);
+  sunrealtype* x = N_VGetArrayPointer(st.x.get());
+  sunrealtype* v = N_VGetArrayPointer(st.v.get());
+  x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
+  Mem ce = FastMemory(ctx, FastA, st.x.get(), st.v.get(), 1e-3);
+  MRIStepInnerStepper raw = nullptr;
+  if (!ce || CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) return -1;
+  Inner inner(raw);
+  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowA, nullptr, 0, st.y.get(), raw, ctx));
+  MRIStepCoupling C = MRIStepCoupling_LoadTable(ARKODE_MRI_GARK_ERK33a);
+  int flag = mri ? MRIStepSetCoupling(mri.get(), C) : -1;
+  MRIStepCoupling_Free(C);
+  if (flag == 0) flag = MRIStepSetFixedStep(mri.get(), 0.05);
+  if (flag == 0) flag = MRIStepSetStopTime(mri.get(), 1.0);  // no interpolated output at t = 1
+  sunrealtype t = 0;
+  if (flag == 0) flag = MRIStepEvolve(mri.get(), 1.0, st.y.get(), &t, ARK_NORMAL);
+  if (flag == ARK_TSTOP_RETURN) flag = 0;  // SUNDIALS 7 says it stopped at tstop
+  v[0] += dv;
+  if (flag == 0) flag = MRIStepReset(mri.get(), t, st.y.get());
+  if (flag == 0) flag = MRIStepEvolve(mri.get(), 2.0, st.y.get(), &t, ARK_NORMAL);
+  long nfe_start = -1;
+  if (flag == 0) CEodeGetNumStartRhsEvals(ce.get(), &nfe_start);
+  return nfe_start;
+}
+
+TEST(MriInnerStepper, AResetToAnotherStateRestartsInFull) {
+  Context ctx;
+  const long same = StartEvalsWithAResetHalfway(ctx, 0.0);
+  const long moved = StartEvalsWithAResetHalfway(ctx, 1e-6);
+  ASSERT_GT(same, 0);
+  EXPECT_EQ(same, 3 + 119);  // 120 restarts, only the first one full
+  EXPECT_EQ(moved, same + 2);
+}
+
+// The carried-over history is as good as a full start: the same MRI errors (to 1 %) as the
+// full consistent start that the implicit path takes at every restart (3 evaluations each).
+TEST(MriInnerStepper, CheapRestartsGiveTheErrorsOfFullRestarts) {
+  Context ctx;
+  for (int nslow : {40, 160}) {
+    const OrderRun cheap = RunProblemA(ctx, nslow, "G4_A34");
+    const OrderRun full = RunProblemA(ctx, nslow, "G4_A34", true);
+    ASSERT_GT(cheap.err, 0);
+    ASSERT_GT(full.err, 0);
+    EXPECT_EQ(full.nfe_start, 3 * full.nrestarts);
+    EXPECT_LT(cheap.nfe_start, full.nfe_start / 2);
+    EXPECT_NEAR(cheap.err, full.err, 0.01 * full.err) << nslow << " slow steps";
+  }
 }
 
 // Problem B: forcing on both halves and a velocity-dependent fast part,
@@ -204,6 +282,51 @@ TEST(MriInnerStepper, MatchesAnRk4InnerStepperWhenBothHalvesAreForcedAndFDepends
   ASSERT_EQ(RunMri(ctx, SlowB, rk, yr.get(), 1.0, 20), 0);
   MRIStepInnerStepper_Free(&rk);
   // Both solve the same forced inner problems; the gap is the inner errors (h = 1e-4).
+  EXPECT_NEAR(NV_Ith_S(yc.get(), 0), NV_Ith_S(yr.get(), 0), 1e-9);
+  EXPECT_NEAR(NV_Ith_S(yc.get(), 1), NV_Ith_S(yr.get(), 1), 1e-8);
+  EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move
+}
+
+// Problem C: a nonlinear, time-dependent fast part without velocity dependence (the cheap
+// restart carries g_t and g_x x' over), q'' = -omega^2 sin q + 0.3 cos 2t, forced on both
+// halves by SlowB. CEODE (1 start evaluation per restart) and RK4 inside must agree.
+int FastC(sunrealtype t, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
+  NV_Ith_S(f, 0) = -kOmega * kOmega * std::sin(NV_Ith_S(x, 0)) + 0.3 * std::cos(2 * t);
+  return 0;
+}
+
+int FastCFirstOrder(sunrealtype t, N_Vector y, N_Vector ydot, void* /*data*/) {
+  NV_Ith_S(ydot, 0) = NV_Ith_S(y, 1);
+  NV_Ith_S(ydot, 1) = -kOmega * kOmega * std::sin(NV_Ith_S(y, 0)) + 0.3 * std::cos(2 * t);
+  return 0;
+}
+
+TEST(MriInnerStepper, CheapRestartsMatchAnRk4InnerStepperOnANonlinearTimeDependentFastPart) {
+  Context ctx;
+  constexpr double kH = 1e-4;
+  Vector x0 = SerialVector(1, ctx, 1.0), v0 = SerialVector(1, ctx, 0.0);
+  Vector yc = SerialVector(2, ctx), yr = SerialVector(2, ctx);
+  NV_Ith_S(yc.get(), 0) = NV_Ith_S(yr.get(), 0) = 1.0;
+  Mem ce = FastMemory(ctx, FastC, x0.get(), v0.get(), kH);
+  ASSERT_TRUE(ce);
+  MRIStepInnerStepper raw = nullptr;
+  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
+  Inner inner(raw);
+  ASSERT_EQ(RunMri(ctx, SlowB, raw, yc.get(), 1.0, 20), 0);
+  long nfe_start = 0, nrestarts = 0;
+  CEodeGetNumStartRhsEvals(ce.get(), &nfe_start);
+  CEodeGetNumInnerRestarts(ce.get(), &nrestarts);
+  EXPECT_EQ(nfe_start, 3 + (nrestarts - 1));
+
+  std::unique_ptr<void, ArkDeleter> ark(ARKStepCreate(FastCFirstOrder, nullptr, 0, yr.get(), ctx));
+  ASSERT_TRUE(ark);
+  ASSERT_EQ(ARKStepSetTableNum(ark.get(), ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4), 0);
+  ASSERT_EQ(ARKStepSetFixedStep(ark.get(), kH), 0);
+  ASSERT_EQ(ARKStepSetMaxNumSteps(ark.get(), 1000000), 0);
+  MRIStepInnerStepper rk = nullptr;
+  ASSERT_EQ(ARKStepCreateMRIStepInnerStepper(ark.get(), &rk), 0);
+  ASSERT_EQ(RunMri(ctx, SlowB, rk, yr.get(), 1.0, 20), 0);
+  MRIStepInnerStepper_Free(&rk);
   EXPECT_NEAR(NV_Ith_S(yc.get(), 0), NV_Ith_S(yr.get(), 0), 1e-9);
   EXPECT_NEAR(NV_Ith_S(yc.get(), 1), NV_Ith_S(yr.get(), 1), 1e-8);
   EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move

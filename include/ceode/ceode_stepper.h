@@ -15,6 +15,11 @@
  * memory accumulate over all inner integrations. Until its first reset the
  * stepper's state is the CEODE memory's (x0, v0 at t0 of CEodeInit); a reset
  * copies the state it is given (the stepper owns its start state).
+ * Every inner integration restarts the method. When it continues the previous
+ * one (same time, same state) and no velocity dependence is declared, the start
+ * reuses the previous history corrected by the known change of the forcing:
+ * 0 evaluations for degree 3, 1 for degree 4; otherwise the full consistent
+ * start (docs/porting.md, "What a restart costs").
  * ---------------------------------------------------------------------------*/
 #ifndef CEODE_CEODE_STEPPER_H_
 #define CEODE_CEODE_STEPPER_H_
