@@ -264,7 +264,10 @@ struct Iterate {
   sunrealtype dnorm = 0;   // max |delta|, the change of x(t+h)
   sunrealtype dprev = 0;
   sunrealtype r1prev = 0;
-  bool x_done = false;  // x(t+h) converged with a stale matrix: the constraint is left out
+  bool x_done = false;       // x(t+h) converged with a stale matrix: the constraint is left out
+  bool have_matrix = false;  // the factored matrix serves this iteration
+  bool fresh_jac = false;    // the next setup evaluates df/dv anew
+  int limit = 0;             // iterations allowed (MaxIters from the last stale refresh)
   sunrealtype tol = 0;
   sunrealtype xscale = 0;
   bool fresh = false;  // the matrix was formed in this solve
@@ -410,53 +413,63 @@ int ConvFailure(CEodeMemRec* ce, const SolveSpec& sp, const Iterate& it, const c
                       static_cast<double>(it.tol), MaxIters(ce));
 }
 
+// One iteration: the residual at the iterate, a fresh matrix when none is usable, the correction.
+int Iteration(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
+              Iterate* it, const char* func) {
+  int flag = Residual(ce, w, sp, a, lam, it, func);
+  if (flag == CE_SUCCESS && !it->have_matrix) {
+    flag = LinSetup(ce, w, sp, it->fresh_jac, func);
+    it->have_matrix = it->fresh = flag == CE_SUCCESS;
+  }
+  return flag == CE_SUCCESS ? LinSolve(ce, w, sp, a, lam, it, func) : flag;
+}
+
+// After a test that did not converge: what the next iteration uses. Iterations with a stale
+// matrix come before the limit, as CVODE's retry with a fresh Jacobian gets its own maxcor.
+void NextIteration(const CEodeMemRec* ce, Conv c, int m, Iterate* it) {
+  if (!it->fresh && it->dnorm <= it->tol) it->x_done = true;
+  if (c == Conv::kRefresh) {
+    if (it->fresh) {
+      it->fresh_jac = true;  // a fresh matrix with a reused df/dv contracted slowly
+    } else {
+      it->limit = m + 1 + MaxIters(ce);
+    }
+    it->have_matrix = it->x_done = false;
+  }
+  it->dprev = it->dnorm;
+  it->r1prev = it->r1norm;
+}
+
 // Newton on (a, lam) for one step; a and lam hold the predictor on entry, the solution on exit;
 // xout (if not NULL) receives x(t+h; a) for the final a.
 //
-// The matrix of an earlier step is reused (MatrixUsable), as CVODE reuses its Newton matrix.
-// The residual stays exact: G(x(t)) and f are evaluated at every step. An earlier version tested
-// a stale-matrix iteration like a fresh one and required the force residual at round-off: with
-// G(x(t)) stale in the matrix that residual converges only linearly in lambda (rate ~ |dG|), so
-// G5_ONES on the DAE pendulum at h = 1e-2 with reuse for 20 steps stopped with CE_CONV_FAILURE
-// at t = 0.32 (x(t+h) settled at 1e-17, the force residual stalled). The residual's part along
-// G^T moves lambda only; what the state sees is the change of a, which StaleConvTest bounds.
+// The matrix of an earlier step is reused (MatrixUsable, JacUsable), as CVODE reuses its Newton
+// matrix; the residual stays exact: G(x(t)) and f are evaluated at every step. How a stale
+// matrix is tested and when it is refreshed: StaleConvTest.
 int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
                       N_Vector xout, const char* func) {
   int flag = MassUpdate(ce, sp.t, sp.xt, func);
   if (flag == CE_SUCCESS) flag = EvalG(ce, sp.t, sp.xt, w->Gt, func);
   if (flag == CE_SUCCESS && !sp.vdep) flag = EvalF(ce, sp.t, sp.xt, sp.V0, w->fval, func);
   if (flag != CE_SUCCESS) return flag;
-  bool have_matrix = MatrixUsable(ce, w, sp);
   if (sp.start) {
     StartPosition(ce, w, sp.xt, a, w->xtrial);
   } else {
     StepPosition(ce, w, sp.xt, a, w->xtrial);
   }
   Iterate it;
-  // Iterations with a stale matrix come before the limit, as CVODE's retry with a fresh
-  // Jacobian gets its own maxcor: the limit counts from the last refresh.
-  bool fresh_jac = false;
-  for (int m = 0, limit = MaxIters(ce); m < limit; ++m) {
-    flag = Residual(ce, w, sp, a, lam, &it, func);
-    if (flag == CE_SUCCESS && !have_matrix) {
-      flag = LinSetup(ce, w, sp, fresh_jac, func);
-      have_matrix = it.fresh = flag == CE_SUCCESS;
-    }
-    if (flag == CE_SUCCESS) flag = LinSolve(ce, w, sp, a, lam, &it, func);
-    if (flag != CE_SUCCESS) return flag;
+  it.have_matrix = MatrixUsable(ce, w, sp);
+  it.limit = MaxIters(ce);
+  for (int m = 0; m < it.limit; ++m) {
+    if ((flag = Iteration(ce, w, sp, a, lam, &it, func)) != CE_SUCCESS) return flag;
     const Conv c = ConvTest(ce, sp, m, it);
     if (c == Conv::kFailed) break;
-    if (!it.fresh && it.dnorm <= it.tol) it.x_done = true;
-    if (c == Conv::kRefresh && !it.fresh) limit = m + 1 + MaxIters(ce);
-    if (c == Conv::kRefresh) have_matrix = it.x_done = false;
-    if (c == Conv::kRefresh && it.fresh) fresh_jac = true;
     if (c == Conv::kConverged) {
       if (!IsFinite(a) || !IsFinite(lam)) break;
       if (xout != nullptr) N_VScale(1, w->xtrial, xout);
       return CE_SUCCESS;
     }
-    it.dprev = it.dnorm;
-    it.r1prev = it.r1norm;
+    NextIteration(ce, c, m, &it);
   }
   return ConvFailure(ce, sp, it, func);
 }
