@@ -20,12 +20,7 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::LinearSolver;
-using ceode_test::Matrix;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
+using namespace ceode_test;  // the handles and helpers of test_util.hpp
 
 constexpr double kG = 9.81;
 constexpr double kL = 1.0;
