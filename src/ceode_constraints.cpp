@@ -40,6 +40,9 @@ constexpr sunrealtype kSlowRate = 0.2;   // refresh the matrix when the contract
 constexpr sunrealtype kTolUlps = 8;      // convergence: |delta| below this many ulps of |x|
 constexpr sunrealtype kFloorUlps = 1e3;  // round-off stagnation is accepted below this
 constexpr int kMaxStaleIters = 10;       // iterations with a matrix of an earlier step
+// Every constrained solve runs inside a step or a start, so inside CEodeEvolve (TakeStep and
+// StartMethod name no other entry): its errors name that one.
+constexpr const char* kFunc = "CEodeEvolve";
 
 // Private workspace of the constrained solve (ce->con).
 struct ConWork {
@@ -140,17 +143,17 @@ void StartPosition(CEodeMemRec* ce, ConWork* w, N_Vector x0, N_Vector a, N_Vecto
   N_VLinearSum(1, x0, 1, w->inc, xout);
 }
 
-int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi, const char* func) {
+int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi) {
   const int rv = ce->phifn(t, x, phi, ce->user_data);
   ++ce->nce;
   if (rv != 0) {
-    return ProcessError(ce, CE_CONSTR_FAIL, func,
+    return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint function failed (returned %d) at t = %.17g. The step was "
                         "not taken; the state is the last good one.",
                         rv, static_cast<double>(t));
   }
   if (!IsFinite(phi)) {
-    return ProcessError(ce, CE_CONSTR_FAIL, func,
+    return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint function returned NaN or Inf at t = %.17g: check Phi (and "
                         "that h is small enough to keep the positions in its domain).",
                         static_cast<double>(t));
@@ -158,29 +161,29 @@ int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi, const char
   return CE_SUCCESS;
 }
 
-int EvalG(CEodeMemRec* ce, sunrealtype t, N_Vector x, SUNMatrix G, const char* func) {
+int EvalG(CEodeMemRec* ce, sunrealtype t, N_Vector x, SUNMatrix G) {
   SUNMatZero(G);
   const int rv = ce->Gfn(t, x, G, ce->user_data);
   if (rv != 0) {
-    return ProcessError(ce, CE_CONSTR_FAIL, func,
+    return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint Jacobian function failed (returned %d) at t = %.17g.", rv,
                         static_cast<double>(t));
   }
   bool finite = true;
   ForEachEntry(G, [&](sunindextype, sunindextype, sunrealtype v) { finite &= std::isfinite(v); });
   if (!finite) {
-    return ProcessError(ce, CE_CONSTR_FAIL, func,
+    return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint Jacobian contains NaN or Inf at t = %.17g.",
                         static_cast<double>(t));
   }
   return CE_SUCCESS;
 }
 
-int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
-  const int flag = EvalRhs(ce, t, x, v, f, func);
+int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
+  const int flag = EvalRhs(ce, t, x, v, f, kFunc);
   if (flag != CE_SUCCESS) return flag;
   if (!IsFinite(f)) {
-    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+    return ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
                         "The right-hand side returned NaN or Inf at t = %.17g.",
                         static_cast<double>(t));
   }
@@ -188,16 +191,15 @@ int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, co
 }
 
 // Assembles and factors the saddle-point matrix; a failure leaves no usable step matrix.
-int Setup(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, SUNMatrix J, SUNMatrix H, sunrealtype t,
-          const char* func) {
-  const int flag = SaddleSetup(ce, &w->sad, kappa, J, w->Gt, H, t, func);
+int Setup(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, SUNMatrix J, SUNMatrix H, sunrealtype t) {
+  const int flag = SaddleSetup(ce, &w->sad, kappa, J, w->Gt, H, t, kFunc);
   if (flag != CE_SUCCESS) w->factored = false;
   return flag;
 }
 
 int Solve(CEodeMemRec* ce, ConWork* w, sunrealtype top_scale, N_Vector top, sunrealtype bot_scale,
-          N_Vector bottom, sunrealtype t, const char* func) {
-  const int flag = SaddleSolve(ce, &w->sad, top_scale, top, bot_scale, bottom, t, func);
+          N_Vector bottom, sunrealtype t) {
+  const int flag = SaddleSolve(ce, &w->sad, top_scale, top, bot_scale, bottom, t, kFunc);
   if (flag != CE_SUCCESS) w->factored = false;
   return flag;
 }
@@ -206,7 +208,7 @@ int Solve(CEodeMemRec* ce, ConWork* w, sunrealtype top_scale, N_Vector top, sunr
 // along the motion that does not involve the acceleration (d^2 Phi/dt^2 = G a + gamma).
 // Sixth-order central differences: the truncation error is O(s^6), round-off O(eps / s^2).
 int ConstraintCurvature(CEodeMemRec* ce, ConWork* w, sunrealtype t, N_Vector x, N_Vector v,
-                        N_Vector gam, const char* func) {
+                        N_Vector gam) {
   static const sunrealtype kW[4] = {-49.0 / 18.0, 3.0 / 2.0, -3.0 / 20.0, 1.0 / 90.0};
   const sunrealtype vn = N_VMaxNorm(v);
   const sunrealtype ell = std::max(N_VMaxNorm(x), SUN_RCONST(1e-3));
@@ -214,14 +216,14 @@ int ConstraintCurvature(CEodeMemRec* ce, ConWork* w, sunrealtype t, N_Vector x, 
   sunrealtype s = 100 * ce->h;  // explicit time dependence: resolved on the step's time scale
   if (vn > 0) s = std::min(s, eta * ell / vn);
   N_VConst(0, gam);
-  int flag = EvalPhi(ce, t, x, w->s, func);
+  int flag = EvalPhi(ce, t, x, w->s);
   if (flag != CE_SUCCESS) return flag;
   N_VLinearSum(kW[0], w->s, 1, gam, gam);
   for (int j = 1; j <= 3 && flag == CE_SUCCESS; ++j) {
     for (int sg = -1; sg <= 1 && flag == CE_SUCCESS; sg += 2) {
       const sunrealtype sj = sg * j * s;
       N_VLinearSum(1, x, sj, v, w->xpt);
-      flag = EvalPhi(ce, t + sj, w->xpt, w->s, func);
+      flag = EvalPhi(ce, t + sj, w->xpt, w->s);
       if (flag == CE_SUCCESS) N_VLinearSum(kW[j], w->s, 1, gam, gam);
     }
   }
@@ -231,14 +233,14 @@ int ConstraintCurvature(CEodeMemRec* ce, ConWork* w, sunrealtype t, N_Vector x, 
 
 // The index-1 acceleration: [[M, G^T], [G, 0]] [a; lambda] = [f; -gamma] at (t, x, v).
 int Index1Accel(CEodeMemRec* ce, ConWork* w, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
-                N_Vector lam, const char* func) {
+                N_Vector lam) {
   w->factored = false;  // A is about to hold a matrix that is not a step matrix
-  int flag = MassUpdate(ce, t, x, func);
-  if (flag == CE_SUCCESS) flag = EvalG(ce, t, x, w->Gt, func);
-  if (flag == CE_SUCCESS) flag = EvalF(ce, t, x, v, w->fval, func);
-  if (flag == CE_SUCCESS) flag = ConstraintCurvature(ce, w, t, x, v, w->gam, func);
-  if (flag == CE_SUCCESS) flag = Setup(ce, w, 0, nullptr, w->Gt, t, func);
-  if (flag == CE_SUCCESS) flag = Solve(ce, w, 1, w->fval, -1, w->gam, t, func);
+  int flag = MassUpdate(ce, t, x, kFunc);
+  if (flag == CE_SUCCESS) flag = EvalG(ce, t, x, w->Gt);
+  if (flag == CE_SUCCESS) flag = EvalF(ce, t, x, v, w->fval);
+  if (flag == CE_SUCCESS) flag = ConstraintCurvature(ce, w, t, x, v, w->gam);
+  if (flag == CE_SUCCESS) flag = Setup(ce, w, 0, nullptr, w->Gt, t);
+  if (flag == CE_SUCCESS) flag = Solve(ce, w, 1, w->fval, -1, w->gam, t);
   if (flag != CE_SUCCESS) return flag;
   SaddleSplit(w->sad, a, lam);
   return CE_SUCCESS;
@@ -275,18 +277,18 @@ struct Iterate {
 
 // The residual at the iterate (a, lam, w->xtrial): Phi into ce->phi, r1 = f - M a - Gt^T lam.
 int Residual(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
-             Iterate* it, const char* func) {
-  int flag = EvalPhi(ce, sp.tc, w->xtrial, ce->phi, func);
+             Iterate* it) {
+  int flag = EvalPhi(ce, sp.tc, w->xtrial, ce->phi);
   if (flag != CE_SUCCESS) return flag;
   if (sp.vdep) {
     N_VLinearSum(1, sp.V0, sp.kappa, a, w->vtmp);
-    flag = EvalF(ce, sp.t, sp.xt, w->vtmp, w->fval, func);
+    flag = EvalF(ce, sp.t, sp.xt, w->vtmp, w->fval);
     if (flag != CE_SUCCESS) return flag;
   }
   it->fscale = N_VMaxNorm(w->fval);
   if (ce->M != nullptr) {
     if (SUNMatMatvec(ce->M, a, w->r1) != 0) {
-      return ProcessError(ce, CE_LSETUP_FAIL, func, "M a failed: check the mass matrix size.");
+      return ProcessError(ce, CE_LSETUP_FAIL, kFunc, "M a failed: check the mass matrix size.");
     }
     it->fscale += N_VMaxNorm(w->r1);
     N_VLinearSum(1, w->fval, -1, w->r1, w->r1);
@@ -310,18 +312,17 @@ bool JacUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
 // The Newton matrix at the current iterate: H = G(x_i), df/dv when f depends on v (evaluated
 // anew when fresh_jac or when the last one may not be reused). nje counts the evaluations of
 // the Jacobian that the matrix reuses: df/dv (VelJacobian) or, f independent of v, G.
-int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac, const char* func) {
-  int flag = EvalG(ce, sp.tc, w->xtrial, w->Gh, func);
+int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
+  int flag = EvalG(ce, sp.tc, w->xtrial, w->Gh);
   if (flag == CE_SUCCESS && sp.vdep && (fresh_jac || !JacUsable(ce, w, sp))) {
     w->nst_jac = -1;
-    flag = VelJacobian(ce, sp.t, sp.xt, w->vtmp, w->fval, w->J, func);
+    flag = VelJacobian(ce, sp.t, sp.xt, w->vtmp, w->fval, w->J, kFunc);
     if (flag == CE_SUCCESS) {
       w->nst_jac = ce->nst;
       w->kappa_jac = sp.kappa;
     }
   }
-  if (flag == CE_SUCCESS)
-    flag = Setup(ce, w, sp.kappa, sp.vdep ? w->J : nullptr, w->Gh, sp.t, func);
+  if (flag == CE_SUCCESS) flag = Setup(ce, w, sp.kappa, sp.vdep ? w->J : nullptr, w->Gh, sp.t);
   if (flag != CE_SUCCESS) return flag;
   if (!sp.vdep) ++ce->nje;
   w->factored = true;
@@ -341,8 +342,8 @@ bool MatrixUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) 
 
 // One Newton correction: x(t+h; a) is affine in a with slope mu, so it moves by delta itself.
 int LinSolve(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
-             Iterate* it, const char* func) {
-  const int flag = Solve(ce, w, sp.mu, w->r1, it->x_done ? 0 : -1, ce->phi, sp.t, func);
+             Iterate* it) {
+  const int flag = Solve(ce, w, sp.mu, w->r1, it->x_done ? 0 : -1, ce->phi, sp.t);
   if (flag != CE_SUCCESS) return flag;
   SaddleSplit(w->sad, w->delta, w->s);
   ++ce->nni;
@@ -402,9 +403,9 @@ Conv ConvTest(const CEodeMemRec* ce, const SolveSpec& sp, int m, const Iterate& 
 
 int MaxIters(const CEodeMemRec* ce) { return ce->maxcor_set ? ce->maxcor : kMaxIters; }
 
-int ConvFailure(CEodeMemRec* ce, const SolveSpec& sp, const Iterate& it, const char* func) {
+int ConvFailure(CEodeMemRec* ce, const SolveSpec& sp, const Iterate& it) {
   ++ce->nnf;
-  return ProcessError(ce, CE_CONV_FAILURE, func,
+  return ProcessError(ce, CE_CONV_FAILURE, kFunc,
                       "The constraint Newton iteration did not converge at t = %.17g (last change "
                       "of x(t+h) %g, target %g, %d iterations): reduce h, and check that "
                       "CEodeConstrJacFn is the exact derivative of the constraint function and "
@@ -415,13 +416,13 @@ int ConvFailure(CEodeMemRec* ce, const SolveSpec& sp, const Iterate& it, const c
 
 // One iteration: the residual at the iterate, a fresh matrix when none is usable, the correction.
 int Iteration(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
-              Iterate* it, const char* func) {
-  int flag = Residual(ce, w, sp, a, lam, it, func);
+              Iterate* it) {
+  int flag = Residual(ce, w, sp, a, lam, it);
   if (flag == CE_SUCCESS && !it->have_matrix) {
-    flag = LinSetup(ce, w, sp, it->fresh_jac, func);
+    flag = LinSetup(ce, w, sp, it->fresh_jac);
     it->have_matrix = it->fresh = flag == CE_SUCCESS;
   }
-  return flag == CE_SUCCESS ? LinSolve(ce, w, sp, a, lam, it, func) : flag;
+  return flag == CE_SUCCESS ? LinSolve(ce, w, sp, a, lam, it) : flag;
 }
 
 // After a test that did not converge: what the next iteration uses. Iterations with a stale
@@ -447,10 +448,10 @@ void NextIteration(const CEodeMemRec* ce, Conv c, int m, Iterate* it) {
 // matrix; the residual stays exact: G(x(t)) and f are evaluated at every step. How a stale
 // matrix is tested and when it is refreshed: StaleConvTest.
 int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
-                      N_Vector xout, const char* func) {
-  int flag = MassUpdate(ce, sp.t, sp.xt, func);
-  if (flag == CE_SUCCESS) flag = EvalG(ce, sp.t, sp.xt, w->Gt, func);
-  if (flag == CE_SUCCESS && !sp.vdep) flag = EvalF(ce, sp.t, sp.xt, sp.V0, w->fval, func);
+                      N_Vector xout) {
+  int flag = MassUpdate(ce, sp.t, sp.xt, kFunc);
+  if (flag == CE_SUCCESS) flag = EvalG(ce, sp.t, sp.xt, w->Gt);
+  if (flag == CE_SUCCESS && !sp.vdep) flag = EvalF(ce, sp.t, sp.xt, sp.V0, w->fval);
   if (flag != CE_SUCCESS) return flag;
   if (sp.start) {
     StartPosition(ce, w, sp.xt, a, w->xtrial);
@@ -461,7 +462,7 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
   it.have_matrix = MatrixUsable(ce, w, sp);
   it.limit = MaxIters(ce);
   for (int m = 0; m < it.limit; ++m) {
-    if ((flag = Iteration(ce, w, sp, a, lam, &it, func)) != CE_SUCCESS) return flag;
+    if ((flag = Iteration(ce, w, sp, a, lam, &it)) != CE_SUCCESS) return flag;
     const Conv c = ConvTest(ce, sp, m, it);
     if (c == Conv::kFailed) break;
     if (c == Conv::kConverged) {
@@ -471,7 +472,7 @@ int ConstrainedNewton(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector
     }
     NextIteration(ce, c, m, &it);
   }
-  return ConvFailure(ce, sp, it, func);
+  return ConvFailure(ce, sp, it);
 }
 
 bool LocalData(N_Vector v) { return N_VGetArrayPointer(v) != nullptr && sun::IsLocal(v); }
@@ -506,14 +507,14 @@ int AllocWork(CEodeMemRec* ce, ConWork* w, const char* func) {
 // differences of the index-1 acceleration along the Taylor curve of what is already known
 // (StartDerivatives, with the index-1 acceleration as the right-hand side). lambda0 ends in
 // w->lam_prev and w->lam.
-int ConsistentStart(CEodeMemRec* ce, ConWork* w, const char* func) {
+int ConsistentStart(CEodeMemRec* ce, ConWork* w) {
   const sunrealtype t0 = ce->tcur;
-  int flag = Index1Accel(ce, w, t0, ce->xcur, ce->D[1], ce->D[2], w->lam, func);
+  int flag = Index1Accel(ce, w, t0, ce->xcur, ce->D[1], ce->D[2], w->lam);
   if (flag != CE_SUCCESS) return flag;
   N_VScale(1, w->lam, w->lam_prev);  // lambda0, kept while the differences reuse w->lam
   flag = StartDerivatives(ce, t0, w->xtrial, w->r1, w->a0,
                           [&](sunrealtype ts, N_Vector xs, N_Vector vs, N_Vector as) {
-                            return Index1Accel(ce, w, ts, xs, vs, as, w->lam, func);
+                            return Index1Accel(ce, w, ts, xs, vs, as, w->lam);
                           });
   if (flag != CE_SUCCESS) return flag;
   N_VScale(1, w->lam_prev, w->lam);
@@ -555,7 +556,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
     for (int k = 2; k < d; ++k) N_VConst(0, ce->D[k]);
     N_VConst(0, w->lam);
   } else {
-    const int flag = ConsistentStart(ce, w, func);
+    const int flag = ConsistentStart(ce, w);
     if (flag != CE_SUCCESS) return flag;
   }
   // The first position: a constrained Taylor step. Its acceleration is the unknown; the velocity
@@ -563,7 +564,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   N_VScale(1, ce->D[2], w->a0);
   N_VScale(1, w->lam, w->lam_prev);
   const SolveSpec sp{t0, ce->xcur, t0 + ce->h, ce->h * ce->h / 2, 0, false, ce->D[1], true, false};
-  const int flag = ConstrainedNewton(ce, w, sp, w->a0, w->lam, w->xpt, func);
+  const int flag = ConstrainedNewton(ce, w, sp, w->a0, w->lam, w->xpt);
   if (flag != CE_SUCCESS) return flag;
   w->factored = false;  // the start matrix has kappa = 0 and the start's mu: not a step matrix
   N_VScale(1, w->xpt, ce->xnext);
@@ -583,8 +584,9 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   return CE_SUCCESS;
 }
 
+// The signature of every acceleration solve (CEodeMemRec::solve_accel); the errors name kFunc.
 int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
-                    const char* func) {
+                    const char* /*func*/) {
   ConWork* w = Work(ce);
   // Predictors: Taylor of the acceleration from t - h, linear extrapolation of lambda.
   PredictAccel(ce, a);
@@ -601,7 +603,7 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
   const StepCoeffs& co = ce->co;
   const SolveSpec sp{t,  x,     tnext, co.mu, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
                      V0, false, true};
-  const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr, func);
+  const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr);
   if (flag != CE_SUCCESS) return flag;
   N_VScale(1, ce->lambda, w->lam_prev);
   N_VScale(1, w->lam, ce->lambda);
