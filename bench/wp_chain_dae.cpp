@@ -353,6 +353,7 @@ void RunPoint(Scene* sc, const Config& c, double h) {
   if (c.kind == Config::kCeode) {
     const wp::SecondOrder p = chain::Problem(&ce_chain, kTend, c.dense);
     ok = wp::MeasureCeode(sc->table, sc->ctx, p, c.method, h, false, c.name, &o);
+    if (ok) wp::PrintMatrixReuse(c.name, h, o);
   } else if (c.kind == Config::kIda) {
     ok = wp::MeasureIda(sc->table, sc->ctx, sc->ida, h, c.name, &o);
   } else {

@@ -325,9 +325,10 @@ void RunCeode(Scene* sc, const Problems& p) {
       wp::Outcome o;
       if (!wp::MeasureCeode(sc->table, sc->ctx, p.ce, c.method, h, c.zero_start, c.name, &o)) {
         ++sc->nfail;
-      } else if (c.zero_start) {
-        CheckRow(c.name, h, o, &sc->ck);
+        return;
       }
+      wp::PrintMatrixReuse(c.name, h, o);
+      if (c.zero_start) CheckRow(c.name, h, o, &sc->ck);
     });
   }
 }

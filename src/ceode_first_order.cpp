@@ -185,6 +185,22 @@ int CheckFirstHalf(CEodeMemRec* ce, FirstOrder* fo, const char* func) {
   return CE_SUCCESS;
 }
 
+// The preamble of the entries that act on an attached first-order problem: the access guard,
+// the adapter, and y split into [x; v] views after its shape is checked.
+int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, CEodeMemRec** ce,
+                     FirstOrder** fo, N_Vector* x, N_Vector* v) {
+  int flag = Access(mem, func, ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  *fo = Adapter(*ce);
+  if (*fo == nullptr) {
+    return ProcessError(*ce, CE_NO_MALLOC, func,
+                        "No first-order problem: call CEodeInitFirstOrder first.");
+  }
+  if ((flag = CheckShape(*ce, func, y, name, *fo)) != CE_SUCCESS) return flag;
+  Split(*fo, y, x, v);
+  return CE_SUCCESS;
+}
+
 }  // namespace
 
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data) {
@@ -248,17 +264,11 @@ int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vec
 
 int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0) {
   CEodeMemRec* ce = nullptr;
-  int flag = ceode::Access(mem, __func__, &ce, true);
-  if (flag != CE_SUCCESS) return flag;
-  ceode::FirstOrder* fo = ceode::Adapter(ce);
-  if (fo == nullptr) {
-    return ceode::ProcessError(ce, CE_NO_MALLOC, __func__,
-                               "No first-order problem: call CEodeInitFirstOrder first.");
-  }
-  if ((flag = ceode::CheckShape(ce, __func__, y0, "y0", fo)) != CE_SUCCESS) return flag;
+  ceode::FirstOrder* fo = nullptr;
   N_Vector x0 = nullptr;
   N_Vector v0 = nullptr;
-  ceode::Split(fo, y0, &x0, &v0);
+  int flag = ceode::AccessFirstOrder(mem, __func__, y0, "y0", &ce, &fo, &x0, &v0);
+  if (flag != CE_SUCCESS) return flag;
   flag = CEodeReInit(mem, t0, x0, v0);
   if (flag == CE_SUCCESS) fo->checked = false;
   return flag;
@@ -267,14 +277,11 @@ int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0) {
 int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout, sunrealtype* tret,
                           int itask) {
   CEodeMemRec* ce = nullptr;
-  int flag = ceode::Access(mem, __func__, &ce, true);
+  ceode::FirstOrder* fo = nullptr;
+  N_Vector x = nullptr;
+  N_Vector v = nullptr;
+  int flag = ceode::AccessFirstOrder(mem, __func__, yout, "yout", &ce, &fo, &x, &v);
   if (flag != CE_SUCCESS) return flag;
-  ceode::FirstOrder* fo = ceode::Adapter(ce);
-  if (fo == nullptr) {
-    return ceode::ProcessError(ce, CE_NO_MALLOC, __func__,
-                               "No first-order problem: call CEodeInitFirstOrder first.");
-  }
-  if ((flag = ceode::CheckShape(ce, __func__, yout, "yout", fo)) != CE_SUCCESS) return flag;
   if (ce->mfn != nullptr || ce->phifn != nullptr || ce->jac != nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "A mass matrix, constraints or a velocity Jacobian is attached: "
@@ -283,9 +290,6 @@ int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout, sunrealtyp
   if (!fo->checked && (flag = ceode::CheckFirstHalf(ce, fo, __func__)) != CE_SUCCESS) {
     return flag;
   }
-  N_Vector x = nullptr;
-  N_Vector v = nullptr;
-  ceode::Split(fo, yout, &x, &v);
   return CEodeEvolve(mem, tout, x, v, tret, itask);
 }
 

@@ -5,9 +5,6 @@
 // (its state, its solver's factorisation, nfe/nsetups/nje) is the same with the
 // guard on or off.
 #include <ceode/ceode_stability.h>
-#include <sunlinsol/sunlinsol_band.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_band.h>
 
 #include <Eigen/Dense>
@@ -19,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "ceode_impl.hpp"
+#include "ceode_saddle.hpp"
 
 namespace ceode {
 
@@ -68,16 +65,7 @@ int AllocWork(CEodeMemRec* ce, const char* func) {
 
 // A solver for the guard's copy of M, of the kind the matrix type allows.
 SUNLinearSolver MassSolver(CEodeMemRec* ce, GuardWork* g) {
-  switch (SUNMatGetID(g->M)) {
-    case SUNMATRIX_DENSE:
-      return SUNLinSol_Dense(g->q, g->M, ce->sunctx);
-    case SUNMATRIX_BAND:
-      return SUNLinSol_Band(g->q, g->M, ce->sunctx);
-    case SUNMATRIX_SPARSE:
-      return SUNLinSol_KLU(g->q, g->M, ce->sunctx);
-    default:
-      return nullptr;
-  }
+  return DirectSolverFor(g->M, g->q, ce->sunctx);
 }
 
 void FreeMass(GuardWork* g) {

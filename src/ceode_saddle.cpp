@@ -4,6 +4,7 @@
 #include "ceode_saddle.hpp"
 
 #include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
@@ -117,7 +118,6 @@ void SortAndMerge(Saddle* s) {
 }
 
 // KLU keeps its symbolic analysis between setups: it must be redone when the pattern moves.
-// The only solver-specific call of the library.
 void PatternChanged(Saddle* s) {
   if (SUNLinSolGetID(s->LS) == SUNLINEARSOLVER_KLU && !s->pat_ptr.empty()) {
     SUNLinSol_KLUReInit(s->LS, s->A, SUNSparseMatrix_NNZ(s->A), SUNKLU_REINIT_PARTIAL);
@@ -155,6 +155,20 @@ int AssembleSparse(CEodeMemRec* ce, Saddle* s, const char* func) {
 }
 
 }  // namespace
+
+// With PatternChanged the library's only solver-specific calls (KLU is named here alone).
+SUNLinearSolver DirectSolverFor(SUNMatrix A, N_Vector tmpl, SUNContext ctx) {
+  switch (SUNMatGetID(A)) {
+    case SUNMATRIX_DENSE:
+      return SUNLinSol_Dense(tmpl, A, ctx);
+    case SUNMATRIX_BAND:
+      return SUNLinSol_Band(tmpl, A, ctx);
+    case SUNMATRIX_SPARSE:
+      return SUNLinSol_KLU(tmpl, A, ctx);
+    default:
+      return nullptr;
+  }
+}
 
 int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
   s->n = ce->n;

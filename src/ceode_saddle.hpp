@@ -62,6 +62,8 @@ struct Saddle {
   std::vector<sunindextype> pat_ptr, pat_idx;  // pattern of the last sparse factorization
 };
 
+// A direct solver for A by its matrix type (dense, band, sparse/KLU); NULL for other types.
+SUNLinearSolver DirectSolverFor(SUNMatrix A, N_Vector tmpl, SUNContext ctx);
 // Validates or creates the solver for the configuration in ce (LS, A, M); sizes from ce.
 int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func);
 void SaddleFree(Saddle* s);

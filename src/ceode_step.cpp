@@ -91,10 +91,12 @@ const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co) {
   *co = StepCoeffs{};
   co->h = h;
+  sunrealtype tw[kMaxDegree + 1];  // h^i / i!
+  TaylorWeights(h, d, tw);
   // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
   for (int k = 1; k <= d - 2; ++k) {
-    for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = std::pow(h, i) / Factorial(i);
-    const sunrealtype top = std::pow(h, d - 1 - k) / Factorial(d - 1 - k);
+    for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = tw[i];
+    const sunrealtype top = tw[d - 1 - k];
     co->T[k][d - 1] += top * (1 - p[k]);
     co->c[k] = top * p[k];
   }
@@ -103,8 +105,8 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
   co->kappa = co->c[1] / co->c[2];
   for (int j = 1; j < d; ++j) co->V0[j] = co->T[1][j] - co->kappa * co->T[2][j];
   // Position: Taylor from t with the top term blended by p_0.
-  for (int i = 1; i <= d - 2; ++i) co->w[i] = std::pow(h, i) / Factorial(i);
-  const sunrealtype top = std::pow(h, d - 1) / Factorial(d - 1);
+  for (int i = 1; i <= d - 2; ++i) co->w[i] = tw[i];
+  const sunrealtype top = tw[d - 1];
   co->wz_old = top * (1 - p[0]);
   co->wz_new = top * p[0];
   sunrealtype cx = co->wz_new;
@@ -162,12 +164,10 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
 }
 
+// Every Taylor polynomial of the library (step coefficients, predictors, starts, dense output)
+// takes its weights from here.
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
-  sunrealtype p = 1;
-  for (int i = 0; i < m; ++i) {
-    w[i] = p;
-    p *= s / (i + 1);
-  }
+  for (int i = 0; i < m; ++i) w[i] = std::pow(s, i) / Factorial(i);
 }
 
 void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
@@ -332,11 +332,9 @@ int OdeStart(CEodeMemRec* ce, const char* func) {
   for (int k = 3; ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
   sunrealtype cw[kMaxDegree];
   N_Vector vw[kMaxDegree];
-  for (int i = 1; i < d; ++i) {
-    cw[i - 1] = std::pow(ce->h, i) / Factorial(i);
-    vw[i - 1] = ce->D[i];
-  }
-  N_VLinearCombination(d - 1, cw, vw, ce->tmp1);
+  TaylorWeights(ce->h, d, cw);
+  for (int i = 1; i < d; ++i) vw[i - 1] = ce->D[i];
+  N_VLinearCombination(d - 1, cw + 1, vw, ce->tmp1);
   N_VLinearSum(1, ce->xcur, 1, ce->tmp1, ce->xnext);
   return CE_SUCCESS;
 }
@@ -461,11 +459,15 @@ void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
   }
   // p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h).
   const sunrealtype e = Factorial(d) / Factorial(d - k) * std::pow(s, d - k) / std::pow(h, d);
+  sunrealtype ts[kMaxDegree + 1];
+  sunrealtype th[kMaxDegree + 1];
+  TaylorWeights(s, d, ts);
+  TaylorWeights(h, d, th);
   sunrealtype c[kMaxDegree + 2];
   N_Vector X[kMaxDegree + 2];
   int m = 0;
   for (int i = 1; i < d; ++i) {
-    c[m] = (i >= k ? std::pow(s, i - k) / Factorial(i - k) : 0) - e * std::pow(h, i) / Factorial(i);
+    c[m] = (i >= k ? ts[i - k] : 0) - e * th[i];
     X[m++] = ce->D[i];
   }
   N_VLinearSum(1, ce->xnext, -1, ce->xcur, ce->tmp3);

@@ -675,18 +675,26 @@ int SunAttach(SUNStepper s, Stepper* st) {
 }
 #endif
 
+// The preamble of the two stepper constructors: the access guard, the output pointer, the
+// stepper's own state.
+template <class Handle>
+int BeginCreate(void* ce_mem, Handle* out, const char* func, CEodeMemRec** ce, Stepper** st) {
+  const int flag = ceode::Access(ce_mem, func, ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (out == nullptr) return ceode::ProcessError(*ce, CE_ILL_INPUT, func, "stepper = NULL.");
+  *out = nullptr;
+  return ceode::StepperCreate(*ce, st, func);
+}
+
 }  // namespace
 
 extern "C" {
 
 int CEodeCreateMRIStepInnerStepper(void* ce_mem, MRIStepInnerStepper* stepper) {
   CEodeMemRec* ce = nullptr;
-  int flag = ceode::Access(ce_mem, __func__, &ce, true);
-  if (flag != CE_SUCCESS) return flag;
-  if (stepper == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "stepper = NULL.");
-  *stepper = nullptr;
   Stepper* st = nullptr;
-  if ((flag = ceode::StepperCreate(ce, &st, __func__)) != CE_SUCCESS) return flag;
+  const int flag = BeginCreate(ce_mem, stepper, __func__, &ce, &st);
+  if (flag != CE_SUCCESS) return flag;
   int rv = MRIStepInnerStepper_Create(ce->sunctx, stepper);
   if (rv == 0) rv = MRIStepInnerStepper_SetContent(*stepper, st);
   if (rv == 0) rv = MRIStepInnerStepper_SetEvolveFn(*stepper, MriEvolve);
@@ -728,12 +736,9 @@ int CEodeGetNumInnerRestarts(void* ce_mem, long int* nrestarts) {
 #ifdef CEODE_HAVE_SUNSTEPPER
 int CEodeCreateSUNStepper(void* ce_mem, SUNStepper* stepper) {
   CEodeMemRec* ce = nullptr;
-  int flag = ceode::Access(ce_mem, __func__, &ce, true);
-  if (flag != CE_SUCCESS) return flag;
-  if (stepper == nullptr) return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "stepper = NULL.");
-  *stepper = nullptr;
   Stepper* st = nullptr;
-  if ((flag = ceode::StepperCreate(ce, &st, __func__)) != CE_SUCCESS) return flag;
+  const int flag = BeginCreate(ce_mem, stepper, __func__, &ce, &st);
+  if (flag != CE_SUCCESS) return flag;
   int rv = SUNStepper_Create(ce->sunctx, stepper);
   if (rv == 0) rv = SunAttach(*stepper, st);
   if (rv != 0) {

@@ -19,14 +19,7 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::LinearSolver;
-using ceode_test::Matrix;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
-
-using ceode_test::Contains;
+using namespace ceode_test;  // the handles and helpers of test_util.hpp
 
 struct NlsDeleter {
   void operator()(SUNNonlinearSolver s) const { SUNNonlinSolFree(s); }

@@ -20,12 +20,7 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::LinearSolver;
-using ceode_test::Matrix;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
+using namespace ceode_test;  // the handles and helpers of test_util.hpp
 
 constexpr double kG = 9.81;
 constexpr double kL = 1.0;
@@ -143,6 +138,7 @@ struct RunResult {
   long steps = 0;
   long iters = 0;
   long setups = 0;
+  long jac_evals = 0;
   std::vector<double> q, v, lambda;  // at the end
   double tension_err = 0;            // max relative error of the rod tension from lambda
 };
@@ -158,6 +154,7 @@ struct RunOptions {
   bool user_jac = false;
   int maxcor = 0;         // > 0: CEodeSetMaxNonlinIters
   double nls_reltol = 0;  // > 0: CEodeSetNonlinTolerances(reltol, 0)
+  long msbj = 0;          // > 0: CEodeSetJacEvalFrequency
   Pendulum* problem = nullptr;
 };
 
@@ -204,6 +201,7 @@ RunResult RunPendulum(const RunOptions& o) {
   if (o.nls_reltol > 0) {
     EXPECT_EQ(CEodeSetNonlinTolerances(mem.get(), o.nls_reltol, 0), CE_SUCCESS);
   }
+  if (o.msbj > 0) EXPECT_EQ(CEodeSetJacEvalFrequency(mem.get(), o.msbj), CE_SUCCESS);
 
   Vector q = SerialVector(3, ctx);
   Vector v = SerialVector(3, ctx);
@@ -236,6 +234,7 @@ RunResult RunPendulum(const RunOptions& o) {
   CEodeGetNumSteps(mem.get(), &res.steps);
   CEodeGetNumNonlinSolvIters(mem.get(), &res.iters);
   CEodeGetNumLinSolvSetups(mem.get(), &res.setups);
+  CEodeGetNumJacEvals(mem.get(), &res.jac_evals);
   res.q.assign(N_VGetArrayPointer(q.get()), N_VGetArrayPointer(q.get()) + 3);
   res.v.assign(N_VGetArrayPointer(v.get()), N_VGetArrayPointer(v.get()) + 3);
   if (CEodeGetMultipliers(mem.get(), lam.get()) == CE_SUCCESS) {
@@ -451,6 +450,7 @@ TEST(Constraints, AFailingConstraintCallbackGivesConstrFailAndTheMemoryStaysUsab
 
 TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
   for (bool vdep : {false, true}) {
+    SCOPED_TRACE(vdep ? "vdep" : "no vdep");
     Pendulum pd, ps;
     pd.damping = ps.damping = vdep ? 0.3 : 0;
     RunOptions o;
@@ -477,6 +477,38 @@ TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
     const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * o.h * o.h);
     for (int i = 0; i < 2; ++i) {
       EXPECT_NEAR(dense.lambda[i], sparse.lambda[i], lambda_resolution);
+    }
+  }
+}
+
+// Issue 10: the saddle-point matrix of an earlier step serves until msbj steps have passed (default
+// 20): at most one Jacobian evaluation in ten steps, and the answer of a run that refreshes the
+// matrix at every step (msbj = 1) to within its round-off. f depending on v: only df/dv is
+// reused, the matrix is formed at every step.
+TEST(Constraints, TheSaddleMatrixIsReusedAcrossStepsWithUnchangedAnswers) {
+  for (bool vdep : {false, true}) {
+    SCOPED_TRACE(vdep ? "vdep" : "no vdep");
+    Pendulum pr, pf;
+    pr.damping = pf.damping = vdep ? 0.3 : 0;
+    RunOptions o;
+    o.h = 1e-3;
+    o.tend = 2;
+    o.vel_dependent = vdep;
+    o.problem = &pr;
+    const RunResult reused = RunPendulum(o);
+    o.msbj = 1;
+    o.problem = &pf;
+    const RunResult fresh = RunPendulum(o);
+    ASSERT_EQ(reused.flag, CE_SUCCESS);
+    ASSERT_EQ(fresh.flag, CE_SUCCESS);
+    EXPECT_LE(10 * reused.jac_evals, reused.steps);
+    EXPECT_GE(fresh.jac_evals, fresh.steps);
+    if (!vdep) EXPECT_LE(10 * reused.setups, reused.steps);
+    EXPECT_NEAR(reused.error, fresh.error, 1e-3 * fresh.error + 1e-14);
+    EXPECT_LE(reused.drift, 1e-14);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(reused.q[i], fresh.q[i], 1e-12);
+      EXPECT_NEAR(reused.v[i], fresh.v[i], 1e-11);
     }
   }
 }

@@ -14,12 +14,7 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::LinearSolver;
-using ceode_test::Matrix;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
+using namespace ceode_test;  // the handles and helpers of test_util.hpp
 
 // A damped chain of N unit masses between fixed walls:
 //   x_i'' = k (x_{i-1} - 2 x_i + x_{i+1}) - c v_i.

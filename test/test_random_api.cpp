@@ -16,12 +16,7 @@
 
 namespace {
 
-using ceode_test::Context;
-using ceode_test::LinearSolver;
-using ceode_test::Matrix;
-using ceode_test::Mem;
-using ceode_test::SerialVector;
-using ceode_test::Vector;
+using namespace ceode_test;  // the handles and helpers of test_util.hpp
 
 // x'' = -x - 0.1 x' (any length), M = 2 I in the matrix's own size.
 int Rhs(sunrealtype, N_Vector x, N_Vector v, N_Vector f, void*) {
