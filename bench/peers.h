@@ -98,6 +98,13 @@ constexpr Info kPeers[] = {
     {Kind::kMsAdams, "GSL", "msadams", false, 0, false},
 };
 
+inline const Info& InfoOf(Kind k) {
+  for (const Info& i : kPeers) {
+    if (i.kind == k) return i;
+  }
+  return kPeers[0];  // unreachable: every Kind has its row
+}
+
 // GSL's default error handler aborts the process; the runners check flags.
 inline void Setup() { gsl_set_error_handler_off(); }
 

@@ -125,14 +125,13 @@ void PeerAccel(double t, const double* x, const double* v, double* a, void*) {
 // An independent check of the reference: GSL rk8pd at tol 1e-14.
 bool CrossCheck(const peers::Problem& p) {
   wp::Outcome o;
-  const peers::Info rk8pd = peers::kPeers[6];
+  const peers::Info& rk8pd = peers::InfoOf(peers::Kind::kRk8pd);
   const bool ran = peers::PeerOnce<1>(p, rk8pd, 1e-14, 1.0, &o) == 0;
   const bool ok = ran && o.error < 1e-11;
   std::printf("GSL rk8pd at tol 1e-14 against the reference: %.2e %s\n", o.error,
               ok ? "ok" : "-- DISAGREES");
   return ok;
 }
-#endif
 
 // CEODE's best curve over odeint RK4's at one error level (issue 10's target).
 void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& sets, double e) {
@@ -148,6 +147,8 @@ void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& set
               tc > 0 && tr > 0 ? (tc <= tr ? " (CEODE at least as fast)" : " (CEODE SLOWER)")
                                : " (not reached)");
 }
+
+#endif
 
 }  // namespace
 
