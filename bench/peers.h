@@ -34,11 +34,16 @@
 #include <array>
 // odeint's steppers copy their (deliberately uninitialised) std::array scratch
 // states on construction, which GCC reports as maybe-uninitialized.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <boost/numeric/odeint.hpp>
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -225,7 +230,7 @@ struct GslData {
 
 inline int GslRhs(double t, const double y[], double dy[], void* data) {
   auto* d = static_cast<GslData*>(data);
-  const int n = d->p->n;
+  const std::ptrdiff_t n = d->p->n;
   ++d->evals;
   std::copy(y + n, y + 2 * n, dy);
   d->p->acc(t, y, y + n, dy + n, d->p->user);
@@ -236,14 +241,14 @@ inline int GslRhs(double t, const double y[], double dy[], void* data) {
 // over), so that the error is seen after every step.
 inline int GslOnce(const Problem& p, Kind k, double tol, double atol_factor, wp::Outcome* out) {
   GslData data{&p, 0};
-  gsl_odeiv2_system sys = {GslRhs, nullptr, static_cast<size_t>(2 * p.n), &data};
+  gsl_odeiv2_system sys = {GslRhs, nullptr, 2 * static_cast<size_t>(p.n), &data};
   const gsl_odeiv2_step_type* type = k == Kind::kRk8pd   ? gsl_odeiv2_step_rk8pd
                                      : k == Kind::kRkf45 ? gsl_odeiv2_step_rkf45
                                                          : gsl_odeiv2_step_msadams;
   gsl_odeiv2_driver* d = gsl_odeiv2_driver_alloc_y_new(&sys, type, p.h0, atol_factor * tol, tol);
   Track tr(p);
   if (d == nullptr) return 1;
-  std::vector<double> y(2 * p.n);
+  std::vector<double> y(2 * static_cast<size_t>(p.n));
   std::copy(p.x0.begin(), p.x0.end(), y.begin());
   std::copy(p.v0.begin(), p.v0.end(), y.begin() + p.n);
   double t = p.t0;
@@ -322,6 +327,47 @@ inline Window OrderWindow(const Info& peer) {
   return {3, 1e9};
 }
 
+// The points of one peer curve between the floor and the ceiling: x is h
+// (fixed step) or the step count (adaptive); any: the curve has rows at all.
+struct Curve {
+  std::vector<double> x, tol, e;
+  bool any = false;
+};
+
+inline Curve CollectCurve(const wp::Table& table, const Info& peer, double floor, double ceiling) {
+  Curve c;
+  for (const wp::Row& r : table.rows()) {
+    if (r.solver != peer.solver || r.config != peer.config) continue;
+    c.any = true;
+    if (r.error > floor && r.error < ceiling) {
+      c.x.push_back(peer.fixed ? r.h_or_tol : static_cast<double>(r.steps));
+      c.tol.push_back(r.h_or_tol);
+      c.e.push_back(r.error);
+    }
+  }
+  if (peer.fixed && c.x.size() > 3) {  // the asymptotic order: the 3 smallest h above the floor
+    for (std::vector<double>* v : {&c.x, &c.tol, &c.e}) v->erase(v->begin(), v->end() - 3);
+  }
+  return c;
+}
+
+// Fits and prints one curve; true when it converges as its method must.
+inline bool CurveConverges(const Info& peer, const Curve& c) {
+  const Window w = OrderWindow(peer), prop{0.6, 1.6};
+  const bool fit = c.x.size() >= 2;
+  double s = 0, q = 1;
+  if (fit) {
+    s = peer.fixed ? LogLogSlope(c.x, c.e) : -LogLogSlope(c.x, c.e);
+    if (!peer.fixed) q = LogLogSlope(c.tol, c.e);
+  }
+  const bool ok = fit && w.Holds(s) && prop.Holds(q);
+  std::printf("  %-7s %-16s %s %6.2f (expected %s)", peer.solver, peer.config,
+              peer.fixed ? "error ~ h^p,      p =" : "error ~ steps^-p, p =", s, w.Text().c_str());
+  if (!peer.fixed) std::printf(", error ~ tol^%.2f (expected %s)", q, prop.Text().c_str());
+  std::printf(" over %zu points %s\n", c.x.size(), ok ? "ok" : "-- NONSENSE");
+  return ok;
+}
+
 // Checks every peer curve of the table converges at its order (see the
 // header comment), on the points with floor < error < ceiling; adaptive
 // curves must also keep the error proportional to the tolerance (slope of log
@@ -331,33 +377,8 @@ inline int CheckPeerOrders(const wp::Table& table, double floor, double ceiling)
   int bad = 0;
   std::printf("\npeer orders (log-log fit on errors in (%.0e, %.0e)):\n", floor, ceiling);
   for (const Info& peer : kPeers) {
-    std::vector<double> x, tol, e;
-    bool any = false;
-    for (const wp::Row& r : table.rows()) {
-      if (r.solver != peer.solver || r.config != peer.config) continue;
-      any = true;
-      if (r.error > floor && r.error < ceiling) {
-        x.push_back(peer.fixed ? r.h_or_tol : static_cast<double>(r.steps));
-        tol.push_back(r.h_or_tol);
-        e.push_back(r.error);
-      }
-    }
-    if (!any) continue;
-    if (peer.fixed && x.size() > 3) {  // the asymptotic order: the 3 smallest h above the floor
-      x.erase(x.begin(), x.end() - 3);
-      e.erase(e.begin(), e.end() - 3);
-    }
-    const Window w = OrderWindow(peer), prop{0.6, 1.6};
-    const bool fit = x.size() >= 2;
-    const double s = !fit ? 0 : peer.fixed ? LogLogSlope(x, e) : -LogLogSlope(x, e);
-    const double q = fit && !peer.fixed ? LogLogSlope(tol, e) : 1.0;
-    const bool ok = fit && w.Holds(s) && prop.Holds(q);
-    std::printf("  %-7s %-16s %s %6.2f (expected %s)", peer.solver, peer.config,
-                peer.fixed ? "error ~ h^p,      p =" : "error ~ steps^-p, p =", s,
-                w.Text().c_str());
-    if (!peer.fixed) std::printf(", error ~ tol^%.2f (expected %s)", q, prop.Text().c_str());
-    std::printf(" over %zu points %s\n", x.size(), ok ? "ok" : "-- NONSENSE");
-    if (!ok) ++bad;
+    const Curve c = CollectCurve(table, peer, floor, ceiling);
+    if (c.any && !CurveConverges(peer, c)) ++bad;
   }
   return bad;
 }

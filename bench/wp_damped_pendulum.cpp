@@ -150,6 +150,98 @@ void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& set
 
 #endif
 
+constexpr double kRoundOff = 3e-14;  // below: the sweep of a fixed-step curve stops
+
+struct Plan {
+  std::vector<double> steps, tols;
+  std::vector<std::string> sets;
+};
+
+Plan MakePlan(bool quick) {
+  std::vector<long> ns = {100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000, 100000};
+  Plan plan;
+  plan.tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
+  plan.sets = {"G3_CD", "G4_A34", "G5", "G5_TOP", "G5_ONES", "G6_O5", "G6_O6", "G7_O7", "G8_O8"};
+  if (quick) {
+    ns = {200, 1000};
+    plan.tols = {1e-5, 1e-9};
+    plan.sets = {"G5", "G8_O8"};
+  }
+  for (long n : ns) plan.steps.push_back(kTend / static_cast<double>(n));
+  return plan;
+}
+
+// CEODE's sets (implicit path, Newton, analytic df/dtheta').
+void RunCeode(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) {
+  wp::SecondOrder p2;
+  p2.n = 1;
+  p2.f = Rhs2;
+  p2.user = scene;
+  p2.tend = kTend;
+  p2.x0 = {0.0};
+  p2.v0 = {0.0};
+  p2.err = Err2;
+  p2.vel_dependent = true;
+  p2.vjac = VelJac;
+  for (const std::string& m : plan.sets) {
+    for (double h : plan.steps) {
+      wp::Outcome o;
+      if (!wp::MeasureCeode(table, ctx, p2, m.c_str(), h, false, m, &o)) continue;
+      if (o.error < kRoundOff) break;
+    }
+  }
+}
+
+// ARKODE (RK3 at the same h, adaptive ERK) and CVODE (Adams, BDF); false if no RK3 table.
+bool RunSundials(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) {
+  wp::FirstOrder p1;
+  p1.n = 2;
+  p1.f = Rhs1;
+  p1.user = scene;
+  p1.tend = kTend;
+  p1.y0 = {0.0, 0.0};
+  p1.err = Err1;
+  ARKodeButcherTable rk3 = wp::KuttaRk3();
+  if (rk3 == nullptr) return false;
+  for (double h : plan.steps) {
+    wp::Outcome o;
+    if (wp::MeasureSundials(table, ctx, p1, wp::Sun::kErkFixed, h, 0, rk3, "RK3-Kutta", nullptr,
+                            &o) &&
+        o.error < kRoundOff) {
+      break;
+    }
+  }
+  ARKodeButcherTable_Free(rk3);
+  for (wp::Sun kind : {wp::Sun::kErkAdaptive, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
+    for (double tol : plan.tols) {
+      wp::MeasureSundials(table, ctx, p1, kind, tol, 1.0, nullptr, "adaptive");
+    }
+  }
+  return true;
+}
+
+// The peers, the reference's cross-check and their order checks; returns the problems.
+int RunPeers(Scene* scene, const Plan& plan, wp::Table* table) {
+#ifdef CEODE_BENCH_PEERS
+  peers::Setup();
+  peers::Problem pp;
+  pp.n = 1;
+  pp.acc = PeerAccel;
+  pp.user = scene;
+  pp.tend = kTend;
+  pp.x0 = {0.0};
+  pp.v0 = {0.0};
+  pp.err = Err2;
+  int bad = CrossCheck(pp) ? 0 : 1;
+  peers::MeasurePeers<1>(table, pp, plan.steps, plan.tols, 1.0);
+  return bad + peers::CheckPeerOrders(*table, 1e-12, 1e-2);
+#else
+  (void)scene, (void)plan, (void)table;
+  std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
+  return 0;
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,82 +253,16 @@ int main(int argc, char** argv) {
       "error = |theta(10) - ref|\n");
   Scene scene;
   int bad = Reference(&scene) ? 0 : 1;
-
-  wp::SecondOrder p2;
-  p2.n = 1;
-  p2.f = Rhs2;
-  p2.user = &scene;
-  p2.tend = kTend;
-  p2.x0 = {0.0};
-  p2.v0 = {0.0};
-  p2.err = Err2;
-  p2.vel_dependent = true;
-  p2.vjac = VelJac;
-  wp::FirstOrder p1;
-  p1.n = 2;
-  p1.f = Rhs1;
-  p1.user = &scene;
-  p1.tend = kTend;
-  p1.y0 = {0.0, 0.0};
-  p1.err = Err1;
-
-  std::vector<long> ns = {100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000, 100000};
-  std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
-  std::vector<std::string> sets = {"G3_CD", "G4_A34", "G5",    "G5_TOP", "G5_ONES",
-                                   "G6_O5", "G6_O6",  "G7_O7", "G8_O8"};
-  if (args.quick) {
-    ns = {200, 1000};
-    tols = {1e-5, 1e-9};
-    sets = {"G5", "G8_O8"};
-  }
-  constexpr double kRoundOff = 3e-14;  // below: the sweep of a fixed-step curve stops
-  std::vector<double> steps;
-  for (long n : ns) steps.push_back(kTend / static_cast<double>(n));
+  const Plan plan = MakePlan(args.quick);
   wp::Table table("damped_pendulum", args.csv);
-  for (const std::string& m : sets) {
-    for (double h : steps) {
-      wp::Outcome o;
-      if (!wp::MeasureCeode(&table, ctx, p2, m.c_str(), h, false, m, &o)) continue;
-      if (o.error < kRoundOff) break;
-    }
-  }
-  ARKodeButcherTable rk3 = wp::KuttaRk3();
-  if (rk3 == nullptr) return 1;
-  for (double h : steps) {
-    wp::Outcome o;
-    if (wp::MeasureSundials(&table, ctx, p1, wp::Sun::kErkFixed, h, 0, rk3, "RK3-Kutta", nullptr,
-                            &o) &&
-        o.error < kRoundOff) {
-      break;
-    }
-  }
-  ARKodeButcherTable_Free(rk3);
-  for (wp::Sun kind : {wp::Sun::kErkAdaptive, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
-    for (double tol : tols) {
-      wp::MeasureSundials(&table, ctx, p1, kind, tol, 1.0, nullptr, "adaptive");
-    }
-  }
-#ifdef CEODE_BENCH_PEERS
-  peers::Setup();
-  peers::Problem pp;
-  pp.n = 1;
-  pp.acc = PeerAccel;
-  pp.user = &scene;
-  pp.tend = kTend;
-  pp.x0 = {0.0};
-  pp.v0 = {0.0};
-  pp.err = Err2;
-  if (!CrossCheck(pp)) ++bad;
-  peers::MeasurePeers<1>(&table, pp, steps, tols, 1.0);
-  bad += peers::CheckPeerOrders(table, 1e-12, 1e-2);
-#else
-  std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
-#endif
+  RunCeode(ctx, &scene, plan, &table);
+  if (!RunSundials(ctx, &scene, plan, &table)) ++bad;
+  bad += RunPeers(&scene, plan, &table);
   bad += table.failures();
   wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
 #ifdef CEODE_BENCH_PEERS
   std::printf("\n");
-  for (double e : {1e-6, 1e-9}) PrintAgainstRk4(table, sets, e);
+  for (double e : {1e-6, 1e-9}) PrintAgainstRk4(table, plan.sets, e);
 #endif
   std::printf("%d problem(s)\n", bad);
   SUNContext_Free(&ctx);
