@@ -20,10 +20,10 @@
 //
 // CheckPeerOrders turns "the curve is correct" into a check that fails the
 // scene: a fixed-step peer's error must fall like h^p (log-log slope over its
-// 3 smallest h above the floor in [p - 0.6, p + 0.9]), an adaptive one's like steps^-p (fixed-order
-// methods: slope within [p - 1.5, p + 3]; variable-order Bulirsch-Stoer and Adams: steeper than 3)
-// and like tol^q with q in [0.6, 1.6], fitted on the points between the scene's round-off floor and
-// a ceiling.
+// 3 smallest h above the floor in [p - 0.6, p + 0.9]), an adaptive one's like
+// steps^-p (fixed-order pairs: slope in [p - 1.5, p + 3]; variable-order
+// Bulirsch-Stoer and Adams: steeper than 3) and like tol^q, q in [0.6, 1.6],
+// fitted on the points between the scene's round-off floor and a ceiling.
 // -----------------------------------------------------------------------------
 #ifndef CEODE_BENCH_PEERS_H_
 #define CEODE_BENCH_PEERS_H_
@@ -63,7 +63,8 @@ struct Problem {
   double t0 = 0, tend = 0;
   std::vector<double> x0, v0;
   wp::ErrFn2 err = nullptr;  // called after every step, as for CEODE
-  bool separable = false;    // acc depends on x only: the symplectic peers apply
+  bool separable = false;    // acc depends on x only (not t, not v; v is passed as
+                             // nullptr): the symplectic peers apply
   double h0 = 1e-3;          // first trial step of the adaptive peers
 };
 
