@@ -213,31 +213,64 @@ inline double TimeAtError(const std::vector<Row>& rows, const std::string& solve
   return best;
 }
 
+// The integrators users pick outside SUNDIALS (bench/peers.h writes these
+// solver names): a third side in PrintEqualError and scripts/ratios.py.
+inline bool IsPeerSolver(const std::string& solver) {
+  return solver == "odeint" || solver == "GSL";
+}
+
+// Best curve of one side at error e: its time (< 0: not reached) and name.
+template <class Pick>
+double BestAtError(const Table& table,
+                   const std::vector<std::pair<std::string, std::string>>& curves, double e,
+                   Pick pick, std::string* name) {
+  double best = -1;
+  *name = "not reached";
+  for (const auto& k : curves) {
+    if (!pick(k.first)) continue;
+    const double t = TimeAtError(table.rows(), k.first, k.second, e);
+    if (t > 0 && (best < 0 || t < best)) {
+      best = t;
+      *name = k.first + " " + k.second;
+    }
+  }
+  return best;
+}
+
 // Prints, at each error level, the best CEODE curve and the best other curve of
-// the table and their time ratio (< 1: CEODE faster).
+// the table and their time ratio (< 1: CEODE faster). When the table has peer
+// curves (IsPeerSolver), "other" is SUNDIALS only (no peer, no hand loop) and
+// the best peer gets its own columns and ratio.
 inline void PrintEqualError(const Table& table, const std::vector<double>& levels) {
   std::vector<std::pair<std::string, std::string>> curves;
+  bool peers = false;
   for (const Row& r : table.rows()) {
     const auto key = std::make_pair(r.solver, r.config);
     if (std::find(curves.begin(), curves.end(), key) == curves.end()) curves.push_back(key);
+    peers |= IsPeerSolver(r.solver);
   }
-  std::printf("\ntime at equal error (best curve per side):\n%9s %-30s %11s %-30s %11s %8s\n",
-              "error", "best CEODE", "seconds", "best other", "seconds", "ratio");
+  std::printf("\ntime at equal error (best curve per side):\n%9s %-30s %11s %-30s %11s %8s",
+              "error", "best CEODE", "seconds", peers ? "best SUNDIALS" : "best other", "seconds",
+              "ratio");
+  std::printf(peers ? " %-30s %11s %8s\n" : "\n", "best peer", "seconds", "ratio");
   for (double e : levels) {
-    double tc = -1, to = -1;
-    std::string nc = "not reached", no = "not reached";
-    for (const auto& k : curves) {
-      const double t = TimeAtError(table.rows(), k.first, k.second, e);
-      const bool ce = k.first == "CEODE";
-      double& best = ce ? tc : to;
-      if (t > 0 && (best < 0 || t < best)) {
-        best = t;
-        (ce ? nc : no) = k.first + " " + k.second;
-      }
-    }
-    if (tc < 0 && to < 0) continue;
-    std::printf("%9.0e %-30s %11.3e %-30s %11.3e %8.3f\n", e, nc.c_str(), tc, no.c_str(), to,
+    std::string nc, no, np;
+    const double tc = BestAtError(
+        table, curves, e, [](const std::string& s) { return s == "CEODE"; }, &nc);
+    const double to = BestAtError(
+        table, curves, e,
+        [peers](const std::string& s) {
+          return s != "CEODE" && !(peers && (IsPeerSolver(s) || s == "CEODE-hand"));
+        },
+        &no);
+    const double tp = BestAtError(table, curves, e, IsPeerSolver, &np);
+    if (tc < 0 && to < 0 && tp < 0) continue;
+    std::printf("%9.0e %-30s %11.3e %-30s %11.3e %8.3f", e, nc.c_str(), tc, no.c_str(), to,
                 tc > 0 && to > 0 ? tc / to : 0.0);
+    if (peers) {
+      std::printf(" %-30s %11.3e %8.3f", np.c_str(), tp, tc > 0 && tp > 0 ? tc / tp : 0.0);
+    }
+    std::printf("\n");
   }
 }
 

@@ -2,7 +2,8 @@
 // wp_high_order: CEODE's high-degree sets (G6_O5 ... G8_O8, docs/stability.md) against
 // the high-order integrators users pick for smooth problems, error against CPU time:
 //   * GSL rk8pd (Prince-Dormand 8(7), gsl_odeiv2_driver, eps_abs = eps_rel = tol),
-//   * Boost.Odeint runge_kutta_fehlberg78 (controlled) and bulirsch_stoer,
+//   * Boost.Odeint runge_kutta_fehlberg78 (controlled) and bulirsch_stoer (these three
+//     through bench/peers.h, the peer runners of every scene: one evolve step at a time),
 //   * ARKODE ERKStep at order 8 (Fehlberg 13-7-8), adaptive, stop time at t_end,
 //   * CEODE at fixed steps (h divides t_end), stability guard off.
 // Problems: the IFToMM pendulum theta'' = -9.81 cos theta, theta(0) = theta'(0) = 0, error
@@ -13,17 +14,13 @@
 // Timing: wp::TimeMedian (process CPU time, median of >= 5 repetitions of >= 50 ms).
 //
 //   wp_high_order [--csv FILE] [--quick]
-// Prints one row per run and a summary: per solver, the CPU time interpolated (log-log, on
-// the solver's Pareto front) at errors 1e-9 and 1e-11, and the smallest error reached.
+// Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
+// (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
 // --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
 // -----------------------------------------------------------------------------
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_odeiv2.h>
-
-#include <array>
-#include <boost/numeric/odeint.hpp>
 #include <map>
 
+#include "peers.h"  // GSL rk8pd, odeint rkf78 and Bulirsch-Stoer: the peers of every scene
 #include "wp_common.h"
 
 namespace {
@@ -134,49 +131,47 @@ int CeodeRun(SUNContext ctx, const Problem& p, const char* method, long steps, b
   return flag < 0 ? 1 : 0;
 }
 
-// ---- first-order form for the others -----------------------------------------
+// ---- the peers (bench/peers.h) --------------------------------------------------
+// x'' = accel(x) as peers::AccFn; counts the evaluations in the Problem.
+void PeerAccel(double /*t*/, const double* x, const double* /*v*/, double* a, void* user) {
+  const auto* p = static_cast<const Problem*>(user);
+  ++p->evals;
+  p->accel(x, a, p->n);
+}
+
+// Only theta(10) / x(10) counts: earlier instants report no error.
+double PeerEndError(double t, const double* x, const double* /*v*/, void* user) {
+  const auto* p = static_cast<const Problem*>(user);
+  return t < p->tend - 1e-9 ? 0.0 : ErrorOf(*p, x);
+}
+
+peers::Problem PeerProblem(const Problem& p) {
+  peers::Problem pp;
+  pp.n = p.n;
+  pp.acc = PeerAccel;
+  pp.user = const_cast<Problem*>(&p);
+  pp.tend = p.tend;
+  pp.x0 = p.x0;
+  pp.v0 = p.v0;
+  pp.err = PeerEndError;
+  return pp;
+}
+
+// eps_abs = eps_rel = tol, first trial step 1e-3 (peers::Problem::h0).
+int PeerRun(const peers::Problem& pp, peers::Kind k, double tol, double* err) {
+  wp::Outcome o;
+  const peers::Info& info = peers::InfoOf(k);
+  const int rc = pp.n == 1 ? peers::PeerOnce<1>(pp, info, tol, 1.0, &o)
+                           : peers::PeerOnce<kChain>(pp, info, tol, 1.0, &o);
+  *err = o.error;
+  return rc;
+}
+
+// ---- ARKODE on the first-order form ------------------------------------------------
 void FirstOrder(const Problem& p, const double* y, double* dy) {
   ++p.evals;
   std::copy(y + p.n, y + 2 * p.n, dy);
   p.accel(y, dy + p.n, p.n);
-}
-
-int GslRhs(double /*t*/, const double y[], double dy[], void* data) {
-  FirstOrder(*static_cast<const Problem*>(data), y, dy);
-  return GSL_SUCCESS;
-}
-
-int GslRun(const Problem& p, double tol, double* err) {
-  gsl_odeiv2_system sys = {GslRhs, nullptr, static_cast<size_t>(2 * p.n), const_cast<Problem*>(&p)};
-  gsl_odeiv2_driver* d =
-      gsl_odeiv2_driver_alloc_standard_new(&sys, gsl_odeiv2_step_rk8pd, 1e-3, tol, tol, 1, 0);
-  std::vector<double> y(2 * p.n);
-  std::copy(p.x0.begin(), p.x0.end(), y.begin());
-  std::copy(p.v0.begin(), p.v0.end(), y.begin() + p.n);
-  double t = 0;
-  const int s = gsl_odeiv2_driver_apply(d, &t, p.tend, y.data());
-  gsl_odeiv2_driver_free(d);
-  *err = ErrorOf(p, y.data());
-  return s == GSL_SUCCESS ? 0 : 1;
-}
-
-using State = std::vector<double>;
-
-int OdeintRun(const Problem& p, double tol, bool bs, double* err) {
-  namespace ode = boost::numeric::odeint;
-  State y(2 * p.n);
-  std::copy(p.x0.begin(), p.x0.end(), y.begin());
-  std::copy(p.v0.begin(), p.v0.end(), y.begin() + p.n);
-  auto rhs = [&p](const State& s, State& ds, double) { FirstOrder(p, s.data(), ds.data()); };
-  if (bs) {
-    ode::bulirsch_stoer<State> stepper(tol, tol);
-    ode::integrate_adaptive(stepper, rhs, y, 0.0, p.tend, 1e-3);
-  } else {
-    auto stepper = ode::make_controlled(tol, tol, ode::runge_kutta_fehlberg78<State>());
-    ode::integrate_adaptive(stepper, rhs, y, 0.0, p.tend, 1e-3);
-  }
-  *err = ErrorOf(p, y.data());
-  return 0;
 }
 
 int ArkRhs(sunrealtype /*t*/, N_Vector y, N_Vector dy, void* data) {
@@ -219,24 +214,19 @@ bool Measure(const Problem& p, const std::string& solver, double param, F run,
   return r.seconds >= 0;
 }
 
-// CPU time at a target error on the solver's Pareto front, log-log interpolated; < 0: the
-// front does not reach the target.
-double TimeAt(std::vector<Result> rs, double target) {
-  std::sort(rs.begin(), rs.end(),
-            [](const Result& a, const Result& b) { return a.seconds < b.seconds; });
-  std::vector<Result> front;
+// CPU time at a target error: wp::TimeAtError, the one equal-error rule of every scene
+// (measured points at or below the target, log-log interpolation on every segment of the
+// curve, in run order, that crosses it); < 0: the curve does not reach the target.
+double TimeAt(const std::vector<Result>& rs, double target) {
+  std::vector<wp::Row> rows;
   for (const Result& r : rs) {
-    if (front.empty() || r.error < front.back().error) front.push_back(r);
+    wp::Row w;
+    w.solver = r.solver;
+    w.error = r.error;
+    w.seconds = r.seconds;
+    rows.push_back(w);
   }
-  for (size_t i = 0; i < front.size(); ++i) {
-    if (front[i].error > target) continue;
-    if (i == 0) return front[0].seconds;
-    const Result& a = front[i - 1];
-    const Result& b = front[i];
-    const double w = std::log(target / a.error) / std::log(b.error / a.error);
-    return std::exp(std::log(a.seconds) + w * std::log(b.seconds / a.seconds));
-  }
-  return -1;
+  return rs.empty() ? -1 : wp::TimeAtError(rows, rs.front().solver, "", target);
 }
 
 struct Plan {
@@ -260,13 +250,17 @@ bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<
       }
     }
   }
+  const peers::Problem pp = PeerProblem(p);
   for (double tol : plan.tols) {
     ok &= Measure(
-        p, "gsl_rk8pd", tol, [&](double* e) { return GslRun(p, tol, e); }, rs);
+        p, "gsl_rk8pd", tol, [&](double* e) { return PeerRun(pp, peers::Kind::kRk8pd, tol, e); },
+        rs);
     ok &= Measure(
-        p, "odeint_rkf78", tol, [&](double* e) { return OdeintRun(p, tol, false, e); }, rs);
+        p, "odeint_rkf78", tol, [&](double* e) { return PeerRun(pp, peers::Kind::kRkf78, tol, e); },
+        rs);
     ok &= Measure(
-        p, "odeint_bs", tol, [&](double* e) { return OdeintRun(p, tol, true, e); }, rs);
+        p, "odeint_bs", tol,
+        [&](double* e) { return PeerRun(pp, peers::Kind::kBulirschStoer, tol, e); }, rs);
     ok &= Measure(
         p, "arkode_erk8", tol, [&](double* e) { return ArkRun(ctx, p, tol, e); }, rs);
   }
@@ -299,7 +293,7 @@ void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
 
 int main(int argc, char** argv) {
   const wp::Args args = wp::ParseArgs(argc, argv);
-  gsl_set_error_handler_off();
+  peers::Setup();
   SUNContext ctx;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
   Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};

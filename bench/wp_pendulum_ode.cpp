@@ -17,13 +17,18 @@
 //    the first-order system (theta, theta');
 //  * ARKODE ERKStep adaptive (default order 4) and CVODE Adams (fixed-point
 //    iteration), rtol = 1e-3 ... 1e-12, atol = rtol, energy error at every
-//    internal step (one-step mode).
+//    internal step (one-step mode);
+//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
+//    and Boost): odeint runge_kutta4, velocity_verlet and
+//    symplectic_rkn_sb3a_mclachlan at the same h, odeint rkf78, dopri5,
+//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances.
 //
 // Usage: wp_pendulum_ode [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, ARKODE's RK3 is Kutta's method (checked
 // against a hand-written RK3), the hand loops agree with CEODE to 1 %
-// (or 1e-13 absolute) and G5 at h = 1e-3 is within a factor 2 of the paper's
-// 6.71e-11 (its Table 6).
+// (or 1e-13 absolute), G5 at h = 1e-3 is within a factor 2 of the paper's
+// 6.71e-11 (its Table 6) and every peer converges at its order
+// (peers::CheckPeerOrders).
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>
@@ -31,6 +36,9 @@
 #include <vector>
 
 #include "wp_common.h"
+#ifdef CEODE_BENCH_PEERS
+#include "peers.h"
+#endif
 
 namespace {
 
@@ -59,6 +67,12 @@ double Err2(double, const double* x, const double* v, void*) {
   return std::fabs(Energy(x[0], v[0]));
 }
 double Err1(double, const double* y, void*) { return std::fabs(Energy(y[0], y[1])); }
+
+#ifdef CEODE_BENCH_PEERS
+void PeerAccel(double, const double* x, const double*, double* a, void*) {
+  a[0] = -(kGrav / kLen) * std::cos(x[0]);
+}
+#endif
 
 // The G3 step (docs/theory.md section 2, d = 3) written out on doubles.
 double HandG3(double alpha, double beta, double h, long* steps) {
@@ -228,6 +242,27 @@ int main(int argc, char** argv) {
     wp::MeasureSundials(&table, ctx, p1, wp::Sun::kCvodeAdams, tol, 1.0, nullptr, "adaptive");
   }
 
+#ifdef CEODE_BENCH_PEERS
+  // The peers (bench/peers.h); f depends on theta only, so the symplectic ones apply.
+  peers::Setup();
+  peers::Problem pp;
+  pp.n = 1;
+  pp.acc = PeerAccel;
+  pp.tend = kTend;
+  pp.x0 = {0.0};
+  pp.v0 = {0.0};
+  pp.err = Err2;
+  pp.separable = true;
+  // A finer h grid than CEODE's: RK4 and SB3A go from pre-asymptotic (h = 0.1) to
+  // round-off (h = 1e-3) within two decades, and their order fits need points between.
+  std::vector<double> peer_steps = {1e-1, 5e-2, 2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 1e-4, 1e-5};
+  if (args.quick) peer_steps = {1e-2, 5e-3};
+  peers::MeasurePeers<1>(&table, pp, peer_steps, tols, 1.0);
+  bad += peers::CheckPeerOrders(table, 1e-11, 1e-1);
+#else
+  std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
+#endif
+  wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
   bad += table.failures();
   if (!args.quick) {
     const bool ok = g5_1e3 > 0 && g5_1e3 < 2 * 6.71e-11 && g5_1e3 > 6.71e-11 / 2;

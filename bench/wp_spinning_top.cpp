@@ -24,11 +24,16 @@
 //  * ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8);
 //  * ARKODE ERKStep adaptive (default order 4), CVODE Adams (fixed point) and
 //    CVODE BDF (Newton, dense), rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol (angles
-//    ~ 1, rates ~ 10).
+//    ~ 1, rates ~ 10);
+//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
+//    and Boost): odeint runge_kutta4 at the same h, odeint rkf78, dopri5,
+//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances and
+//    atol (velocity_verlet and the symplectic RKN do not apply: f depends on q').
 //
 // Usage: wp_spinning_top [--csv FILE] [--quick]
-// Exit code 0 when every run succeeded and the zero-start G5_TOP errors at
-// h = 1e-2 and 1e-3 are within a factor 2 of the paper's 2.28e-5 and 3.09e-9.
+// Exit code 0 when every run succeeded, the zero-start G5_TOP errors at
+// h = 1e-2 and 1e-3 are within a factor 2 of the paper's 2.28e-5 and 3.09e-9
+// and every peer converges at its order (peers::CheckPeerOrders).
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>
@@ -36,6 +41,9 @@
 #include <vector>
 
 #include "wp_common.h"
+#ifdef CEODE_BENCH_PEERS
+#include "peers.h"
+#endif
 
 namespace {
 
@@ -109,6 +117,12 @@ double Err1(double, const double* y, void* user) {
   const Top& p = *static_cast<Top*>(user);
   return std::fabs(Energy(p, y, y + 3) - p.e0);
 }
+
+#ifdef CEODE_BENCH_PEERS
+void PeerAccel(double, const double* x, const double* v, double* a, void* user) {
+  Accel(*static_cast<Top*>(user), x, v, a);
+}
+#endif
 
 // Checks the analytic velocity Jacobian against central differences, so a
 // wrong derivation shows up as a failure rather than as slow Newton steps.
@@ -205,6 +219,27 @@ int main(int argc, char** argv) {
   for (double tol : tols) {
     wp::MeasureSundials(&table, ctx, p1, wp::Sun::kCvodeBdf, tol, 1e-3, nullptr, "adaptive");
   }
+
+#ifdef CEODE_BENCH_PEERS
+  // The peers (bench/peers.h); f depends on the rates: no symplectic peer.
+  peers::Setup();
+  peers::Problem pp;
+  pp.n = 3;
+  pp.acc = PeerAccel;
+  pp.user = &top;
+  pp.tend = 10.0;
+  pp.x0 = q0;
+  pp.v0 = w0;
+  pp.err = Err2;
+  // RK4 reaches round-off at h = 1e-4: a finer grid above it for its order fit.
+  std::vector<double> peer_steps = {1e-2, 5e-3, 2e-3, 1e-3, 1e-4};
+  if (args.quick) peer_steps = steps;
+  peers::MeasurePeers<3>(&table, pp, peer_steps, tols, 1e-3);
+  bad += peers::CheckPeerOrders(table, 1e-13, 1e-4);
+#else
+  std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
+#endif
+  wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
 
   // The paper's Table 7 (zero start): within a factor 2.
   const double paper_h[2] = {1e-2, 1e-3}, paper_e[2] = {2.28e-5, 3.09e-9};

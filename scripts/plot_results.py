@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Draws one log-log work-precision plot per scene CSV: error against run time,
-one curve per (solver, config). Writes <csv stem>.png and .svg beside the CSV
+one curve per (solver, config): CEODE solid, SUNDIALS dashed, the odeint/GSL
+peers (bench/peers.h) dash-dotted, the hand loop dotted grey. Writes <csv stem>.png and .svg beside the CSV
 (or into --outdir).
 
 Usage: plot_results.py [--outdir DIR] [--skip-existing] FILE.csv ...
@@ -20,7 +21,7 @@ matplotlib.use("Agg")  # files only, no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from wp_curves import is_ceode, is_sundials, read_curves, usable  # noqa: E402
+from wp_curves import is_ceode, is_peer, is_sundials, read_curves, usable  # noqa: E402
 
 # Errors above this are runs past a stability limit: listed in the CSV, not drawn.
 MAX_DRAWN_ERROR = 10.0
@@ -31,6 +32,7 @@ YLABEL = {
     "spinning_top": "max |E - E0| over 10 s [J]",
     "forced_vibration": "max |x - x_exact| over 1000 s [m]",
     "chain_dae_wp": "max |E - E0| over 2 s [J] (chain of 8 masses, E0 = -22 J)",
+    "damped_pendulum": "|theta(10) - ref| [rad]",
 }
 
 
@@ -40,6 +42,8 @@ def style(solver, index):
         return dict(linestyle="-", marker=markers[index % len(markers)])
     if is_sundials(solver):
         return dict(linestyle="--", marker=markers[index % len(markers)], fillstyle="none")
+    if is_peer(solver):  # odeint / GSL (bench/peers.h): dash-dot, small filled markers
+        return dict(linestyle="-.", marker=markers[index % len(markers)], lw=0.9)
     # The hand-written reference loop: grey, dotted.
     return dict(linestyle=":", marker="x+"[index % 2], color="0.3")
 
@@ -54,8 +58,10 @@ def plot(path, outdir, skip_existing):
     if skip_existing and os.path.exists(base + ".png"):
         print(f"{base}.png exists, left alone")
         return
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    nc = ns = nh = 0
+    # Scenes with the peer curves have ~25 curves: the legend goes beside the axes.
+    many = any(is_peer(solver) for solver, _ in curves)
+    fig, ax = plt.subplots(figsize=(11, 6) if many else (8, 5.5))
+    nc = ns = nh = npeer = 0
     for (solver, config), pts in curves.items():
         pts = [p for p in pts if usable(p) and p["error"] <= MAX_DRAWN_ERROR]
         if not pts:
@@ -64,17 +70,23 @@ def plot(path, outdir, skip_existing):
             st, nc = style(solver, nc), nc + 1
         elif is_sundials(solver):
             st, ns = style(solver, ns), ns + 1
+        elif is_peer(solver):
+            st, npeer = style(solver, npeer), npeer + 1
         else:
             st, nh = style(solver, nh), nh + 1
         label = solver if config in ("", solver) else f"{solver} {config}"
-        ax.loglog([p["seconds"] for p in pts], [p["error"] for p in pts], label=label, ms=4, lw=1.2,
-                  **st)
+        kw = dict(ms=4, lw=1.2)
+        kw.update(st)
+        ax.loglog([p["seconds"] for p in pts], [p["error"] for p in pts], label=label, **kw)
     ax.set_xlabel("CPU time per solve (s), median of 5 repetitions")
     ax.set_ylabel(YLABEL.get(scene, "error (scene's measure)"))
     ax.set_title(f"{scene}: work-precision (lower left is better)")
     ax.grid(True, which="major", alpha=0.4)
     ax.grid(True, which="minor", alpha=0.12)
-    ax.legend(fontsize=7, ncol=2, loc="best")
+    if many:
+        ax.legend(fontsize=6.5, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    else:
+        ax.legend(fontsize=7, ncol=2, loc="best")
     fig.tight_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{base}.{ext}", dpi=120)

@@ -21,6 +21,14 @@ def is_sundials(solver):
     return solver.upper().startswith(SUNDIALS_PREFIXES)
 
 
+# The integrators users pick outside SUNDIALS (bench/peers.h): Boost.Odeint and GSL.
+PEER_SOLVERS = ("odeint", "GSL")
+
+
+def is_peer(solver):
+    return solver in PEER_SOLVERS
+
+
 def read_curves(path):
     """Returns (scene, OrderedDict[(solver, config)] -> list of dict points)."""
     curves = OrderedDict()
