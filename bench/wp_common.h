@@ -317,6 +317,7 @@ struct SecondOrder {
   bool vel_dependent = false;
   CEodeVelJacFn vjac = nullptr;  // nullptr: CEODE's difference quotients
   int max_nonlin_iters = 0;      // 0: CEODE's default
+  int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode (PC or AUTO: docs/theory.md 4.3)
   ErrFn2 drift = nullptr;        // constraint drift (nullptr: not tracked)
   CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
   // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G) and the
@@ -368,6 +369,7 @@ inline bool CeodeAttach(SUNContext ctx, const SecondOrder& p, CeodeObjects* o) {
            Failed(CEodeSetVelocityDependence(mem, SUNTRUE), "CEodeSetVelocityDependence") ||
            Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver") ||
            (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
+           Failed(CEodeSetImplicitMode(mem, p.implicit_mode), "CEodeSetImplicitMode") ||
            (p.max_nonlin_iters > 0 &&
             Failed(CEodeSetMaxNonlinIters(mem, p.max_nonlin_iters), "CEodeSetMaxNonlinIters"));
   }

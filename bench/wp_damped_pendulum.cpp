@@ -171,7 +171,7 @@ Plan MakePlan(bool quick) {
   return plan;
 }
 
-// CEODE's sets (implicit path, Newton, analytic df/dtheta').
+// CEODE's sets (implicit path, Newton and AUTO, analytic df/dtheta').
 void RunCeode(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) {
   wp::SecondOrder p2;
   p2.n = 1;
@@ -183,11 +183,16 @@ void RunCeode(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) 
   p2.err = Err2;
   p2.vel_dependent = true;
   p2.vjac = VelJac;
-  for (const std::string& m : plan.sets) {
-    for (double h : plan.steps) {
-      wp::Outcome o;
-      if (!wp::MeasureCeode(table, ctx, p2, m.c_str(), h, false, m, &o)) continue;
-      if (o.error < kRoundOff) break;
+  // Newton (the default), then AUTO: prediction-correction where kappa ||df/dv|| is small.
+  for (int mode : {CE_IMPLICIT_NEWTON, CE_IMPLICIT_AUTO}) {
+    p2.implicit_mode = mode;
+    for (const std::string& m : plan.sets) {
+      const std::string label = mode == CE_IMPLICIT_AUTO ? m + "-auto" : m;
+      for (double h : plan.steps) {
+        wp::Outcome o;
+        if (!wp::MeasureCeode(table, ctx, p2, m.c_str(), h, false, label, &o)) continue;
+        if (o.error < kRoundOff) break;
+      }
     }
   }
 }

@@ -202,6 +202,9 @@ int main(int argc, char** argv) {
   }
   for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, true, "G5_TOP-zero");
   for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP");
+  p2.implicit_mode = CE_IMPLICIT_AUTO;  // prediction-correction where kappa ||df/dv|| is small
+  for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP-auto");
+  p2.implicit_mode = CE_IMPLICIT_NEWTON;
   ARKodeButcherTable rk3 = wp::KuttaRk3();
   if (rk3 == nullptr) return 1;
   for (double h : steps) {
