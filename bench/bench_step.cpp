@@ -18,6 +18,8 @@
 // Usage:
 //   bench_step [--quick] [Google Benchmark flags]
 //   bench_step --count VARIANT METHOD N STEPS   (no timing: for valgrind --tool=callgrind;
+//                                               VARIANT also ceode_generic: the N_Vector
+//                                               reference update, to count its passes;
 //                                               instructions per step = difference of two
 //                                               STEPS divided by their difference)
 // Before timing, the program checks that CEODE and both hand loops agree with the exact
@@ -213,7 +215,8 @@ struct CeodeRun {
   double t = 0;
   bool ok = false;
 
-  CeodeRun(const Method& m, long n) : k(SpringConstants(n)) {
+  // generic: the N_Vector reference update instead of the fused kernel (CEodeSetFusedKernel).
+  CeodeRun(const Method& m, long n, bool generic = false) : k(SpringConstants(n)) {
     if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return;
     x = N_VNew_Serial(n, ctx);
     v = N_VNew_Serial(n, ctx);
@@ -227,6 +230,7 @@ struct CeodeRun {
          CEodeSetFixedStep(mem, kStep) == CE_SUCCESS &&
          CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0) == CE_SUCCESS &&
          CEodeSetMaxNumSteps(mem, 1L << 40) == CE_SUCCESS &&
+         CEodeSetFusedKernel(mem, generic ? SUNFALSE : SUNTRUE) == CE_SUCCESS &&
          CEodeEvolve(mem, 0.0, x, v, &t, CE_NORMAL) >= 0;  // the start, not a step
   }
   ~CeodeRun() {
@@ -381,8 +385,8 @@ int CountMode(int argc, char** argv) {
   const long n = std::atol(argv[4]);
   const long steps = std::atol(argv[5]);
   if (m == nullptr || n < 1 || steps < 0) return 2;
-  if (variant == "ceode" || variant == "ceode_1step") {
-    CeodeRun run(*m, n);
+  if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic") {
+    CeodeRun run(*m, n, variant == "ceode_generic");
     return run.ok && run.Steps(steps, variant == "ceode_1step") ? 0 : 1;
   }
   const Coeffs co = MakeCoeffs(*m, kStep);

@@ -124,19 +124,48 @@ void SumBlock(const FusedTerms& tk, sunindextype off, sunindextype len,
   }
 }
 
-using AtFn = sunrealtype (*)(const FusedTerms&, sunindextype);
 using BlockFn = void (*)(const FusedTerms&, sunindextype, sunindextype, sunrealtype* __restrict);
 
-template <std::size_t... F>
-constexpr std::array<AtFn, kNumForms> AtTable(std::index_sequence<F...> /*forms*/) {
-  return {&SumAt<static_cast<int>(F)>...};
-}
 template <std::size_t... F>
 constexpr std::array<BlockFn, kNumForms> BlockTable(std::index_sequence<F...> /*forms*/) {
   return {&SumBlock<static_cast<int>(F)>...};
 }
-constexpr std::array<AtFn, kNumForms> kAt = AtTable(std::make_index_sequence<kNumForms>{});
 constexpr std::array<BlockFn, kNumForms> kBlock = BlockTable(std::make_index_sequence<kNumForms>{});
+
+// A switch, not a table of function pointers: the small kernel's sums inline into it.
+inline sunrealtype SumAtForm(const FusedTerms& tk, sunindextype i) {
+  switch (tk.form) {
+    case 1:
+      return SumAt<1>(tk, i);
+    case 2:
+      return SumAt<2>(tk, i);
+    case 3:
+      return SumAt<3>(tk, i);
+    case 4:
+      return SumAt<4>(tk, i);
+    case 5:
+      return SumAt<5>(tk, i);
+    case 6:
+      return SumAt<6>(tk, i);
+    case 7:
+      return SumAt<7>(tk, i);
+    case 8:
+      return SumAt<8>(tk, i);
+    case 9:
+      return SumAt<9>(tk, i);
+    case 10:
+      return SumAt<10>(tk, i);
+    case 11:
+      return SumAt<11>(tk, i);
+    case kSum:
+      return SumAt<kSum>(tk, i);
+    case kDifference:
+      return SumAt<kDifference>(tk, i);
+    default:
+      return 0;  // kZero
+  }
+}
+static_assert(kMaxTerms == 11, "SumAtForm lists every term count");
 
 // Small systems: entry by entry, every sum of the plan on it, no loop set-up per sum.
 sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
@@ -145,7 +174,7 @@ sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   for (sunindextype i = 0; i < n; ++i) {
     for (int k = 0; k < fp.n; ++k) {
       const FusedTerms& tk = fp.terms[k];
-      const sunrealtype y = kAt[tk.form](tk, i);  // compensated: increment - comp
+      const sunrealtype y = SumAtForm(tk, i);  // compensated: increment - comp
       if (tk.old == nullptr) {
         tk.out[i] = y;
       } else {
