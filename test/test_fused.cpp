@@ -90,10 +90,14 @@ INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
 // The kernel itself, without an integrator: the serial backend against the generic reference on
 // plans of every shape the step builds (0, 1, 2 and more terms; the two-term shortcuts of
 // N_VLinearSum; accumulated terms with and without compensation), on sizes that exercise the
-// tiny-system branch (n <= 4) and the block tails (the block is 256 entries).
+// entry-by-entry branch (n < 16), the block tails (the block is 256 entries) and the streamed
+// stores of large systems.
 namespace kernel {
 
 constexpr sunindextype kBlock = 256;
+// From 2^19 entries on the new position is stored past the cache (SSE2): a size beyond it, with
+// a block tail.
+constexpr sunindextype kStreamed = (sunindextype{1} << 19) + 5;
 constexpr int kPool = 19;  // vectors: inputs 0-7, outputs 8-15, new compensations 16-18
 
 struct KernelCase {
@@ -236,7 +240,7 @@ std::vector<KernelCase> Cases() {
   std::vector<KernelCase> out;
   for (sunindextype n :
        {sunindextype{1}, sunindextype{2}, sunindextype{3}, sunindextype{4}, sunindextype{5},
-        sunindextype{7}, kBlock - 1, kBlock, kBlock + 1, 2 * kBlock + 3}) {
+        sunindextype{7}, kBlock - 1, kBlock, kBlock + 1, 2 * kBlock + 3, kStreamed}) {
     for (bool comp : {false, true}) out.push_back({n, comp});
   }
   return out;
