@@ -68,6 +68,13 @@ constexpr int kSum = kMaxTerms + 1;
 constexpr int kDifference = kMaxTerms + 2;
 constexpr int kNumForms = kMaxTerms + 3;
 
+// The number of vectors a form reads (kZero: none, one slot kept for the arrays' sake).
+constexpr int TermsOf(int form) {
+  if (form == kSum || form == kDifference) return 2;
+  if (form == kZero) return 1;
+  return form;
+}
+
 int FormOf(int m, const sunrealtype* c) {
   if (m == 2) {
     const bool unit = c[0] == 1 || c[1] == 1 || c[0] == -1 || c[1] == -1;
@@ -106,7 +113,7 @@ void SumBlock(const FusedTerms& tk, sunindextype off, sunindextype len,
   if constexpr (F == kZero) {
     std::fill(out, out + len, SUN_RCONST(0.0));
   } else {
-    constexpr int kM = (F == kSum || F == kDifference) ? 2 : F;
+    constexpr int kM = TermsOf(F);
     const sunrealtype* x[kM];
     sunrealtype c[kM];
     for (int j = 0; j < kM; ++j) {
@@ -227,7 +234,7 @@ constexpr bool kCanStream = true;
 template <int F>
 void SumBlockStream(const FusedTerms& tk, sunindextype off, sunindextype len, sunrealtype* out,
                     sunrealtype* s) {
-  constexpr int kM = (F == kSum || F == kDifference) ? 2 : (F == kZero ? 1 : F);
+  constexpr int kM = TermsOf(F);
   const sunrealtype* x[kM];
   __m128d c[kM];
   for (int j = 0; j < kM; ++j) {
