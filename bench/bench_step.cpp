@@ -1,25 +1,43 @@
 // -----------------------------------------------------------------------------
-// bench_step: Google Benchmark of the cost of ONE explicit CEODE step, against
-// the same step written by hand on raw doubles (the floor for overhead).
+// bench_step: the per-step cost of CEODE's explicit step against the same method written by
+// hand on raw doubles (issue 11's floor), side by side in one run, with the ratios printed.
 //
-// Problems: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n (n = 1 is the
-// 1-DOF oscillator), explicit path, h = 1e-3 (far inside every stability limit).
-// Methods: G3_CD (d = 3) and G5 (d = 5); CEODE through CEodeEvolve(CE_ONE_STEP)
-// with serial N_Vectors, the hand loop with the docs/theory.md section 2 formulas.
-// One benchmark iteration = one step, so "Time" is ns/step; for n > 1 the
-// counter ns_per_dof divides it by n.
+// Problem: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n, x(0) = 1, v(0) = 0, h = 1e-3
+// (far inside every stability limit). Methods G3_CD and G4_A34 at n = 1, 10^4, 10^5, 10^6 and
+// G8_O8 at n = 1 (issue 14's pendulum is n = 1).
+// Variants (one benchmark iteration = K steps; the time shown is per iteration, the ratios
+// table is per step):
+//   ceode       CEodeEvolve(tout K steps ahead, CE_NORMAL): no output copy per step;
+//   ceode_1step CEodeEvolve(CE_ONE_STEP) K times: two output copies per step (the API's);
+//   hand_fpass  the hand loop calling f as its own pass over the vectors (as CEODE does);
+//   hand_fused  the hand loop with f fused into the update (one pass, the practical limit).
+// Both hand loops carry the method's history D_1..D_{d-1} and x(t) as CEODE does, update them
+// in place and swap the acceleration buffer instead of copying it; f is the same function
+// (SpringAccel) everywhere, called through CEODE's N_Vector interface by CEODE.
 //
-// Usage: bench_step [Google Benchmark flags], e.g.
-//   bench_step --benchmark_min_time=0.05 --benchmark_repetitions=5
-// The program aborts the benchmark (state.SkipWithError) on any failed call.
+// Usage:
+//   bench_step [--quick] [Google Benchmark flags]
+//   bench_step --count VARIANT METHOD N STEPS   (no timing: for valgrind --tool=callgrind;
+//                                               VARIANT also ceode_generic: the N_Vector
+//                                               reference update, to count its passes;
+//                                               instructions per step = difference of two
+//                                               STEPS divided by their difference)
+// Before timing, the program checks that CEODE and both hand loops agree with the exact
+// solution cos(sqrt(k) t) and with each other (exit 1 otherwise); --quick times n <= 10^4 only.
 // -----------------------------------------------------------------------------
 #include <benchmark/benchmark.h>
 #include <ceode/ceode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
@@ -27,132 +45,396 @@
 namespace {
 
 constexpr double kStep = 1e-3;
+constexpr int kMaxD = 8;
 
-struct Springs {
-  std::vector<double> k;
+struct Method {
+  const char* name;
+  int degree;
+  double p[kMaxD];
+};
+// The parameters of CEODE's named sets (src/ceode_step.cpp), written out as a user would.
+const Method kMethods[] = {
+    {"G3_CD", 3, {1.0, 0.5}},
+    {"G4_A34", 4, {0.75, 1.0 / 3.0, 0.5}},
+    {"G8_O8",
+     8,
+     {399.99982239054896, 278.28678067794129, 134.15990720943549, 51.039413540261052,
+      20.827940678986256, 6.8588048481939303, 2.805527440772015}},
 };
 
-int SpringRhs(sunrealtype, N_Vector x, N_Vector, N_Vector f, void* user) {
-  const std::vector<double>& k = static_cast<Springs*>(user)->k;
-  const double* xd = N_VGetArrayPointer(x);
-  double* fd = N_VGetArrayPointer(f);
-  const size_t n = k.size();
-  for (size_t i = 0; i < n; ++i) fd[i] = -k[i] * xd[i];
+const Method* FindMethod(const std::string& name) {
+  for (const Method& m : kMethods) {
+    if (name == m.name) return &m;
+  }
+  return nullptr;
+}
+
+// The step's coefficients (docs/theory.md section 2.2): D_k(t) = sum_j T[k][j] D_j(t-h) +
+// c[k] z, z from a = D_2(t), x(t+h) = x(t) + sum_i w[i] D_i(t) + wz_old z(t-h) + wz_new z.
+struct Coeffs {
+  double T[kMaxD][kMaxD] = {};
+  double c[kMaxD] = {};
+  double w[kMaxD] = {};
+  double wz_old = 0, wz_new = 0, inv_c2 = 1;
+};
+
+double Fact(int n) { return n < 2 ? 1.0 : n * Fact(n - 1); }
+
+Coeffs MakeCoeffs(const Method& m, double h) {
+  const int d = m.degree;
+  Coeffs co;
+  for (int k = 1; k <= d - 2; ++k) {
+    for (int i = 0; i <= d - 2 - k; ++i) co.T[k][k + i] = std::pow(h, i) / Fact(i);
+    const double top = std::pow(h, d - 1 - k) / Fact(d - 1 - k);
+    co.T[k][d - 1] += top * (1 - m.p[k]);
+    co.c[k] = top * m.p[k];
+  }
+  co.c[d - 1] = 1;
+  if (d > 3) co.inv_c2 = 1 / co.c[2];
+  for (int i = 1; i <= d - 2; ++i) co.w[i] = std::pow(h, i) / Fact(i);
+  const double top = std::pow(h, d - 1) / Fact(d - 1);
+  co.wz_old = top * (1 - m.p[0]);
+  co.wz_new = top * m.p[0];
+  return co;
+}
+
+std::vector<double> SpringConstants(long n) {
+  std::vector<double> k(n);
+  for (long i = 0; i < n; ++i) k[i] = 1.0 + static_cast<double>(i) / static_cast<double>(n);
+  return k;
+}
+
+// The f of every variant: a = -k x.
+__attribute__((noinline)) void SpringAccel(const double* k, const double* x, double* a, long n) {
+  for (long i = 0; i < n; ++i) a[i] = -k[i] * x[i];
+}
+
+int CeodeRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* user) {
+  const auto* k = static_cast<const std::vector<double>*>(user);
+  SpringAccel(k->data(), N_VGetArrayPointer(x), N_VGetArrayPointer(f),
+              static_cast<long>(k->size()));
   return 0;
 }
 
-Springs MakeSprings(long n) {
-  Springs s;
-  s.k.resize(n);
-  for (long i = 0; i < n; ++i) s.k[i] = 1.0 + static_cast<double>(i) / static_cast<double>(n);
+// ---- the hand loops -----------------------------------------------------------------------
+// State of the hand loop: the history D[1..d-1] at t - h, x(t), the acceleration buffer.
+struct HandState {
+  std::vector<std::vector<double>> D;
+  std::vector<double> x, an, k;
+  double* Dp[kMaxD] = {};
+};
+
+// Exact derivatives of x = cos(sqrt(k) t) at t = 0 and x(h) from their Taylor polynomial: the
+// same start CEODE makes (its differences agree with these to far below the checks' tolerance).
+HandState MakeHand(const Method& m, long n) {
+  const int d = m.degree;
+  HandState s;
+  s.k = SpringConstants(n);
+  s.D.assign(kMaxD, std::vector<double>(n, 0.0));
+  s.x.assign(n, 1.0);
+  s.an.assign(n, 0.0);
+  for (long i = 0; i < n; ++i) {
+    double dk = 1, xh = 1;
+    for (int j = 1; j < d; ++j) {
+      if (j % 2 == 0) dk *= -s.k[i];
+      s.D[j][i] = j % 2 == 0 ? dk : 0.0;
+      xh += std::pow(kStep, j) / Fact(j) * s.D[j][i];
+    }
+    s.x[i] = xh;
+  }
+  for (int j = 0; j < kMaxD; ++j) s.Dp[j] = s.D[j].data();
   return s;
 }
 
-// method: 0 = G3_CD, 1 = G5.
-void BM_CeodeStep(benchmark::State& state) {
-  const long n = state.range(0);
-  const char* method = state.range(1) == 0 ? "G3_CD" : "G5";
-  state.SetLabel(method);
-  SUNContext ctx = nullptr;
-  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) {
-    state.SkipWithError("SUNContext_Create failed");
-    return;
+// One element of the step, everything in registers (d is a template constant: unrolled).
+// write_a: store a as the new D_2 (the fused loop); otherwise the caller swaps buffers.
+template <int d, bool write_a>
+inline void HandElement(const Coeffs& co, double* const* D, long i, double a, double* x) {
+  double old[d], nw[d];
+  for (int j = 1; j < d; ++j) old[j] = D[j][i];
+  double z = a;
+  if (d > 3) {
+    double b2 = 0;
+    for (int j = 2; j < d; ++j) b2 += co.T[2][j] * old[j];
+    z = (a - b2) * co.inv_c2;
   }
-  Springs sp = MakeSprings(n);
-  N_Vector x = N_VNew_Serial(n, ctx), v = N_VNew_Serial(n, ctx);
-  void* mem = CEodeCreate(ctx);
-  if (x == nullptr || v == nullptr || mem == nullptr) {
-    state.SkipWithError("allocation failed");
-    return;
+  nw[2] = a;
+  nw[d - 1] = z;
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k == 2) continue;
+    double s = old[k];
+    for (int j = k + 1; j < d; ++j) s += co.T[k][j] * old[j];
+    nw[k] = s + co.c[k] * z;
   }
-  N_VConst(1.0, x);
-  N_VConst(0.0, v);
-  if (CEodeInit(mem, SpringRhs, 0.0, x, v) != CE_SUCCESS ||
-      CEodeSetUserData(mem, &sp) != CE_SUCCESS || CEodeSetMethodByName(mem, method) != CE_SUCCESS ||
-      CEodeSetFixedStep(mem, kStep) != CE_SUCCESS ||
-      CEodeSetMaxNumSteps(mem, 1L << 40) != CE_SUCCESS) {
-    state.SkipWithError("CEODE setup failed");
-  } else {
-    sunrealtype t = 0;
-    // The start (initial derivatives) is not a step: take it before timing.
-    if (CEodeEvolve(mem, 1.0, x, v, &t, CE_ONE_STEP) < 0) state.SkipWithError("first step failed");
-    for (auto _ : state) {
-      if (CEodeEvolve(mem, t + 1.0, x, v, &t, CE_ONE_STEP) < 0) {
-        state.SkipWithError("CEodeEvolve failed");
-        break;
-      }
-      benchmark::DoNotOptimize(t);
-    }
+  double dx = co.wz_old * old[d - 1] + co.wz_new * z;
+  for (int j = 1; j <= d - 2; ++j) dx += co.w[j] * nw[j];
+  x[i] += dx;
+  for (int k = 1; k < d; ++k) {
+    if (k != 2 || write_a) D[k][i] = nw[k];
   }
-  if (n > 1) {
-    state.counters["ns_per_dof"] =
-        benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
-                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  }
-  CEodeFree(&mem);
-  N_VDestroy(x);
-  N_VDestroy(v);
-  SUNContext_Free(&ctx);
 }
 
-// The same steps on plain arrays: state kept in structure-of-arrays form.
-void BM_HandStep(benchmark::State& state) {
-  const long n = state.range(0);
-  const bool g5 = state.range(1) != 0;
-  state.SetLabel(g5 ? "G5" : "G3_CD");
-  const Springs sp = MakeSprings(n);
-  const double h = kStep, h2 = h * h, h3 = h2 * h, h4 = h3 * h;
-  // G5 = (4/5, 1, 1, 1); G3_CD = (1, 1/2).
-  const double al = g5 ? 0.8 : 1.0, be = g5 ? 1.0 : 0.5, ga = 1.0, ze = 1.0;
-  std::vector<double> x(n, 1.0), v(n, 0.0), a(n), j(n, 0.0), s(n, 0.0), xn(n);
-  for (long i = 0; i < n; ++i) {
-    a[i] = -sp.k[i] * x[i];
-    xn[i] = x[i] + h * v[i] + 0.5 * h2 * a[i];
+// f as its own pass, then the update; the new D_2 = a is the buffer f wrote: swapped, not copied.
+template <int d>
+void HandStepFpass(const Coeffs& co, HandState* s, long n) {
+  SpringAccel(s->k.data(), s->x.data(), s->an.data(), n);
+  const double* a = s->an.data();
+  double* x = s->x.data();
+  double* const* D = s->Dp;
+  for (long i = 0; i < n; ++i) HandElement<d, false>(co, D, i, a[i], x);
+  s->D[2].swap(s->an);
+  s->Dp[2] = s->D[2].data();
+}
+
+template <int d>
+void HandStepFused(const Coeffs& co, HandState* s, long n) {
+  const double* k = s->k.data();
+  double* x = s->x.data();
+  double* const* D = s->Dp;
+  for (long i = 0; i < n; ++i) HandElement<d, true>(co, D, i, -k[i] * x[i], x);
+}
+
+using HandFn = void (*)(const Coeffs&, HandState*, long);
+HandFn HandStepFn(int degree, bool fused) {
+  switch (degree) {
+    case 3:
+      return fused ? HandStepFused<3> : HandStepFpass<3>;
+    case 4:
+      return fused ? HandStepFused<4> : HandStepFpass<4>;
+    default:
+      return fused ? HandStepFused<8> : HandStepFpass<8>;
   }
-  for (auto _ : state) {
-    if (g5) {
-      for (long i = 0; i < n; ++i) {
-        const double xi = xn[i];
-        const double an = -sp.k[i] * xi;
-        const double sn = ((an - a[i] - h * j[i]) * (2 / h2) - (1 - ga) * s[i]) / ga;
-        const double sb = (1 - be) * s[i] + be * sn, sz = (1 - ze) * s[i] + ze * sn;
-        const double sa = (1 - al) * s[i] + al * sn;
-        v[i] += h * a[i] + 0.5 * h2 * j[i] + h3 / 6 * sb;
-        j[i] += h * sz;
-        x[i] = xi;
-        xn[i] = xi + (h * v[i] + 0.5 * h2 * an + h3 / 6 * j[i] + h4 / 24 * sa);
-        a[i] = an;
-        s[i] = sn;
-      }
-    } else {
-      for (long i = 0; i < n; ++i) {
-        const double xi = xn[i];
-        const double an = -sp.k[i] * xi;
-        v[i] += h * ((1 - be) * a[i] + be * an);
-        x[i] = xi;
-        xn[i] = xi + (h * v[i] + 0.5 * h2 * ((1 - al) * a[i] + al * an));
-        a[i] = an;
-      }
+}
+
+// ---- CEODE ----------------------------------------------------------------------------------
+struct CeodeRun {
+  SUNContext ctx = nullptr;
+  N_Vector x = nullptr, v = nullptr;
+  void* mem = nullptr;
+  std::vector<double> k;
+  double t = 0;
+  bool ok = false;
+
+  // generic: the N_Vector reference update instead of the fused kernel (CEodeSetFusedKernel).
+  CeodeRun(const Method& m, long n, bool generic = false) : k(SpringConstants(n)) {
+    if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return;
+    x = N_VNew_Serial(n, ctx);
+    v = N_VNew_Serial(n, ctx);
+    mem = CEodeCreate(ctx);
+    if (x == nullptr || v == nullptr || mem == nullptr) return;
+    N_VConst(1.0, x);
+    N_VConst(0.0, v);
+    ok = CEodeInit(mem, CeodeRhs, 0.0, x, v) == CE_SUCCESS &&
+         CEodeSetUserData(mem, &k) == CE_SUCCESS &&
+         CEodeSetMethodByName(mem, m.name) == CE_SUCCESS &&
+         CEodeSetFixedStep(mem, kStep) == CE_SUCCESS &&
+         CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0) == CE_SUCCESS &&
+         CEodeSetMaxNumSteps(mem, 1L << 40) == CE_SUCCESS &&
+         CEodeSetFusedKernel(mem, generic ? SUNFALSE : SUNTRUE) == CE_SUCCESS &&
+         CEodeEvolve(mem, 0.0, x, v, &t, CE_NORMAL) >= 0;  // the start, not a step
+  }
+  ~CeodeRun() {
+    CEodeFree(&mem);
+    if (x != nullptr) N_VDestroy(x);
+    if (v != nullptr) N_VDestroy(v);
+    if (ctx != nullptr) SUNContext_Free(&ctx);
+  }
+  CeodeRun(const CeodeRun&) = delete;
+  CeodeRun& operator=(const CeodeRun&) = delete;
+
+  // K steps; x and v hold the state at the end.
+  bool Steps(long K, bool one_step) {
+    if (!one_step) {
+      return CEodeEvolve(mem, t + static_cast<double>(K) * kStep, x, v, &t, CE_NORMAL) >= 0;
     }
-    benchmark::DoNotOptimize(xn.data());
+    for (long s = 0; s < K; ++s) {
+      if (CEodeEvolve(mem, t + 1.0, x, v, &t, CE_ONE_STEP) < 0) return false;
+    }
+    return true;
+  }
+};
+
+enum Variant { kCeode, kCeodeOneStep, kHandFpass, kHandFused, kNumVariants };
+const char* const kVariantNames[kNumVariants] = {"ceode", "ceode_1step", "hand_fpass",
+                                                 "hand_fused"};
+
+// Steps per benchmark iteration: a few milliseconds of work at every n.
+long StepsPerIteration(long n) { return std::max(1L, std::min(1000L, 1000000L / n)); }
+
+void BM_Ceode(benchmark::State& state, const Method* m, long n, bool one_step) {
+  CeodeRun run(*m, n);
+  if (!run.ok) {
+    state.SkipWithError("CEODE setup failed");
+    return;
+  }
+  const long K = StepsPerIteration(n);
+  for (auto _ : state) {
+    if (!run.Steps(K, one_step)) {
+      state.SkipWithError("CEodeEvolve failed");
+      break;
+    }
+    benchmark::ClobberMemory();  // (DoNotOptimize(double&) miscompiles with GCC 12 here)
+  }
+  state.counters["steps"] = static_cast<double>(K);
+}
+
+void BM_Hand(benchmark::State& state, const Method* m, long n, bool fused) {
+  const Coeffs co = MakeCoeffs(*m, kStep);
+  HandState s = MakeHand(*m, n);
+  const HandFn step = HandStepFn(m->degree, fused);
+  const long K = StepsPerIteration(n);
+  for (auto _ : state) {
+    for (long j = 0; j < K; ++j) step(co, &s, n);
+    benchmark::DoNotOptimize(s.x.data());
     benchmark::ClobberMemory();
   }
-  if (n > 1) {
-    state.counters["ns_per_dof"] =
-        benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
-                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  }
+  state.counters["steps"] = static_cast<double>(K);
 }
 
-void Sizes(benchmark::internal::Benchmark* b) {
-  for (long n : {1L, 1000L, 100000L}) {
-    for (long m : {0L, 1L}) b->Args({n, m});
+// ---- checks -----------------------------------------------------------------------------------
+// Largest error against cos(sqrt(k_i) t) of a state x at time t.
+double ExactError(const double* x, const std::vector<double>& k, double t) {
+  double e = 0;
+  for (size_t i = 0; i < k.size(); ++i)
+    e = std::max(e, std::fabs(x[i] - std::cos(std::sqrt(k[i]) * t)));
+  return e;
+}
+
+// Each variant 2000 steps to t = 2: errors within the method's own (h = 1e-3) and the variants
+// within the same of each other.
+bool CheckVariants(const Method& m, long n) {
+  constexpr long kSteps = 2000;
+  const double tol = m.degree == 3 ? 1e-6 : 1e-9;
+  CeodeRun run(m, n);
+  const bool ran = run.ok && run.Steps(kSteps, false);
+  const double t = static_cast<double>(kSteps + 1) * kStep;  // the hand loops' x is x(t + h)
+  const double e_ceode = ran ? ExactError(N_VGetArrayPointer(run.x), run.k, run.t) : 1.0;
+  bool ok = ran && std::fabs(run.t - t + kStep) < 1e-12 && e_ceode < tol;
+  for (bool fused : {false, true}) {
+    const Coeffs co = MakeCoeffs(m, kStep);
+    HandState s = MakeHand(m, n);
+    for (long j = 0; j < kSteps; ++j) HandStepFn(m.degree, fused)(co, &s, n);
+    const double e = ExactError(s.x.data(), s.k, t);
+    const bool pass = e < tol;
+    std::printf("check %-6s n = %-7ld ceode error %.3e  %s error %.3e  (tol %.0e) %s\n", m.name, n,
+                e_ceode, fused ? "hand_fused" : "hand_fpass", e, tol, pass && ok ? "ok" : "FAILED");
+    ok = ok && pass;
   }
+  return ok;
+}
+
+// ---- the ratios --------------------------------------------------------------------------------
+// Collects the CPU time per step of each benchmark (the median when repeated) while the console
+// reporter prints as usual; Summarise prints CEODE / hand loop.
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& reports) override {
+    ConsoleReporter::ReportRuns(reports);
+    for (const Run& r : reports) {
+      const bool single = r.run_type == Run::RT_Iteration && r.repetitions <= 1;
+      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
+      if (r.error_occurred || !(single || median)) continue;
+      const auto it = r.counters.find("steps");
+      const double steps = it == r.counters.end() ? 1.0 : it->second.value;
+      per_step_[r.run_name.function_name] = r.GetAdjustedCPUTime() / steps;
+    }
+  }
+  void Summarise(const std::vector<std::pair<const Method*, long>>& cases) const {
+    std::printf("\nPer-step CPU time (median) and ratios to the hand loops\n");
+    std::printf("%-7s %8s %12s %12s %12s %12s %9s %9s %9s\n", "method", "n", "ceode", "ceode_1step",
+                "hand_fpass", "hand_fused", "c/fpass", "c/fused", "1s/fpass");
+    for (const auto& c : cases) {
+      double tv[kNumVariants];
+      for (int v = 0; v < kNumVariants; ++v) {
+        const auto it = per_step_.find(Name(v, *c.first, c.second));
+        tv[v] = it == per_step_.end() ? NAN : it->second;
+      }
+      std::printf("%-7s %8ld %9.4g %-2s %9.4g %-2s %9.4g %-2s %9.4g %-2s %9.3f %9.3f %9.3f\n",
+                  c.first->name, c.second, tv[0], "ns", tv[1], "ns", tv[2], "ns", tv[3], "ns",
+                  tv[0] / tv[2], tv[0] / tv[3], tv[1] / tv[2]);
+    }
+  }
+  static std::string Name(int variant, const Method& m, long n) {
+    return std::string(kVariantNames[variant]) + "/" + m.name + "/n:" + std::to_string(n);
+  }
+
+ private:
+  std::map<std::string, double> per_step_;
+};
+
+// The cases of the issue: G3_CD and G4_A34 at every n, G8_O8 at n = 1.
+std::vector<std::pair<const Method*, long>> Cases(bool quick) {
+  std::vector<std::pair<const Method*, long>> out;
+  for (const char* name : {"G3_CD", "G4_A34"}) {
+    for (long n : {1L, 10000L, 100000L, 1000000L}) {
+      if (!quick || n <= 10000) out.emplace_back(FindMethod(name), n);
+    }
+  }
+  out.emplace_back(FindMethod("G8_O8"), 1L);
+  return out;
+}
+
+// --count VARIANT METHOD N STEPS: the steps alone, for an instruction counter.
+int CountMode(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: bench_step --count VARIANT METHOD N STEPS\n");
+    return 2;
+  }
+  const std::string variant = argv[2];
+  const Method* m = FindMethod(argv[3]);
+  const long n = std::atol(argv[4]);
+  const long steps = std::atol(argv[5]);
+  if (m == nullptr || n < 1 || steps < 0) return 2;
+  if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic") {
+    CeodeRun run(*m, n, variant == "ceode_generic");
+    return run.ok && run.Steps(steps, variant == "ceode_1step") ? 0 : 1;
+  }
+  const Coeffs co = MakeCoeffs(*m, kStep);
+  HandState s = MakeHand(*m, n);
+  const HandFn step = HandStepFn(m->degree, variant == "hand_fused");
+  for (long j = 0; j < steps; ++j) step(co, &s, n);
+  benchmark::DoNotOptimize(s.x.data());
+  return 0;
 }
 
 }  // namespace
 
-BENCHMARK(BM_CeodeStep)->Apply(Sizes)->ArgNames({"n", "G5"});
-BENCHMARK(BM_HandStep)->Apply(Sizes)->ArgNames({"n", "G5"});
-
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "--count") == 0) return CountMode(argc, argv);
+  bool quick = false;
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else {
+      args.push_back(argv[i]);
+    }
+  }
+  static char min_time[] = "--benchmark_min_time=0.01";
+  if (quick) args.push_back(min_time);
+  bool ok = true;
+  for (const char* name : {"G3_CD", "G4_A34", "G8_O8"}) {
+    for (long n : {1L, 1000L}) ok = CheckVariants(*FindMethod(name), n) && ok;
+  }
+  if (!ok) return 1;
+  const auto cases = Cases(quick);
+  for (const auto& c : cases) {
+    const Method* m = c.first;
+    const long n = c.second;
+    for (int v = 0; v < kNumVariants; ++v) {
+      const std::string name = RatioReporter::Name(v, *m, n);
+      if (v == kCeode || v == kCeodeOneStep) {
+        benchmark::RegisterBenchmark(name.c_str(), BM_Ceode, m, n, v == kCeodeOneStep);
+      } else {
+        benchmark::RegisterBenchmark(name.c_str(), BM_Hand, m, n, v == kHandFused);
+      }
+    }
+  }
+  int gb_argc = static_cast<int>(args.size());
+  benchmark::Initialize(&gb_argc, args.data());
+  RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  reporter.Summarise(cases);
+  return 0;
+}

@@ -1,10 +1,17 @@
 // The step's update kernel: the reference on generic N_Vectors and the fused serial backend
-// (the whole update in one sweep through memory, block by block, about 3x faster on serial
-// vectors; docs/results/bench_step.txt).
+// (the whole update in one sweep through memory, block by block, with the growth check's norm
+// folded in; docs/results/bench_step.txt). Both perform the same floating-point operations in
+// the same order, so the state they produce is bit for bit the same.
 #include "ceode_fused.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <utility>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace ceode {
 
@@ -51,94 +58,286 @@ void RunCombo(const Combo& cb, const Compensation& cs) {
   N_VLinearSum(1, comp_new, -1, y, comp_new);
 }
 
-// N_VLinearSum's shortcuts: a = +-b is computed as a * (x +- y) unless a or b is +-1.
-enum class TwoTerm { kSum, kDifference, kGeneral };
-TwoTerm TwoTermForm(sunrealtype a, sunrealtype b) {
-  const bool unit = a == 1 || b == 1 || a == -1 || b == -1;
-  if (!unit && a == b) return TwoTerm::kSum;
-  if (!unit && a == -b) return TwoTerm::kDifference;
-  return TwoTerm::kGeneral;
+// The arithmetic of one sum, decided when the plan is built so that the step only dispatches:
+// FusedTerms::form is kZero, a term count 1 .. kMaxTerms (sum term by term in order, as
+// N_VLinearCombination and N_VScale), or one of N_VLinearSum's shortcuts (a = +-b is computed
+// as a * (x +- y) unless a or b is +-1).
+constexpr int kMaxTerms = kMaxDegree + 3;
+constexpr int kZero = 0;
+constexpr int kSum = kMaxTerms + 1;
+constexpr int kDifference = kMaxTerms + 2;
+constexpr int kNumForms = kMaxTerms + 3;
+
+// The number of vectors a form reads (kZero: none, one slot kept for the arrays' sake).
+constexpr int TermsOf(int form) {
+  if (form == kSum || form == kDifference) return 2;
+  if (form == kZero) return 1;
+  return form;
 }
 
-// Tiny systems: plain scalar code, without the vector loops' set-up.
-void CombineTiny(int m, const sunrealtype* c, sunrealtype* const* X, sunindextype off,
-                 sunindextype len, sunrealtype* out) {
-  const TwoTerm form = m == 2 ? TwoTermForm(c[0], c[1]) : TwoTerm::kGeneral;
-  for (sunindextype i = 0; i < len; ++i) {
-    const sunrealtype x0 = X[0][off + i];
-    sunrealtype acc;
-    if (form == TwoTerm::kSum) {
-      acc = c[0] * (x0 + X[1][off + i]);
-    } else if (form == TwoTerm::kDifference) {
-      acc = c[0] * (x0 - X[1][off + i]);
-    } else if (m == 2) {
-      acc = c[0] * x0 + c[1] * X[1][off + i];
-    } else {
-      acc = c[0] * x0;
-      for (int j = 1; j < m; ++j) acc += c[j] * X[j][off + i];
+int FormOf(int m, const sunrealtype* c) {
+  if (m == 2) {
+    const bool unit = c[0] == 1 || c[1] == 1 || c[0] == -1 || c[1] == -1;
+    if (!unit && c[0] == c[1]) return kSum;
+    if (!unit && c[0] == -c[1]) return kDifference;
+  }
+  return m;
+}
+
+// One entry of a sum with M terms; M is a constant, so the loop unrolls.
+template <int M>
+inline sunrealtype TermsAt(const FusedTerms& tk, sunindextype i) {
+  sunrealtype acc = tk.c[0] * tk.X[0][i];
+  for (int j = 1; j < M; ++j) acc += tk.c[j] * tk.X[j][i];
+  return acc;
+}
+
+template <int F>
+sunrealtype SumAt(const FusedTerms& tk, sunindextype i) {
+  if constexpr (F == kZero) {
+    return 0;
+  } else if constexpr (F == kSum) {
+    return tk.c[0] * (tk.X[0][i] + tk.X[1][i]);
+  } else if constexpr (F == kDifference) {
+    return tk.c[0] * (tk.X[0][i] - tk.X[1][i]);
+  } else {
+    return TermsAt<F>(tk, i);
+  }
+}
+
+// out[0 .. len) = the sum on entries off .. off + len. An output is never an input of its own
+// sum (BuildFusedPlan checks), hence restrict: the loop vectorises without alias checks.
+template <int F>
+void SumBlock(const FusedTerms& tk, sunindextype off, sunindextype len,
+              sunrealtype* __restrict out) {
+  if constexpr (F == kZero) {
+    std::fill(out, out + len, SUN_RCONST(0.0));
+  } else {
+    constexpr int kM = TermsOf(F);
+    const sunrealtype* x[kM];
+    sunrealtype c[kM];
+    for (int j = 0; j < kM; ++j) {
+      x[j] = tk.X[j] + off;
+      c[j] = tk.c[j];
+    }
+    for (sunindextype i = 0; i < len; ++i) {
+      sunrealtype acc;
+      if constexpr (F == kSum) {
+        acc = c[0] * (x[0][i] + x[1][i]);
+      } else if constexpr (F == kDifference) {
+        acc = c[0] * (x[0][i] - x[1][i]);
+      } else {
+        acc = c[0] * x[0][i];
+        for (int j = 1; j < kM; ++j) acc += c[j] * x[j][i];
+      }
+      out[i] = acc;
+    }
+  }
+}
+
+using BlockFn = void (*)(const FusedTerms&, sunindextype, sunindextype, sunrealtype* __restrict);
+
+template <std::size_t... F>
+constexpr std::array<BlockFn, kNumForms> BlockTable(std::index_sequence<F...> /*forms*/) {
+  return {&SumBlock<static_cast<int>(F)>...};
+}
+constexpr std::array<BlockFn, kNumForms> kBlock = BlockTable(std::make_index_sequence<kNumForms>{});
+
+// A switch, not a table of function pointers: the small kernel's sums inline into it.
+inline sunrealtype SumAtForm(const FusedTerms& tk, sunindextype i) {
+  switch (tk.form) {
+    case 1:
+      return SumAt<1>(tk, i);
+    case 2:
+      return SumAt<2>(tk, i);
+    case 3:
+      return SumAt<3>(tk, i);
+    case 4:
+      return SumAt<4>(tk, i);
+    case 5:
+      return SumAt<5>(tk, i);
+    case 6:
+      return SumAt<6>(tk, i);
+    case 7:
+      return SumAt<7>(tk, i);
+    case 8:
+      return SumAt<8>(tk, i);
+    case 9:
+      return SumAt<9>(tk, i);
+    case 10:
+      return SumAt<10>(tk, i);
+    case 11:
+      return SumAt<11>(tk, i);
+    case kSum:
+      return SumAt<kSum>(tk, i);
+    case kDifference:
+      return SumAt<kDifference>(tk, i);
+    default:
+      return 0;  // kZero
+  }
+}
+static_assert(kMaxTerms == 11, "SumAtForm lists every term count");
+
+// Small systems: entry by entry, every sum of the plan on it, no loop set-up per sum.
+sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
+  const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
+  sunrealtype sum = 0;
+  for (sunindextype i = 0; i < n; ++i) {
+    for (int k = 0; k < fp.n; ++k) {
+      const FusedTerms& tk = fp.terms[k];
+      const sunrealtype y = SumAtForm(tk, i);  // compensated: increment - comp
+      if (tk.old == nullptr) {
+        tk.out[i] = y;
+      } else {
+        const sunrealtype nw = tk.old[i] + y;
+        tk.out[i] = nw;
+        tk.compnew[i] = (nw - tk.old[i]) - y;
+      }
+    }
+    sum += std::fabs(xout[i]);
+  }
+  return sum;
+}
+
+// Four partial sums: the norm is a dependency chain of additions otherwise, slower than the
+// update itself on large vectors. It only feeds the growth check, so its rounding (not that of
+// N_VL1Norm's order) does not reach the state.
+void AddAbs(const sunrealtype* x, sunindextype len, sunrealtype* s) {
+  sunindextype i = 0;
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+  // The same four sums two lanes at a time (the compiler does not vectorise a reduction).
+  const __m128d sign = _mm_set1_pd(-0.0);
+  __m128d s01 = _mm_loadu_pd(s);
+  __m128d s23 = _mm_loadu_pd(s + 2);
+  for (; i + 4 <= len; i += 4) {
+    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, _mm_loadu_pd(x + i)));
+    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, _mm_loadu_pd(x + i + 2)));
+  }
+  _mm_storeu_pd(s, s01);
+  _mm_storeu_pd(s + 2, s23);
+#endif
+  for (; i + 4 <= len; i += 4) {
+    s[0] += std::fabs(x[i]);
+    s[1] += std::fabs(x[i + 1]);
+    s[2] += std::fabs(x[i + 2]);
+    s[3] += std::fabs(x[i + 3]);
+  }
+  for (; i < len; ++i) s[0] += std::fabs(x[i]);
+}
+
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+constexpr bool kCanStream = true;
+// The new position on systems too large for the cache: stored past it (nothing reads it again
+// in this step, and a normal store would first read the old line), its |x| summed from the
+// registers into the same partial sums as AddAbs. The same multiplications and additions in
+// the same order as SumBlock, two entries at a time. out is 16-byte aligned.
+template <int F>
+void SumBlockStream(const FusedTerms& tk, sunindextype off, sunindextype len, sunrealtype* out,
+                    sunrealtype* s) {
+  constexpr int kM = TermsOf(F);
+  const sunrealtype* x[kM];
+  __m128d c[kM];
+  for (int j = 0; j < kM; ++j) {
+    x[j] = tk.X[j] + off;
+    c[j] = _mm_set1_pd(tk.c[j]);
+  }
+  auto pair = [&](sunindextype i) {
+    if constexpr (F == kZero) return _mm_setzero_pd();
+    if constexpr (F == kSum)
+      return _mm_mul_pd(c[0], _mm_add_pd(_mm_loadu_pd(x[0] + i), _mm_loadu_pd(x[1] + i)));
+    if constexpr (F == kDifference)
+      return _mm_mul_pd(c[0], _mm_sub_pd(_mm_loadu_pd(x[0] + i), _mm_loadu_pd(x[1] + i)));
+    __m128d acc = _mm_mul_pd(c[0], _mm_loadu_pd(x[0] + i));
+    for (int j = 1; j < kM; ++j) acc = _mm_add_pd(acc, _mm_mul_pd(c[j], _mm_loadu_pd(x[j] + i)));
+    return acc;
+  };
+  const __m128d sign = _mm_set1_pd(-0.0);
+  __m128d s01 = _mm_loadu_pd(s);
+  __m128d s23 = _mm_loadu_pd(s + 2);
+  sunindextype i = 0;
+  for (; i + 4 <= len; i += 4) {
+    const __m128d a = pair(i);
+    const __m128d b = pair(i + 2);
+    _mm_stream_pd(out + i, a);
+    _mm_stream_pd(out + i + 2, b);
+    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, a));
+    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, b));
+  }
+  _mm_storeu_pd(s, s01);
+  _mm_storeu_pd(s + 2, s23);
+  for (; i < len; ++i) {
+    sunrealtype acc = 0;
+    if constexpr (F == kSum) {
+      acc = tk.c[0] * (x[0][i] + x[1][i]);
+    } else if constexpr (F == kDifference) {
+      acc = tk.c[0] * (x[0][i] - x[1][i]);
+    } else if constexpr (F != kZero) {
+      acc = tk.c[0] * x[0][i];
+      for (int j = 1; j < kM; ++j) acc += tk.c[j] * x[j][i];
     }
     out[i] = acc;
+    s[0] += std::fabs(acc);
   }
+}
+using StreamFn = void (*)(const FusedTerms&, sunindextype, sunindextype, sunrealtype*,
+                          sunrealtype*);
+template <std::size_t... F>
+constexpr std::array<StreamFn, kNumForms> StreamTable(std::index_sequence<F...> /*forms*/) {
+  return {&SumBlockStream<static_cast<int>(F)>...};
+}
+constexpr std::array<StreamFn, kNumForms> kStream =
+    StreamTable(std::make_index_sequence<kNumForms>{});
+void StreamFence() { _mm_sfence(); }
+#else
+constexpr bool kCanStream = false;
+constexpr std::array<
+    void (*)(const FusedTerms&, sunindextype, sunindextype, sunrealtype*, sunrealtype*), 1>
+    kStream = {nullptr};
+void StreamFence() {}
+#endif
+
+// From this size on the vectors of a step no longer fit in a (32 MiB) last-level cache.
+constexpr sunindextype kStreamSystem = sunindextype{1} << 19;
+
+// Each block stays in cache while every sum of the plan runs on it: one pass over the vectors.
+sunrealtype UpdateBlocked(const FusedPlan& fp, sunindextype n) {
+  constexpr sunindextype kBlockLen = 256;
+  sunrealtype y[kBlockLen];
+  const FusedTerms& last = fp.terms[fp.n - 1];
+  const sunrealtype* xout = last.out;
+  const bool stream = kCanStream && n >= kStreamSystem && last.old == nullptr &&
+                      reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
+  sunrealtype s[4] = {0, 0, 0, 0};
+  for (sunindextype off = 0; off < n; off += kBlockLen) {
+    const sunindextype len = std::min(kBlockLen, n - off);
+    for (int k = 0; k < fp.n; ++k) {
+      const FusedTerms& tk = fp.terms[k];
+      if (stream && k == fp.n - 1) {
+        kStream[tk.form](tk, off, len, tk.out + off, s);
+        continue;
+      }
+      if (tk.old == nullptr) {
+        kBlock[tk.form](tk, off, len, tk.out + off);
+        continue;
+      }
+      kBlock[tk.form](tk, off, len, y);  // y = increment - comp
+      const sunrealtype* o = tk.old + off;
+      sunrealtype* __restrict nw = tk.out + off;
+      sunrealtype* __restrict cn = tk.compnew + off;
+      for (sunindextype i = 0; i < len; ++i) {
+        const sunrealtype v = o[i] + y[i];
+        nw[i] = v;
+        cn[i] = (v - o[i]) - y[i];
+      }
+    }
+    if (!stream) AddAbs(xout + off, len, s);
+  }
+  if (stream) StreamFence();  // the streamed stores are visible before f reads x(t + h)
+  return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
-void CombineTwo(const sunrealtype* c, const sunrealtype* x0, const sunrealtype* y, sunindextype len,
-                sunrealtype* out) {
-  const sunrealtype a = c[0];
-  const sunrealtype b = c[1];
-  switch (TwoTermForm(a, b)) {
-    case TwoTerm::kSum:
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] + y[i]);
-      break;
-    case TwoTerm::kDifference:
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * (x0[i] - y[i]);
-      break;
-    case TwoTerm::kGeneral:
-      for (sunindextype i = 0; i < len; ++i) out[i] = a * x0[i] + b * y[i];
-      break;
-  }
-}
-
-// out[0..len) = sum_j c[j] X[j][off..off+len) with the rounding of Combine: a two-term sum
-// follows N_VLinearSum's shortcuts; longer sums add term by term in order, as
-// N_VLinearCombination. The branch is taken once per block, so the inner loops vectorise.
-void CombineBlock(int m, const sunrealtype* c, sunrealtype* const* X, sunindextype off,
-                  sunindextype len, sunrealtype* out) {
-  if (m == 0) {
-    std::fill(out, out + len, SUN_RCONST(0.0));
-    return;
-  }
-  if (len <= 4) {
-    CombineTiny(m, c, X, off, len, out);
-    return;
-  }
-  const sunrealtype* x0 = X[0] + off;
-  if (m == 2) {
-    CombineTwo(c, x0, X[1] + off, len, out);
-    return;
-  }
-  for (sunindextype i = 0; i < len; ++i) out[i] = c[0] * x0[i];
-  for (int j = 1; j < m; ++j) {
-    const sunrealtype cj = c[j];
-    const sunrealtype* xj = X[j] + off;
-    for (sunindextype i = 0; i < len; ++i) out[i] += cj * xj[i];
-  }
-}
-
-// One combination of the plan on one block; y is scratch of the block's length.
-void RunTermsBlock(const FusedTerms& tk, sunindextype off, sunindextype len, sunrealtype* y) {
-  if (tk.old == nullptr) {
-    CombineBlock(tk.m, tk.c, tk.X, off, len, tk.out + off);
-    return;
-  }
-  CombineBlock(tk.m, tk.c, tk.X, off, len, y);  // y = increment - comp
-  const sunrealtype* o = tk.old + off;
-  sunrealtype* nw = tk.out + off;
-  sunrealtype* cn = tk.compnew + off;
-  for (sunindextype i = 0; i < len; ++i) {
-    nw[i] = o[i] + y[i];
-    cn[i] = (nw[i] - o[i]) - y[i];
-  }
-}
+// Systems smaller than this take the entry-by-entry kernel.
+constexpr sunindextype kSmallSystem = 16;
 
 }  // namespace
 
@@ -146,25 +345,15 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs) {
   for (int k = 0; k < plan.n; ++k) RunCombo(plan.combos[k], cs);
 }
 
-// Each block stays in cache while every combination of the plan runs on it, instead of one
-// pass over the vectors per term.
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
-  constexpr sunindextype kBlock = 256;
-  sunrealtype y[kBlock];
-  const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
-  sunrealtype sum = 0;
-  for (sunindextype off = 0; off < n; off += kBlock) {
-    const sunindextype len = std::min(kBlock, n - off);
-    for (int k = 0; k < fp.n; ++k) RunTermsBlock(fp.terms[k], off, len, y);
-    for (sunindextype i = 0; i < len; ++i) sum += std::fabs(xout[off + i]);
-  }
-  return sum;
+  return n < kSmallSystem ? UpdateSmall(fp, n) : UpdateBlocked(fp, n);
 }
 
 // Each combination with its accumulated term (or, compensated, minus its compensation)
 // appended, exactly as RunCombo hands it to Combine.
-void BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp) {
+bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp) {
   fp->n = plan.n;
+  bool distinct = true;  // no sum writes a vector it reads (the kernels rely on it)
   for (int k = 0; k < plan.n; ++k) {
     const Combo& cb = plan.combos[k];
     FusedTerms& tk = fp->terms[k];
@@ -185,7 +374,12 @@ void BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
       tk.compnew = N_VGetArrayPointer(cs.compnew[cb.level]);
     }
     tk.out = N_VGetArrayPointer(cb.out);
+    tk.form = FormOf(tk.m, tk.c);
+    for (int j = 0; j < tk.m; ++j) distinct = distinct && tk.X[j] != tk.out;
+    distinct = distinct && (tk.old == nullptr ||
+                            (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
+  return distinct;
 }
 
 }  // namespace ceode

@@ -22,11 +22,15 @@ struct Compensation {
 
 // The reference: every combination of the plan, one N_Vector operation per term.
 void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
-// The serial backend on the plan's raw-pointer form (vectors of length n); returns the L1 norm
-// of the last combination's output (the new position).
+// The serial backend on the plan's raw-pointer form (vectors of length n): one pass over the
+// vectors (entry by entry for small n). Returns the L1 norm of the last combination's output
+// (the new position) for the growth check, summed in four interleaved partial sums, so it may
+// differ from N_VL1Norm by rounding (n * unit round-off relative); the outputs are bitwise
+// those of UpdateReference.
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
-// The raw-pointer form of a plan (serial vectors only).
-void BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
+// The raw-pointer form of a plan (vectors that expose their data). Returns false when some
+// combination writes a vector it also reads: the serial backend must not run that plan.
+bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
 
 }  // namespace ceode
 

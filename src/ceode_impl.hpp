@@ -78,6 +78,7 @@ struct UpdatePlan {
 // The same plan on raw arrays, for the one-pass kernel on serial vectors.
 struct FusedTerms {
   int m;
+  int form;  // the arithmetic of the sum, fixed when the plan is built (ceode_fused.cpp)
   sunrealtype c[kMaxDegree + 3];
   sunrealtype* X[kMaxDegree + 3];
   sunrealtype* old;

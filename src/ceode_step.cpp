@@ -159,6 +159,8 @@ int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, 
 
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func) {
+  // No mass matrix (M = I): MassUpdate and MassSolve would do nothing; skip their calls.
+  if (ce->mfn == nullptr && ce->M == nullptr) return EvalRhs(ce, t, x, v, a, func);
   int flag = MassUpdate(ce, t, x, func);
   if (flag == CE_SUCCESS) flag = EvalRhs(ce, t, x, v, a, func);
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
@@ -243,7 +245,8 @@ void BuildPlans(CEodeMemRec* ce) {
   for (int i = 0; i < kNumPlans; ++i) {
     BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[i]);
     if (ce->fused_ready) {
-      BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr}, &ce->fused_plans[i]);
+      ce->fused_ready = BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr},
+                                       &ce->fused_plans[i]);
     }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
@@ -450,11 +453,29 @@ int TakeStep(CEodeMemRec* ce) {
   return CE_SUCCESS;
 }
 
+namespace {
+
+// The one-step output copies: memcpy on serial vectors (N_VScale(1, ...) is a multiply loop,
+// unoptimised in Debian's -O0 SUNDIALS build), N_VScale elsewhere. Same values either way.
+void CopyVector(N_Vector from, N_Vector to) {
+  if (N_VGetVectorID(from) == SUNDIALS_NVEC_SERIAL && N_VGetVectorID(to) == SUNDIALS_NVEC_SERIAL) {
+    const sunrealtype* src = N_VGetArrayPointer(from);
+    sunrealtype* dst = N_VGetArrayPointer(to);
+    if (src != nullptr && dst != nullptr) {
+      if (src != dst) std::memcpy(dst, src, sizeof(sunrealtype) * N_VGetLength(from));
+      return;
+    }
+  }
+  N_VScale(1, from, to);
+}
+
+}  // namespace
+
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
   const int d = ce->degree;
   const sunrealtype h = ce->h;
   if (s == 0 && k < d) {  // exactly the method's own values at tcur
-    N_VScale(1, k == 0 ? ce->xcur : ce->D[k], out);
+    CopyVector(k == 0 ? ce->xcur : ce->D[k], out);
     return;
   }
   // p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h).
