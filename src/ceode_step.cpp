@@ -91,7 +91,7 @@ const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co) {
   *co = StepCoeffs{};
   co->h = h;
-  sunrealtype tw[kMaxDegree + 1];  // h^i / i!
+  sunrealtype tw[kMaxDegree + 1] = {};  // h^i / i!
   TaylorWeights(h, d, tw);
   // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
   for (int k = 1; k <= d - 2; ++k) {
@@ -241,12 +241,15 @@ void BuildPlans(CEodeMemRec* ce) {
   N_Vector xcur = ce->xcur;
   N_Vector xnext = ce->xnext;
   N_Vector xnew = ce->xnew;
-  ce->fused_ready = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
+  const bool serial = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
+  const bool mpi = !serial && sun::LocalArrayWithReduce(ce->xnext);
+  bool fusable = serial || mpi;
+  ce->fused_len = serial ? ce->n : (mpi ? ce->xnext->ops->nvgetlocallength(ce->xnext) : 0);
   for (int i = 0; i < kNumPlans; ++i) {
     BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[i]);
-    if (ce->fused_ready) {
-      ce->fused_ready = BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr},
-                                       &ce->fused_plans[i]);
+    if (fusable) {
+      fusable = BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr},
+                               &ce->fused_plans[i]);
     }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
@@ -255,6 +258,8 @@ void BuildPlans(CEodeMemRec* ce) {
     xnext = xnew;
     xnew = old;
   }
+  ce->fused_ready = fusable && serial;
+  ce->fused_mpi = fusable && mpi;
 }
 
 int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
@@ -377,6 +382,11 @@ sunrealtype StepTime(const CEodeMemRec* ce, int k) {
 sunrealtype FormUpdate(CEodeMemRec* ce) {
   const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
   if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
+  if (ce->fused && ce->fused_mpi) {  // the same kernel on the local part, one allreduce
+    sunrealtype l1 = UpdateSerial(ce->fused_plans[ip], ce->fused_len);
+    if (N_VDotProdMultiAllReduce(1, ce->xnew, &l1) != 0) return std::nan("");
+    return l1;
+  }
   UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
   return N_VL1Norm(ce->xnew);
 }

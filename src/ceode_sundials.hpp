@@ -57,6 +57,15 @@ inline bool IsLocal(N_Vector v) {
 #endif
 }
 
+// A distributed vector whose local part is one contiguous array (NVECTOR_PARALLEL): the
+// one-pass update can run on that part, its norm finished by one allreduce. Through the ops
+// table, so that libceode does not link the parallel vector (N_VGetLocalLength is deprecated
+// on 6.4).
+inline bool LocalArrayWithReduce(N_Vector v) {
+  return N_VGetVectorID(v) == SUNDIALS_NVEC_PARALLEL && v->ops->nvgetlocallength != nullptr &&
+         v->ops->nvdotprodmultiallreduce != nullptr && N_VGetArrayPointer(v) != nullptr;
+}
+
 // Hands a CEODE message to the SUNContext as SUNDIALS 7 packages do: warnings
 // to the logger's warning stream, errors to the context's handler stack (whose
 // default handler writes them to the logger's error stream). The context's
