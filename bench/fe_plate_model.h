@@ -31,14 +31,14 @@ using Mat8 = std::array<std::array<double, 8>, 8>;
 struct Plate {
   int nx = 0, ny = 0;
   double Lx = 4, Ly = 1, thick = 1, E = 1, nu = 0.3, rho = 1;
-  int n = 0;                  // free DOFs
-  std::vector<int> rowptr;    // CSR of K, n + 1 entries
-  std::vector<int> col;       // column of each entry (sorted within a row)
-  std::vector<double> val;    // K entries
-  std::vector<double> mass;   // lumped mass of each DOF
-  std::vector<double> invm;   // 1 / mass
-  Mat8 ke{};                  // element stiffness (every element is the same)
-  double me = 0;              // lumped mass of one element node
+  int n = 0;                      // free DOFs
+  std::vector<int> rowptr;        // CSR of K, n + 1 entries
+  std::vector<int> col;           // column of each entry (sorted within a row)
+  std::vector<double> val;        // K entries
+  std::vector<double> mass;       // lumped mass of each DOF
+  std::vector<double> invm;       // 1 / mass
+  Mat8 ke{};                      // element stiffness (every element is the same)
+  double me = 0;                  // lumped mass of one element node
   double damp_m = 0, damp_k = 0;  // Rayleigh C = damp_m M + damp_k K
 };
 
@@ -77,7 +77,9 @@ inline Mat8 Q4Stiffness(double dx, double dy, double E, double nu, double thick)
 }
 
 // Free-DOF index of node (i, j), -1 on the clamped edge.
-inline int NodeIndex(const Plate& p, int i, int j) { return i == 0 ? -1 : (i - 1) * (p.ny + 1) + j; }
+inline int NodeIndex(const Plate& p, int i, int j) {
+  return i == 0 ? -1 : (i - 1) * (p.ny + 1) + j;
+}
 
 // Local number (0..3) of node (i, j) in element (ei, ej), -1 when not in it.
 inline int LocalNode(int ei, int ej, int i, int j) {

@@ -83,8 +83,7 @@ int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
 }
 
 // J = [[0, I], [-M^{-1} K, 0]] of the first-order form, CSR.
-int Jac1(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector,
-         N_Vector) {
+int Jac1(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
   const auto* s = static_cast<const Scene*>(user);
   const fe::Plate& p = s->plate;
   sunindextype* rp = SUNSparseMatrix_IndexPointers(J);
@@ -242,17 +241,19 @@ int ReportStep(const char* label, const StepFigures& f) {
   int bad = 0;
   if (f.exact > 0) {
     const double de = 100 * (f.estimate / f.exact - 1);
-    std::printf("exact %.6e, guard estimate %.6e (%+.3f %%, %ld f evals), Gershgorin %.6e "
-                "(%+.2f %%), element %.6e (%+.2f %%)\n",
-                f.exact, f.estimate, de, f.guard_fe, f.gershgorin,
-                100 * (f.gershgorin / f.exact - 1), f.element, 100 * (f.element / f.exact - 1));
+    std::printf(
+        "exact %.6e, guard estimate %.6e (%+.3f %%, %ld f evals), Gershgorin %.6e "
+        "(%+.2f %%), element %.6e (%+.2f %%)\n",
+        f.exact, f.estimate, de, f.guard_fe, f.gershgorin, 100 * (f.gershgorin / f.exact - 1),
+        f.element, 100 * (f.element / f.exact - 1));
     // The stable step's criterion: the estimate's limit within 2 %, the bounds never below.
     bad += !(std::fabs(de) <= 2.0) + !(f.gershgorin >= f.exact) + !(f.element >= f.exact);
   } else {
-    std::printf("guard estimate %.6e (%ld f evals), Gershgorin %.6e (%+.2f %% of the estimate), "
-                "element %.6e (%+.2f %%)\n",
-                f.estimate, f.guard_fe, f.gershgorin, 100 * (f.gershgorin / f.estimate - 1),
-                f.element, 100 * (f.element / f.estimate - 1));
+    std::printf(
+        "guard estimate %.6e (%ld f evals), Gershgorin %.6e (%+.2f %% of the estimate), "
+        "element %.6e (%+.2f %%)\n",
+        f.estimate, f.guard_fe, f.gershgorin, 100 * (f.gershgorin / f.estimate - 1), f.element,
+        100 * (f.element / f.estimate - 1));
     bad += !(f.gershgorin >= f.estimate * (1 - 1e-3)) + !(f.element >= f.estimate * (1 - 1e-3));
   }
   return bad;
@@ -272,8 +273,8 @@ int StableStepPart(SUNContext ctx, bool quick, Scene* wp_scene) {
   bad += ReportStep(label, fs);
   StepFigures fw;
   bad += ApiFigures(ctx, wp_scene, &fw) ? 0 : 1;
-  std::snprintf(label, sizeof label, "%dx%d mesh (%d DOF)", wp_scene->plate.nx,
-                wp_scene->plate.ny, wp_scene->plate.n);
+  std::snprintf(label, sizeof label, "%dx%d mesh (%d DOF)", wp_scene->plate.nx, wp_scene->plate.ny,
+                wp_scene->plate.n);
   bad += ReportStep(label, fw);
   std::printf("stable-step criteria: %s\n", bad == 0 ? "met" : "NOT MET");
   return bad;
@@ -554,9 +555,9 @@ void G5Probe(SUNContext ctx, Scene* s, double h_cd) {
 
 void SundialsCurves(SUNContext ctx, Scene* s, wp::Table* table, bool quick) {
   const SunConfig configs[] = {
-      {Kind::kErk, 3, "ARKODE-ERK", "order3"},     {Kind::kErk, 4, "ARKODE-ERK", "order4"},
-      {Kind::kErk, 5, "ARKODE-ERK", "order5"},     {Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
-      {Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},  {Kind::kBdfKlu, 0, "CVODE-BDF", "KLU"},
+      {Kind::kErk, 3, "ARKODE-ERK", "order3"},      {Kind::kErk, 4, "ARKODE-ERK", "order4"},
+      {Kind::kErk, 5, "ARKODE-ERK", "order5"},      {Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
+      {Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},   {Kind::kBdfKlu, 0, "CVODE-BDF", "KLU"},
       {Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
   const std::vector<double> tols =
       quick ? std::vector<double>{1e-5}
@@ -582,9 +583,10 @@ void PrintJudged(const wp::Table& table) {
     const auto key = std::make_pair(r.solver, r.config);
     if (std::find(curves.begin(), curves.end(), key) == curves.end()) curves.push_back(key);
   }
-  std::printf("\ntime at equal relative position error (issue 11: CEODE/SUNDIALS <= 1/3, "
-              "CEODE/hand <= 1.2)\n%7s %-18s %10s %-22s %10s %10s %9s %9s\n", "error",
-              "best CEODE", "s", "best SUNDIALS", "s", "hand s", "CE/SUN", "CE/hand");
+  std::printf(
+      "\ntime at equal relative position error (issue 11: CEODE/SUNDIALS <= 1/3, "
+      "CEODE/hand <= 1.2)\n%7s %-18s %10s %-22s %10s %10s %9s %9s\n",
+      "error", "best CEODE", "s", "best SUNDIALS", "s", "hand s", "CE/SUN", "CE/hand");
   for (double e : {1e-4, 1e-6}) {
     double best[3] = {-1, -1, -1};  // CEODE, SUNDIALS, hand
     std::string name[3] = {"not reached", "not reached", "not reached"};
@@ -596,8 +598,8 @@ void PrintJudged(const wp::Table& table) {
         name[side] = k.first + " " + k.second;
       }
     }
-    std::printf("%7.0e %-18s %10.3e %-22s %10.3e %10.3e %9.3f %9.3f\n", e, name[0].c_str(),
-                best[0], name[1].c_str(), best[1], best[2],
+    std::printf("%7.0e %-18s %10.3e %-22s %10.3e %10.3e %9.3f %9.3f\n", e, name[0].c_str(), best[0],
+                name[1].c_str(), best[1], best[2],
                 best[0] > 0 && best[1] > 0 ? best[0] / best[1] : 0.0,
                 best[0] > 0 && best[2] > 0 ? best[0] / best[2] : 0.0);
   }
@@ -605,9 +607,10 @@ void PrintJudged(const wp::Table& table) {
 
 WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
   WpResult res;
-  std::printf("\n== work-precision: %dx%d Q4 mesh, %d DOF, w1 = %.6e, w2 = %.6e, one period "
-              "(%.6e), %d outputs ==\n",
-              s->plate.nx, s->plate.ny, s->plate.n, s->w1, s->w2, s->tend, s->nout);
+  std::printf(
+      "\n== work-precision: %dx%d Q4 mesh, %d DOF, w1 = %.6e, w2 = %.6e, one period "
+      "(%.6e), %d outputs ==\n",
+      s->plate.nx, s->plate.ny, s->plate.n, s->w1, s->w2, s->tend, s->nout);
   wp::Table table("fe_plate", args.csv);
   CeodeCurves(ctx, s, &table, args.quick, &res);
   G5Probe(ctx, s, res.h_cd);
@@ -659,9 +662,8 @@ ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
   double* out[3] = {&p.cd, &p.a34, &p.g5};
   for (int k = 0; k < 3; ++k) {
     const double hk = scale[k] * h;
-    *out[k] = PerStep(
-        [&](Scene* sc, wp::Outcome* o) { return CeodeRun(ctx, sc, sets[k], hk, o); }, &s, hk,
-        steps);
+    *out[k] = PerStep([&](Scene* sc, wp::Outcome* o) { return CeodeRun(ctx, sc, sets[k], hk, o); },
+                      &s, hk, steps);
   }
   return p;
 }
@@ -698,10 +700,11 @@ int ScalingPart(SUNContext ctx, const wp::Args& args, double h_cd, double dx_ref
     const ScalePoint& a = pts.front();
     const ScalePoint& b = pts.back();
     const double lr = std::log(static_cast<double>(b.n) / a.n);
-    std::printf("log-log slope of time per step against N (%d to %d): hand %.3f, G3_CD %.3f, "
-                "G4_A34 %.3f, G5 %.3f\n",
-                a.n, b.n, std::log(b.hand / a.hand) / lr, std::log(b.cd / a.cd) / lr,
-                std::log(b.a34 / a.a34) / lr, std::log(b.g5 / a.g5) / lr);
+    std::printf(
+        "log-log slope of time per step against N (%d to %d): hand %.3f, G3_CD %.3f, "
+        "G4_A34 %.3f, G5 %.3f\n",
+        a.n, b.n, std::log(b.hand / a.hand) / lr, std::log(b.cd / a.cd) / lr,
+        std::log(b.a34 / a.a34) / lr, std::log(b.g5 / a.g5) / lr);
   }
   return bad;
 }
@@ -716,9 +719,10 @@ int main(int argc, char** argv) {
   // Square elements, L/D = 4 (quick: a coarser mesh of the same plate).
   s.plate = args.quick ? fe::MakePlate(16, 4) : fe::MakePlate(64, 16);
   const double res = LowestModes(&s);
-  std::printf("Q4 cantilever 4 x 1, plane stress, E = 1, nu = 0.3, rho = 1; reference: two lowest "
-              "modes (residual %.2e)\n",
-              res);
+  std::printf(
+      "Q4 cantilever 4 x 1, plane stress, E = 1, nu = 0.3, rho = 1; reference: two lowest "
+      "modes (residual %.2e)\n",
+      res);
   int bad = res < 1e-9 ? 0 : 1;
   bad += StableStepPart(ctx, args.quick, &s);
   const WpResult wr = WorkPrecisionPart(ctx, &s, args);

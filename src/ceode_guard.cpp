@@ -47,7 +47,7 @@ struct GuardWork {
   SUNLinearSolver LS = nullptr;
   SUNMatrix M_source = nullptr;  // the user's matrix M was cloned from
   CEodeMassFn mfn_source = nullptr;
-  N_Vector wts = nullptr;  // CEodeSetGuardMass: f returns M^{-1} force with this diagonal M
+  N_Vector wts = nullptr;   // CEodeSetGuardMass: f returns M^{-1} force with this diagonal M
   bool mass_ready = false;  // M evaluated and factored (constant M: once per run)
   std::vector<sunrealtype> alpha, beta;
 };
