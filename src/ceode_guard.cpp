@@ -44,6 +44,7 @@ struct GuardWork {
   SUNLinearSolver LS = nullptr;
   SUNMatrix M_source = nullptr;  // the user's matrix M was cloned from
   CEodeMassFn mfn_source = nullptr;
+  N_Vector wts = nullptr;   // CEodeSetGuardMass: f returns M^{-1} force with this diagonal M
   bool mass_ready = false;  // M evaluated and factored (constant M: once per run)
   std::vector<sunrealtype> alpha, beta;
 };
@@ -137,9 +138,14 @@ void StartVector(N_Vector q) {
   }
 }
 
-// out = M in (in without a mass matrix).
+// out = M in: the mass matrix, else CEodeSetGuardMass's diagonal, else M = I.
 void MassTimes(const GuardWork* g, N_Vector in, N_Vector out) {
-  if (g->M == nullptr || SUNMatMatvec(g->M, in, out) != 0) N_VScale(1, in, out);
+  if (g->M != nullptr && SUNMatMatvec(g->M, in, out) == 0) return;
+  if (g->M == nullptr && g->wts != nullptr) {
+    N_VProd(g->wts, in, out);
+    return;
+  }
+  N_VScale(1, in, out);
 }
 
 // u = K q = -(f(x + sig q) - f(x)) / sig, into g->w.
@@ -175,7 +181,13 @@ int LanczosStep(CEodeMemRec* ce, GuardWork* g, bool mass, sunrealtype beta_prev,
                 sunrealtype* beta) {
   int flag = StiffnessTimes(ce, g, func);
   if (flag != CE_SUCCESS) return flag;
-  g->alpha.push_back(N_VDotProd(g->q, g->w));  // q^T K q = <q, M^{-1} K q>_M
+  if (!mass && g->wts != nullptr) {
+    // w = M^{-1} K q already (f divides by the lumped mass): <q, w>_M, in which it is symmetric.
+    MassTimes(g, g->w, g->mw);
+    g->alpha.push_back(N_VDotProd(g->q, g->mw));
+  } else {
+    g->alpha.push_back(N_VDotProd(g->q, g->w));  // q^T K q = <q, M^{-1} K q>_M
+  }
   if (mass) {
     N_VConst(0, g->mw);
     if (SUNLinSolSolve(g->LS, g->M, g->mw, g->w, 0) != 0) {
@@ -366,12 +378,31 @@ void Report(CEodeMemRec* ce, const char* func, sunrealtype Omega, sunrealtype rh
                static_cast<double>(kRecommendSafety), tail);
 }
 
+// CEodeSetGuardMass's vector: the length of x, every entry positive and finite.
+int CheckGuardMass(CEodeMemRec* ce, const char* func, N_Vector mass) {
+  if (N_VGetLength(mass) != N_VGetLength(ce->xcur)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "mass has %ld entries but x has %ld: give one lumped mass per entry of x.",
+                        static_cast<long>(N_VGetLength(mass)),
+                        static_cast<long>(N_VGetLength(ce->xcur)));
+  }
+  // min > 0 and a finite sum: no zero, negative, NaN (which propagates through the sum) or Inf.
+  const sunrealtype mn = N_VMin(mass);
+  if (!(mn > 0) || !std::isfinite(N_VL1Norm(mass))) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "mass has an entry that is not positive and finite (min %g): every lumped "
+                        "mass must be.",
+                        static_cast<double>(mn));
+  }
+  return CE_SUCCESS;
+}
+
 }  // namespace
 
 void GuardFree(CEodeMemRec* ce) {
   GuardWork* g = Work(ce);
   if (g == nullptr) return;
-  for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0}) {
+  for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0, g->wts}) {
     if (v != nullptr) N_VDestroy(v);
   }
   FreeMass(g);
@@ -445,6 +476,27 @@ int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax) {
   } else {
     *hmax = ce->omega_est > 0 ? safety * lim / ce->omega_est : SUN_BIG_REAL;
   }
+  return CE_SUCCESS;
+}
+
+int CEodeSetGuardMass(void* mem, N_Vector mass) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if ((flag = ceode::AllocWork(ce, __func__)) != CE_SUCCESS) return flag;
+  ceode::GuardWork* g = ceode::Work(ce);
+  if (mass == nullptr) {
+    if (g->wts != nullptr) N_VDestroy(g->wts);
+    g->wts = nullptr;
+  } else if ((flag = ceode::CheckGuardMass(ce, __func__, mass)) != CE_SUCCESS) {
+    return flag;
+  } else {
+    if (g->wts == nullptr) g->wts = N_VClone(ce->xcur);
+    if (g->wts == nullptr) return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+    N_VScale(1, mass, g->wts);
+  }
+  ce->guard_warned = false;
+  ce->guard_pending = true;  // checked again at the next CEodeEvolve
   return CE_SUCCESS;
 }
 
