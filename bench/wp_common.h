@@ -315,11 +315,11 @@ struct SecondOrder {
   std::vector<double> x0, v0;
   ErrFn2 err = nullptr;
   bool vel_dependent = false;
-  CEodeVelJacFn vjac = nullptr;  // nullptr: CEODE's difference quotients
-  int max_nonlin_iters = 0;      // 0: CEODE's default
+  CEodeVelJacFn vjac = nullptr;            // nullptr: CEODE's difference quotients
+  int max_nonlin_iters = 0;                // 0: CEODE's default
   int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode (PC or AUTO: docs/theory.md 4.3)
-  ErrFn2 drift = nullptr;        // constraint drift (nullptr: not tracked)
-  CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
+  ErrFn2 drift = nullptr;                  // constraint drift (nullptr: not tracked)
+  CEodeMassFn mass = nullptr;              // constant mass matrix (nullptr: M = I)
   // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G) and the
   // saddle-point matrix [[M, G^T], [G, 0]]: dense (saddle_nnz = 0) or CSR with
   // room for saddle_nnz entries, factored by KLU.

@@ -120,9 +120,9 @@ struct CEodeMemRec {
   std::string method_name = "G3_CD";
   bool zero_start = false;
   bool compensated = false;
-  bool fused = true;         // one-pass update kernel for serial vectors
-  bool fused_ready = false;  // serial vectors: fused_plans valid, raw arrays of length n
-  bool fused_mpi = false;    // NVECTOR_PARALLEL: fused_plans valid on the local part
+  bool fused = true;           // one-pass update kernel for serial vectors
+  bool fused_ready = false;    // serial vectors: fused_plans valid, raw arrays of length n
+  bool fused_mpi = false;      // NVECTOR_PARALLEL: fused_plans valid on the local part
   sunindextype fused_len = 0;  // entries the fused update runs over (local on NVECTOR_PARALLEL)
   std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
   std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;

@@ -5,8 +5,8 @@
 //
 // Grid 37 x 23 (23 rows: uneven strips on 2 and 3 ranks, and on 3 ranks a middle strip with two
 // neighbours), 200 steps at 0.9 of each set's stability limit, the two modes of
-// InitialModes; and a 9 x 2 grid, on 3 ranks one without rows. Reference: the serial run of the same
-// program (no reference file: the claim is equality). A negative control shows the comparison
+// InitialModes; and a 9 x 2 grid, on 3 ranks one without rows. Reference: the serial run of the
+// same program (no reference file: the claim is equality). A negative control shows the comparison
 // notices a wrong halo.
 //
 // One GoogleTest program run by every rank (mpiexec -n 2 / -n 3); the tests are collective.
