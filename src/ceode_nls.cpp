@@ -16,21 +16,25 @@ constexpr const char* kFunc = "CEodeEvolve";
 constexpr sunrealtype kCrDown = 0.3;  // as CVODE: convergence-rate memory
 constexpr sunrealtype kRDiv = 2.0;    // divergence when the correction grows this much
 
+// f(t, x, vtmp) into ftmp inside a solve, counted; the failure is recorded for the step (a
+// fixed step cannot retry), and the solver gets SUNDIALS' recoverable/unrecoverable sign.
+int RhsInSolve(CEodeMemRec* ce) {
+  const int rv = ce->f(ce->t_eval, ce->x_eval, ce->vtmp, ce->ftmp, ce->user_data);
+  ++ce->nfe;
+  if (rv == 0) return 0;
+  ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
+               "The right-hand side function failed (returned %d) inside the nonlinear solve at "
+               "t = %.17g.",
+               rv, static_cast<double>(ce->t_eval));
+  ce->cb_flag = CE_RHSFUNC_FAIL;
+  return rv > 0 ? 1 : -1;
+}
+
 // a = apred + ycor; v = V0 + kappa a; ftmp = f(t, x, v)
 int EvalAtCorrection(CEodeMemRec* ce, N_Vector ycor) {
   N_VLinearSum(1, ce->apred, 1, ycor, ce->atmp);
   N_VLinearSum(1, ce->V0, ce->co.kappa, ce->atmp, ce->vtmp);
-  const int rv = ce->f(ce->t_eval, ce->x_eval, ce->vtmp, ce->ftmp, ce->user_data);
-  ++ce->nfe;
-  if (rv != 0) {
-    ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
-                 "The right-hand side function failed (returned %d) inside the nonlinear solve at "
-                 "t = %.17g.",
-                 rv, static_cast<double>(ce->t_eval));
-    ce->cb_flag = CE_RHSFUNC_FAIL;
-    return rv > 0 ? 1 : -1;
-  }
-  return 0;
+  return RhsInSolve(ce);
 }
 
 int NewtonResidual(N_Vector ycor, N_Vector F, void* mem) {
@@ -157,16 +161,8 @@ int DirectResidual(CEodeMemRec* ce, const Raw& r) {
     r.atmp[i] = r.apred[i] + y[i];
     r.vtmp[i] = (kappa * r.atmp[i]) + r.V0[i];
   }
-  const int rv = ce->f(ce->t_eval, ce->x_eval, ce->vtmp, ce->ftmp, ce->user_data);
-  ++ce->nfe;
-  if (rv != 0) {
-    ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
-                 "The right-hand side function failed (returned %d) inside the nonlinear solve at "
-                 "t = %.17g.",
-                 rv, static_cast<double>(ce->t_eval));
-    ce->cb_flag = CE_RHSFUNC_FAIL;
-    return rv > 0 ? 1 : -1;
-  }
+  const int rv = RhsInSolve(ce);
+  if (rv != 0) return rv;
   sunrealtype* Fd = r.delta;
   if (ce->M != nullptr && SUNMatMatvec(ce->M, ce->atmp, ce->nls_delta) != 0) return -1;
   const sunrealtype* lhs = ce->M != nullptr ? Fd : r.atmp;
