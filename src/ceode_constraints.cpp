@@ -334,10 +334,13 @@ int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
 
 // A step matrix of an earlier step serves (simplified Newton) until msbj steps have passed, h
 // (kappa, mu) or M changed; the iteration refreshes it when it contracts slowly (ConvTest).
+// Only when the user set msbj: with f independent of v the matrix needs no evaluation of f, and
+// a stale one costs more iterations than a factorisation on small systems (measured on the DAE
+// pendulum: 2.4x the time per step with msbj = 20; docs/theory.md section 8).
 bool MatrixUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
   const bool mass_fixed = ce->mfn == nullptr || ce->mass_constant;
-  return sp.reuse && !sp.vdep && w->factored && mass_fixed && w->kappa_fact == sp.kappa &&
-         w->mu_fact == sp.mu && ce->nst - w->nst_fact < ce->msbj;
+  return sp.reuse && !sp.vdep && ce->msbj_set && w->factored && mass_fixed &&
+         w->kappa_fact == sp.kappa && w->mu_fact == sp.mu && ce->nst - w->nst_fact < ce->msbj;
 }
 
 // One Newton correction: x(t+h; a) is affine in a with slope mu, so it moves by delta itself.

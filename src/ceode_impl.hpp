@@ -44,6 +44,7 @@ struct StepCoeffs {
   sunrealtype V0[kMaxDegree] = {};
   sunrealtype kappa = 0;
   sunrealtype mu = 0;
+  sunrealtype pred[kMaxDegree] = {};  // h^i/i!, i < d - 2: the predictor's weights of D_2..
 };
 void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
 
@@ -168,6 +169,7 @@ struct CEodeMemRec {
   sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
   bool nls_tol_set = false;    // the constrained solve keeps its own default until set
   long int msbj = ceode::kDefaultJacEvalFrequency;
+  bool msbj_set = false;  // CEodeSetJacEvalFrequency called with msbj > 0 (see MatrixUsable)
 
   // The acceleration solve of every step, chosen when the run starts (StartMethod):
   // explicit, implicit (velocity dependent) or constrained.

@@ -201,6 +201,7 @@ int CEodeSetJacEvalFrequency(void* mem, long int msbj) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->msbj = msbj > 0 ? msbj : ceode::kDefaultJacEvalFrequency;
+  ce->msbj_set = msbj > 0;
   return CE_SUCCESS;
 }
 

@@ -174,8 +174,7 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
   const int d = ce->degree;
   sunrealtype c[kMaxDegree] = {};
   N_Vector X[kMaxDegree] = {};
-  sunrealtype tw[kMaxDegree] = {};
-  TaylorWeights(co.h, d - 2, tw);  // the predictor's weights of D_2 .. D_{d-1}
+  const sunrealtype* tw = co.pred;  // the predictor's weights of D_2 .. D_{d-1}
   for (int j = 1; j < d; ++j) {
     c[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * tw[j - 2] : 0);
     X[j - 1] = ce->D[j];

@@ -93,6 +93,8 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
   co->h = h;
   sunrealtype tw[kMaxDegree + 1] = {};  // h^i / i!
   TaylorWeights(h, d, tw);
+  // The predictor's weights, once per h: every step reads them (PredictAccel, SolvePC).
+  TaylorWeights(h, d - 2, co->pred);
   // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
   for (int k = 1; k <= d - 2; ++k) {
     for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = tw[i];
@@ -174,9 +176,8 @@ void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
 
 void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
   const int d = ce->degree;
-  sunrealtype c[kMaxDegree];
-  TaylorWeights(ce->co.h, d - 2, c);
-  N_VLinearCombination(d - 2, c, const_cast<N_Vector*>(ce->D + 2), a);
+  N_VLinearCombination(d - 2, const_cast<sunrealtype*>(ce->co.pred),
+                       const_cast<N_Vector*>(ce->D + 2), a);
 }
 
 void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0) {

@@ -481,10 +481,11 @@ TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
   }
 }
 
-// Issue 10: the saddle-point matrix of an earlier step serves until msbj steps have passed (default
-// 20): at most one Jacobian evaluation in ten steps, and the answer of a run that refreshes the
-// matrix at every step (msbj = 1) to within its round-off. f depending on v: only df/dv is
-// reused, the matrix is formed at every step.
+// Issue 10: the saddle-point matrix of an earlier step serves until msbj steps have passed (20
+// here; f independent of v, only when msbj is set): at most one Jacobian evaluation in ten steps,
+// and the answer of a run that refreshes the matrix at every step (msbj = 1) to within its
+// round-off. f depending on v: only df/dv is reused (default 20), the matrix is formed at every
+// step.
 TEST(Constraints, TheSaddleMatrixIsReusedAcrossStepsWithUnchangedAnswers) {
   for (bool vdep : {false, true}) {
     SCOPED_TRACE(vdep ? "vdep" : "no vdep");
@@ -494,6 +495,7 @@ TEST(Constraints, TheSaddleMatrixIsReusedAcrossStepsWithUnchangedAnswers) {
     o.h = 1e-3;
     o.tend = 2;
     o.vel_dependent = vdep;
+    o.msbj = vdep ? 0 : 20;  // 0: the default
     o.problem = &pr;
     const RunResult reused = RunPendulum(o);
     o.msbj = 1;
