@@ -36,6 +36,7 @@
 #include <math.h>
 #include <nvector/nvector_serial.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include "ceode_sundials_compat.h" /* SUN_COMM_NULL on SUNDIALS 6.4 */
@@ -201,6 +202,7 @@ int main(void) {
   sunrealtype h_lim = 0, w_est = 0, w_b = 0, h_b, lim = 0, par[8], xmax;
   long ns;
   int fail, flag, degree = 0;
+  char* name = NULL;
 
   if (check_flag(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
   p.K = SUNSparseMatrix(NDOF, NDOF, 18 * NDOF, CSR_MAT, ctx);
@@ -223,12 +225,15 @@ int main(void) {
   if (flag < 0 || ns != NSTEPS || !(xmax <= 2.0)) fail = 1;
 
   flag = run(ctx, &p, 1.01 * h_lim, CE_GUARD_REFUSE, 0.0, &ns, &xmax);
-  printf("  1.01 h_lim, guard refusing: %s after %ld steps\n", CEodeGetReturnFlagName(flag), ns);
+  name = CEodeGetReturnFlagName(flag); /* malloc'd, as SUNDIALS' GetReturnFlagName */
+  printf("  1.01 h_lim, guard refusing: %s after %ld steps\n", name, ns);
+  free(name);
   if (flag != CE_UNSTABLE || ns != 0) fail = 1;
 
   flag = run(ctx, &p, 1.01 * h_lim, CE_GUARD_OFF, 0.0, &ns, &xmax);
-  printf("  1.01 h_lim, guard off:      %s after %ld steps (the top mode grew)\n",
-         CEodeGetReturnFlagName(flag), ns);
+  name = CEodeGetReturnFlagName(flag);
+  printf("  1.01 h_lim, guard off:      %s after %ld steps (the top mode grew)\n", name, ns);
+  free(name);
   if (flag != CE_UNSTABLE) fail = 1;
 
   flag = run(ctx, &p, h_b, CE_GUARD_REFUSE, w_b, &ns, &xmax);
