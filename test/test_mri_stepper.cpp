@@ -360,6 +360,10 @@ class MriInnerStepperBadInput : public ::testing::Test {
     ASSERT_TRUE(ce_);
     CEodeSetErrFile(ce_.get(), nullptr);
   }
+  // MRIStep with CEODE inside on the state y, evolved with slow step h to tout: the evolve must
+  // fail; CEODE's last message is returned (empty if a step of the set-up failed).
+  std::string FailedEvolveMessage(N_Vector y, sunrealtype h, sunrealtype tout);
+
   Context ctx_;
   Vector x0_, v0_;
   Mem ce_;
@@ -414,51 +418,38 @@ int SlowNone(sunrealtype, N_Vector, N_Vector ydot, void*) {
   return 0;
 }
 
-TEST_F(MriInnerStepperBadInput, ABackwardInnerStepIsRefusedAsForwardOnly) {
+std::string MriInnerStepperBadInput::FailedEvolveMessage(N_Vector y, sunrealtype h,
+                                                         sunrealtype tout) {
   MRIStepInnerStepper s = nullptr;
-  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce_.get(), &s), CE_SUCCESS);
+  if (CEodeCreateMRIStepInnerStepper(ce_.get(), &s) != CE_SUCCESS) return "";
   Inner keep(s);
-  Vector y = SerialVector(4, ctx_, 0.5);
-  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
-  ASSERT_TRUE(mri);
+  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y, s, ctx_));
+  if (!mri) return "";
   QuietArkode(mri.get());
-  ASSERT_EQ(MRIStepSetFixedStep(mri.get(), -0.1), 0);
+  if (MRIStepSetFixedStep(mri.get(), h) != 0) return "";
   sunrealtype t = 0;
-  EXPECT_LT(MRIStepEvolve(mri.get(), -0.5, y.get(), &t, ARK_NORMAL), 0);
-  EXPECT_NE(LastMessage(ce_.get()).find("forward only"), std::string::npos)
-      << LastMessage(ce_.get());
+  EXPECT_LT(MRIStepEvolve(mri.get(), tout, y, &t, ARK_NORMAL), 0);
+  return LastMessage(ce_.get());
+}
+
+TEST_F(MriInnerStepperBadInput, ABackwardInnerStepIsRefusedAsForwardOnly) {
+  Vector y = SerialVector(4, ctx_, 0.5);
+  const std::string msg = FailedEvolveMessage(y.get(), -0.1, -0.5);
+  EXPECT_NE(msg.find("forward only"), std::string::npos) << msg;
 }
 
 TEST_F(MriInnerStepperBadInput, AManyVectorOfThreePartsIsRefused) {
   Vector a = SerialVector(2, ctx_), b = SerialVector(2, ctx_), c = SerialVector(2, ctx_);
   N_Vector parts[3] = {a.get(), b.get(), c.get()};
   Vector y(N_VNew_ManyVector(3, parts, ctx_));
-  MRIStepInnerStepper s = nullptr;
-  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce_.get(), &s), CE_SUCCESS);
-  Inner keep(s);
-  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
-  ASSERT_TRUE(mri);
-  QuietArkode(mri.get());
-  ASSERT_EQ(MRIStepSetFixedStep(mri.get(), 0.1), 0);
-  sunrealtype t = 0;
-  EXPECT_LT(MRIStepEvolve(mri.get(), 0.5, y.get(), &t, ARK_NORMAL), 0);
-  EXPECT_NE(LastMessage(ce_.get()).find("has 3 parts"), std::string::npos)
-      << LastMessage(ce_.get());
+  const std::string msg = FailedEvolveMessage(y.get(), 0.1, 0.5);
+  EXPECT_NE(msg.find("has 3 parts"), std::string::npos) << msg;
 }
 
 TEST_F(MriInnerStepperBadInput, ASerialStateOfTheWrongLengthIsRefused) {
   Vector y = SerialVector(3, ctx_);
-  MRIStepInnerStepper s = nullptr;
-  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce_.get(), &s), CE_SUCCESS);
-  Inner keep(s);
-  std::unique_ptr<void, MriDeleter> mri(MRIStepCreate(SlowNone, nullptr, 0, y.get(), s, ctx_));
-  ASSERT_TRUE(mri);
-  QuietArkode(mri.get());
-  ASSERT_EQ(MRIStepSetFixedStep(mri.get(), 0.1), 0);
-  sunrealtype t = 0;
-  EXPECT_LT(MRIStepEvolve(mri.get(), 0.5, y.get(), &t, ARK_NORMAL), 0);
-  EXPECT_NE(LastMessage(ce_.get()).find("serial vector of length 4"), std::string::npos)
-      << LastMessage(ce_.get());
+  const std::string msg = FailedEvolveMessage(y.get(), 0.1, 0.5);
+  EXPECT_NE(msg.find("serial vector of length 4"), std::string::npos) << msg;
 }
 
 TEST_F(MriInnerStepperBadInput, UserDataChangedBehindTheStepperIsRefusedNotFollowed) {
