@@ -50,6 +50,8 @@ void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, Ste
 
 // Finite-difference weights w of the q-th derivative at 0 on the m nodes x (Fornberg).
 void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w);
+// The same for every order 0..q at once (q < kMaxDegree): w[k] holds order k.
+void FornbergTable(int q, int m, const sunrealtype* x, sunrealtype (*w)[2 * kMaxDegree + 1]);
 
 // One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
 // for a quantity that accumulates). Zero coefficients are dropped when the plan

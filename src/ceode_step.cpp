@@ -51,8 +51,10 @@ sunrealtype Factorial(int n) {
 
 }  // namespace
 
-// Weights of the derivative of order q on the nodes x[0..m-1] at 0 (Fornberg 1988).
-void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
+// Weights of the derivatives of orders 0..q on the nodes x[0..m-1] at 0 (Fornberg 1988): the
+// recursion builds every lower order on the way, and each order's weights do not depend on
+// the higher ones, so one call serves every order with the numbers of separate calls.
+void FornbergTable(int q, int m, const sunrealtype* x, sunrealtype (*w)[2 * kMaxDegree + 1]) {
   sunrealtype C[2 * kMaxDegree + 1][kMaxDegree] = {};
   C[0][0] = 1;
   sunrealtype c1 = 1;
@@ -73,7 +75,15 @@ void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
     }
     c1 = c2;
   }
-  for (int i = 0; i < m; ++i) w[i] = C[i][q];
+  for (int k = 0; k <= q; ++k) {
+    for (int i = 0; i < m; ++i) w[k][i] = C[i][k];
+  }
+}
+
+void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w) {
+  sunrealtype table[kMaxDegree][2 * kMaxDegree + 1];
+  FornbergTable(q, m, x, table);
+  std::copy(table[q], table[q] + m, w);
 }
 
 const MethodSet* FindMethodSet(const char* name) {
