@@ -172,8 +172,10 @@ inline sunrealtype SumAtForm(const FusedTerms& tk, sunindextype i) {
       return SumAt<kSum>(tk, i);
     case kDifference:
       return SumAt<kDifference>(tk, i);
+    case kZero:
+      return 0;
     default:
-      return 0;  // kZero
+      __builtin_unreachable();  // FormOf returns only the forms above: no range check per sum
   }
 }
 static_assert(kMaxTerms == 11, "SumAtForm lists every term count");

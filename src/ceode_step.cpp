@@ -442,16 +442,15 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
 }
 
 // The new derivatives become the history; the three positions rotate.
+// Whole arrays, not the degree's slots: a fixed-length swap compiles to a few vector moves
+// instead of a loop; the slots at and above the degree are spare buffers and D[0] is unused.
 void Commit(CEodeMemRec* ce, sunrealtype t) {
-  const int d = ce->degree;
-  for (int k = 1; k < d; ++k) std::swap(ce->D[k], ce->Dnew[k]);
+  std::swap(ce->D, ce->Dnew);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
   ce->xnew = old;
-  if (ce->compensated) {
-    for (int k = 0; k <= d - 2; ++k) std::swap(ce->comp[k], ce->compnew[k]);
-  }
+  if (ce->compensated) std::swap(ce->comp, ce->compnew);
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
