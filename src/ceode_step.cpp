@@ -180,8 +180,9 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
 
 // Every Taylor polynomial of the library (step coefficients, predictors, starts, dense output)
 // takes its weights from here.
+// The first two weights are exactly 1 and s (pow(s, 0) and pow(s, 1) are exact): no pow call.
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
-  for (int i = 0; i < m; ++i) w[i] = std::pow(s, i) / Factorial(i);
+  for (int i = 0; i < m; ++i) w[i] = i == 0 ? 1 : (i == 1 ? s : std::pow(s, i) / Factorial(i));
 }
 
 void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
