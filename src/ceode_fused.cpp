@@ -181,7 +181,7 @@ inline sunrealtype SumAtForm(const FusedTerms& tk, sunindextype i) {
 static_assert(kMaxTerms == 11, "SumAtForm lists every term count");
 
 // Small systems: entry by entry, every sum of the plan on it, no loop set-up per sum.
-sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
+inline sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
   sunrealtype sum = 0;
   for (sunindextype i = 0; i < n; ++i) {
@@ -348,6 +348,7 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs) {
 }
 
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
+  if (n == 1) return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
   return n < kSmallSystem ? UpdateSmall(fp, n) : UpdateBlocked(fp, n);
 }
 
