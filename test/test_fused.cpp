@@ -85,6 +85,50 @@ INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
                            return info.param;
                          });
 
+// One unknown: the entry-by-entry kernel, which also runs the high-degree start's Taylor samples
+// and stencil sums (src/ceode_start_high.cpp). The pendulum theta'' = -9.81 cos theta.
+int PendulumRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
+  N_VGetArrayPointer(f)[0] = -9.81 * std::cos(N_VGetArrayPointer(x)[0]);
+  return 0;
+}
+
+std::pair<sunrealtype, sunrealtype> RunPendulum(const std::string& method, bool fused,
+                                                bool compensated, sunrealtype tend) {
+  SUNContext ctx = nullptr;
+  SUNContext_Create(SUN_COMM_NULL, &ctx);
+  N_Vector x = N_VNew_Serial(1, ctx);
+  N_Vector v = N_VNew_Serial(1, ctx);
+  N_VConst(0, x);
+  N_VConst(0, v);
+  void* mem = CEodeCreate(ctx);
+  EXPECT_EQ(CEodeInit(mem, PendulumRhs, 0, x, v), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem, method.c_str()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFixedStep(mem, 0.0125), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetCompensatedSummation(mem, compensated ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  sunrealtype t = 0;
+  EXPECT_EQ(CEodeEvolve(mem, tend, x, v, &t, CE_NORMAL), CE_SUCCESS);
+  const std::pair<sunrealtype, sunrealtype> r{N_VGetArrayPointer(x)[0], N_VGetArrayPointer(v)[0]};
+  CEodeFree(&mem);
+  N_VDestroy(x);
+  N_VDestroy(v);
+  SUNContext_Free(&ctx);
+  return r;
+}
+
+TEST_P(FusedKernel, GivesBitwiseTheNumbersOfTheGenericPathOnOneUnknown) {
+  for (bool compensated : {false, true}) {
+    for (sunrealtype tend : {0.0125, 10.0}) {  // the start alone (one step), and a long run
+      const auto generic = RunPendulum(GetParam(), false, compensated, tend);
+      const auto fused = RunPendulum(GetParam(), true, compensated, tend);
+      EXPECT_EQ(generic.first, fused.first) << "x compensated=" << compensated << " t=" << tend;
+      EXPECT_EQ(generic.second, fused.second) << "v compensated=" << compensated << " t=" << tend;
+      EXPECT_TRUE(std::isfinite(fused.first) && std::fabs(fused.first) < 4);
+    }
+  }
+}
+
 }  // namespace
 
 // The kernel itself, without an integrator: the serial backend against the generic reference on
