@@ -4,6 +4,8 @@
 // the same order, so the state they produce is bit for bit the same.
 #include "ceode_fused.hpp"
 
+#include <nvector/nvector_serial.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -352,6 +354,18 @@ sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
   return n < kSmallSystem ? UpdateSmall(fp, n) : UpdateBlocked(fp, n);
 }
 
+namespace {
+
+// A vector's data. Serial vectors (their array operation is N_VGetArrayPointer_Serial, so their
+// content is serial) without a call: every plan build takes a few hundred of these, and each
+// call runs through Debian's -O0 build. Others through the generic accessor.
+sunrealtype* DataOf(N_Vector v) {
+  if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
+  return N_VGetArrayPointer(v);
+}
+
+}  // namespace
+
 // Each combination with its accumulated term (or, compensated, minus its compensation)
 // appended, exactly as RunCombo hands it to Combine.
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp) {
@@ -363,20 +377,20 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     tk.m = cb.m;
     for (int j = 0; j < cb.m; ++j) {
       tk.c[j] = cb.c[j];
-      tk.X[j] = N_VGetArrayPointer(cb.X[j]);
+      tk.X[j] = DataOf(cb.X[j]);
     }
     tk.old = nullptr;
     tk.compnew = nullptr;
     if (cb.old != nullptr && !cs.on) {
       tk.c[tk.m] = 1;
-      tk.X[tk.m++] = N_VGetArrayPointer(cb.old);
+      tk.X[tk.m++] = DataOf(cb.old);
     } else if (cb.old != nullptr) {
       tk.c[tk.m] = -1;
-      tk.X[tk.m++] = N_VGetArrayPointer(cs.comp[cb.level]);
-      tk.old = N_VGetArrayPointer(cb.old);
-      tk.compnew = N_VGetArrayPointer(cs.compnew[cb.level]);
+      tk.X[tk.m++] = DataOf(cs.comp[cb.level]);
+      tk.old = DataOf(cb.old);
+      tk.compnew = DataOf(cs.compnew[cb.level]);
     }
-    tk.out = N_VGetArrayPointer(cb.out);
+    tk.out = DataOf(cb.out);
     tk.form = FormOf(tk.m, tk.c);
     for (int j = 0; j < tk.m; ++j) distinct = distinct && tk.X[j] != tk.out;
     distinct = distinct && (tk.old == nullptr ||
