@@ -14,6 +14,8 @@
 // Timing: wp::TimeMedian (process CPU time, median of >= 5 repetitions of >= 50 ms).
 //
 //   wp_high_order [--csv FILE] [--quick]
+//   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
+//                                                     bench/high_order_instructions.sh)
 // Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
 // (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
 // --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
@@ -289,9 +291,33 @@ void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
   }
 }
 
+// --count: REPS pendulum runs of METHOD at STEPS steps, nothing timed (whole runs as the timed
+// ones, create to free, so callgrind's counts split into a fixed cost per run and a cost per step).
+int CountRuns(int argc, char** argv) {
+  if (argc < 5) {
+    std::fprintf(stderr, "usage: %s --count METHOD STEPS REPS [comp]\n", argv[0]);
+    return 2;
+  }
+  SUNContext ctx;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
+  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
+  const long steps = std::atol(argv[3]);
+  const int reps = std::atoi(argv[4]);
+  const bool comp = argc > 5 && std::strcmp(argv[5], "comp") == 0;
+  int rc = 0;
+  double err = 0;
+  pend.ref = {0};
+  for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
+  std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
+              comp ? " +comp" : "", err);
+  SUNContext_Free(&ctx);
+  return rc;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "--count") == 0) return CountRuns(argc, argv);
   const wp::Args args = wp::ParseArgs(argc, argv);
   peers::Setup();
   SUNContext ctx;
