@@ -284,6 +284,8 @@ int NlsInitialize(CEodeMemRec* ce, const char* func) {
 void NlsFree(CEodeMemRec* ce) {
   if (ce->nls_delta != nullptr) N_VDestroy(ce->nls_delta);
   ce->nls_delta = nullptr;
+  if (ce->pc_dir != nullptr) N_VDestroy(ce->pc_dir);  // CE_IMPLICIT_AUTO's (ceode_pc.cpp)
+  ce->pc_dir = nullptr;
   if (ce->NLS != nullptr && ce->own_nls) SUNNonlinSolFree(ce->NLS);
   if (ce->own_nls) ce->NLS = nullptr;
   ce->own_nls = false;

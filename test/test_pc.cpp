@@ -234,7 +234,9 @@ TEST(PredictionCorrectionWithAMassMatrix, GivesTheMotionOfTheUnitMass) {
   CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfe_probe, &coupling);
   CEodeGetNumLinSolvSetups(mem.get(), &nsetups);
   EXPECT_EQ(npc, 1000);
-  EXPECT_EQ(nfe_probe, 4);  // f(t0, x0, v0) itself (M is not I), then three power steps
+  // f(t0, x0, v0) itself (M is not I), then three power steps; then one power step every msbj
+  // = 20 steps (at steps 20, 40, ..., 980).
+  EXPECT_EQ(nfe_probe, 4 + 999 / 20);
   // kappa = h beta / (2 gamma) = 0.01 / 3 for G4_A34, |M^{-1} df/dv| = 2 zeta w = 0.2.
   EXPECT_NEAR(coupling, 0.01 / 3 * 0.2, 1e-9);
   EXPECT_EQ(nsetups, 1);  // M is factored once, every correction reuses it
@@ -288,7 +290,8 @@ TEST(AutomaticChoice, TakesNewtonForStiffDampingAndStaysStableAndAccurate) {
   EXPECT_NEAR(autorun.coupling, 2.5, 0.025);  // 1 DOF, linear: the estimate is exact
   EXPECT_EQ(autorun.npc, 0);
   EXPECT_EQ(autorun.nnls, autorun.nst);
-  EXPECT_EQ(autorun.nfe_coupling, 3);          // three power steps, the start's a0 as base
+  // Three power steps, the start's a0 as base, then one every msbj = 20 steps.
+  EXPECT_EQ(autorun.nfe_coupling, 3 + (autorun.nst - 1) / 20);
   EXPECT_EQ(MaxDiff(autorun.x, newton.x), 0);  // the same solver, bit for bit
   EXPECT_LT(autorun.err_x, 1e-7);              // measured 3.8e-9
   EXPECT_LT(autorun.err_v, 1e-9);              // measured 3.8e-11
@@ -357,6 +360,7 @@ TEST(NewtonMatrixOnTheOdePath, IsRebuiltWhenTheStepChanges) {
   ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
   ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
   ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON), CE_SUCCESS);  // its matrix
   ASSERT_EQ(CEodeSetJacEvalFrequency(mem.get(), 1000), CE_SUCCESS);
   sunrealtype t = 0;
   long int nje = 0;
@@ -402,6 +406,7 @@ ChainRun RunChainNewton(const char* method, bool user_nls, bool band, sunrealtyp
               ok(CEodeSetMethodByName(mem.get(), method)) && ok(CEodeSetFixedStep(mem.get(), h)) &&
               ok(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0)) &&
               ok(CEodeSetVelocityDependence(mem.get(), SUNTRUE)) &&
+              ok(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON)) &&
               ok(CEodeSetLinearSolver(mem.get(), LS.get(), A.get())) &&
               (!user_nls || ok(CEodeSetNonlinearSolver(mem.get(), nls)));
   CEodeSetErrFile(mem.get(), nullptr);  // the failing runs are expected
