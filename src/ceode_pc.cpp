@@ -227,12 +227,15 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
 }
 
 // CE_IMPLICIT_AUTO's step: the solve in use, then every msbj steps the coupling estimate anew
-// (one f), which moves a problem whose damping grows to the nonlinear solver and back.
+// (one f), which moves a problem whose damping grows to the nonlinear solver and back. At least
+// kDefaultJacEvalFrequency steps apart: a user's msbj = 1 (a fresh Newton matrix every step,
+// cheap with an analytic df/dv) would otherwise add an f to every step.
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func) {
   const int flag =
       ce->pc_active ? SolvePC(ce, t, tnext, x, a, func) : SolveImplicit(ce, t, tnext, x, a, func);
-  if (flag != CE_SUCCESS || ce->nst - ce->nst_coupling < ce->msbj) return flag;
+  const long int every = std::max(ce->msbj, kDefaultJacEvalFrequency);
+  if (flag != CE_SUCCESS || ce->nst - ce->nst_coupling < every) return flag;
   return RefreshCoupling(ce, t, x, a, func);
 }
 
