@@ -341,6 +341,43 @@ TEST(AutomaticChoice, EstimatesTheCouplingAgainAfterAStepChange) {
   EXPECT_NEAR(coarse.coupling, 4 * fine.coupling, 1e-3 * coarse.coupling);
 }
 
+// x'' = -x - c(t) x' with c = 0.1 + 5 t: the damping grows fiftyfold over [0, 10]. No closed
+// form: Exact() gives 0 and the runs are compared with each other.
+struct GrowingDamping : ExactProblem {
+  static int F(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* /*data*/) {
+    N_VLinearSum(-1, x, -(SUN_RCONST(0.1) + 5 * t), v, f);
+    return 0;
+  }
+  CEodeRhsFn Rhs() const override { return F; }
+  bool VelocityDependent() const override { return true; }
+  void Exact(sunrealtype /*t*/, sunrealtype* x, sunrealtype* v) const override { *x = *v = 0; }
+};
+
+// G3_CD at h = 0.01: kappa = 0.005, kappa c = 5e-4 at the start (PC) and 0.25 at the end, five
+// times the limit. The refresh every 20 steps moves the run to Newton once kappa c passes 0.05
+// (c = 10, t = 1.98); the answer is then Newton's to the PC phase's difference.
+TEST(AutomaticChoice, MovesToNewtonWhenTheDampingGrowsDuringTheRun) {
+  GrowingDamping prob;
+  Config c;
+  c.mode = CE_IMPLICIT_AUTO;
+  const Outcome autorun = Integrate(prob, c);
+  c.mode = CE_IMPLICIT_NEWTON;
+  const Outcome newton = Integrate(prob, c);
+  ASSERT_EQ(autorun.flag, CE_SUCCESS);
+  ASSERT_EQ(newton.flag, CE_SUCCESS);
+  std::printf(
+      "[ auto     ] growing damping: %ld PC steps, %ld Newton steps, last coupling %.4f, "
+      "|auto - newton| x %.3e\n",
+      autorun.npc, autorun.nnls, autorun.coupling, MaxDiff(autorun.x, newton.x));
+  // Switched within one refresh period after t = 1.98 (step 198): PC for steps 0 .. 199 at most.
+  EXPECT_GE(autorun.npc, 180);
+  EXPECT_LE(autorun.npc, 220);
+  EXPECT_EQ(autorun.npc + autorun.nnls, autorun.nst);
+  EXPECT_NEAR(autorun.coupling, 0.005 * (0.1 + 5 * 9.8), 0.005 * 5 * 0.3);  // a late refresh
+  EXPECT_EQ(autorun.nfe_coupling, 3 + (autorun.nst - 1) / 20);
+  EXPECT_LT(MaxDiff(autorun.x, newton.x), 1e-4);  // measured 4.85e-5
+}
+
 // ---------------------------------------------------------------------------
 // The Newton matrix on the ODE path: refreshed every msbj steps, not every step.
 
