@@ -304,6 +304,36 @@ void ErrorWeights(CEodeMemRec* ce, bool direct, const Raw& raw) {
   N_VInv(ce->ewt, ce->ewt);
 }
 
+// Velocity offset and predictor (v(a) = V0 + kappa a; a0 = Taylor of a from t - h) and the
+// error weights, on raw arrays on the direct path.
+void PrepareSolve(CEodeMemRec* ce, bool direct, const Raw& raw) {
+  if (direct) {
+    DirectOffsetAndPredict(ce, raw);
+  } else {
+    VelocityOffset(ce->degree, ce->co, ce->D, ce->V0);
+    PredictAccel(ce, ce->apred);
+  }
+  ErrorWeights(ce, direct, raw);
+}
+
+void ZeroCorrection(CEodeMemRec* ce, bool direct, const Raw& raw) {
+  if (direct) {
+    std::fill(raw.ycor, raw.ycor + raw.n, SUN_RCONST(0.0));
+  } else {
+    N_VConst(0, ce->ycor);
+  }
+}
+
+// a = apred + ycor (N_VLinearSum's VSum on the direct path).
+void CorrectedAccel(CEodeMemRec* ce, bool direct, const Raw& raw, N_Vector a) {
+  if (direct) {
+    sunrealtype* ad = NV_DATA_S(a);
+    for (sunindextype i = 0; i < raw.n; ++i) ad[i] = raw.apred[i] + raw.ycor[i];
+  } else {
+    N_VLinearSum(1, ce->apred, 1, ce->ycor, a);
+  }
+}
+
 }  // namespace
 
 int NlsInitialize(CEodeMemRec* ce, const char* func) {
@@ -361,16 +391,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   int flag = MassUpdate(ce, t, x, func);
   if (flag != CE_SUCCESS) return flag;
 
-  // Velocity offset and predictor: v(a) = V0 + kappa a; a0 = Taylor of a from t - h.
   const bool direct = DirectNewtonApplies(ce);
   const Raw raw = direct ? RawArrays(ce) : Raw{};
-  if (direct) {
-    DirectOffsetAndPredict(ce, raw);
-  } else {
-    VelocityOffset(ce->degree, co, ce->D, ce->V0);
-    PredictAccel(ce, ce->apred);
-  }
-  ErrorWeights(ce, direct, raw);
+  PrepareSolve(ce, direct, raw);
 
   ce->t_eval = t;
   ce->x_eval = x;
@@ -382,11 +405,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
                           ce->mass_dirty || ce->kappa_setup != co.kappa);
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
-    if (direct) {
-      std::fill(raw.ycor, raw.ycor + raw.n, SUN_RCONST(0.0));
-    } else {
-      N_VConst(0, ce->ycor);
-    }
+    ZeroCorrection(ce, direct, raw);
     rv = direct ? DirectNewton(ce, raw, setup)
                 : SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1,
                                     setup ? SUNTRUE : SUNFALSE, ce);
@@ -408,12 +427,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
                         "attach a linear solver for Newton, or raise CEodeSetMaxNonlinIters.",
                         newton ? "Newton" : "fixed-point", ce->maxcor, static_cast<double>(t));
   }
-  if (direct) {
-    sunrealtype* ad = NV_DATA_S(a);
-    for (sunindextype i = 0; i < raw.n; ++i) ad[i] = raw.apred[i] + raw.ycor[i];
-  } else {
-    N_VLinearSum(1, ce->apred, 1, ce->ycor, a);
-  }
+  CorrectedAccel(ce, direct, raw, a);
   ++ce->nnls_steps;
   return CE_SUCCESS;
 }
