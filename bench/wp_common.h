@@ -318,8 +318,12 @@ struct SecondOrder {
   CEodeVelJacFn vjac = nullptr;            // nullptr: CEODE's difference quotients
   int max_nonlin_iters = 0;                // 0: CEODE's default
   int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode (PC or AUTO: docs/theory.md 4.3)
-  ErrFn2 drift = nullptr;                  // constraint drift (nullptr: not tracked)
-  CEodeMassFn mass = nullptr;              // constant mass matrix (nullptr: M = I)
+  // -- implicit-step options (bench/wp_spinning_top.cpp): 0 keeps CEODE's default --
+  double nls_reltol = 0;       // CEodeSetNonlinTolerances(reltol, 0)
+  long msbj = 0;               // CEodeSetJacEvalFrequency
+  int pc_corrections = 0;      // CEodeSetPCCorrections
+  ErrFn2 drift = nullptr;      // constraint drift (nullptr: not tracked)
+  CEodeMassFn mass = nullptr;  // constant mass matrix (nullptr: M = I)
   // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G) and the
   // saddle-point matrix [[M, G^T], [G, 0]]: dense (saddle_nnz = 0) or CSR with
   // room for saddle_nnz entries, factored by KLU.
@@ -370,6 +374,11 @@ inline bool CeodeAttach(SUNContext ctx, const SecondOrder& p, CeodeObjects* o) {
            Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver") ||
            (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
            Failed(CEodeSetImplicitMode(mem, p.implicit_mode), "CEodeSetImplicitMode") ||
+           (p.nls_reltol > 0 &&
+            Failed(CEodeSetNonlinTolerances(mem, p.nls_reltol, 0), "CEodeSetNonlinTolerances")) ||
+           (p.msbj > 0 &&
+            Failed(CEodeSetJacEvalFrequency(mem, p.msbj), "CEodeSetJacEvalFrequency")) ||
+           Failed(CEodeSetPCCorrections(mem, p.pc_corrections), "CEodeSetPCCorrections") ||
            (p.max_nonlin_iters > 0 &&
             Failed(CEodeSetMaxNonlinIters(mem, p.max_nonlin_iters), "CEodeSetMaxNonlinIters"));
   }

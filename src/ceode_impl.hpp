@@ -243,14 +243,18 @@ struct CEodeMemRec {
   long int nce = 0;
 
   // Implicit-step mode and velocity-dependence detection (ceode_pc.cpp)
-  int implicit_mode = CE_IMPLICIT_NEWTON;
-  int pc_corrections = 0;              // 0: 1 for degree <= 4, 2 above
-  int vel_request = -1;                // CEodeSetVelocityDependence's value; -1: never called
-  CEodeRhsFn vel_checked_f = nullptr;  // f already probed for an undeclared dependence
-  sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
-  long int npc_steps = 0;              // steps solved by prediction-correction
-  long int nnls_steps = 0;             // steps solved by the nonlinear solver
-  long int nfe_coupling = 0;           // f evaluations of the detection and the coupling estimate
+  int implicit_mode = CE_IMPLICIT_AUTO;  // the library chooses (docs/theory.md section 4.3)
+  bool implicit_mode_set = false;        // CEodeSetImplicitMode called
+  bool pc_active = false;                // AUTO: the step in use is prediction-correction
+  long int nst_coupling = 0;             // AUTO: nst at the last coupling estimate
+  N_Vector pc_dir = nullptr;             // AUTO: the power iteration's direction, kept warm
+  int pc_corrections = 0;                // 0: 1 for degree <= 4, 2 above
+  int vel_request = -1;                  // CEodeSetVelocityDependence's value; -1: never called
+  CEodeRhsFn vel_checked_f = nullptr;    // f already probed for an undeclared dependence
+  sunrealtype coupling = 0;              // last estimate of kappa ||M^{-1} df/dv|| (0: none)
+  long int npc_steps = 0;                // steps solved by prediction-correction
+  long int nnls_steps = 0;               // steps solved by the nonlinear solver
+  long int nfe_coupling = 0;             // f evaluations of the detection and the coupling estimate
   bool nls_jcur = false;  // the direct Newton iteration's "matrix is current" (ceode_nls.cpp)
   N_Vector nls_delta = nullptr;  // its correction vector
 
@@ -348,6 +352,8 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func);
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
             const char* func);
 void ImplicitStatsReset(CEodeMemRec* ce);  // CEodeReInit
+int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+              const char* func);  // CE_IMPLICIT_AUTO: PC or the nonlinear solver, refreshed
 
 // ceode_constraints.cpp
 bool HasConstraints(const CEodeMemRec* ce);

@@ -1,10 +1,15 @@
 // The implicit (velocity-dependent) case: F(a) = M a - f(t, x, V0 + kappa a) = 0
 // handed to a SUNNonlinearSolver. The unknown is the correction to the
 // predicted acceleration, as CVODE solves for the correction to its predictor.
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 #include <sunnonlinsol/sunnonlinsol_newton.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ceode_impl.hpp"
 
@@ -122,23 +127,77 @@ bool DirectNewtonApplies(const CEodeMemRec* ce) {
          SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
 }
 
-// The raw arrays of the direct iteration, looked up once per step.
+// The raw arrays of the direct iteration, looked up once per step. The direct path runs on
+// serial vectors only (fused_ready), so the data pointers are read from the vectors' content
+// (NV_DATA_S) rather than through the vector operations' dispatch: at n of a few, the
+// dispatch of N_VGetArrayPointer was a sixth of a Newton step (bench_implicit_step).
 struct Raw {
   sunindextype n;
   sunrealtype *apred, *atmp, *vtmp, *V0, *ftmp, *lstmp, *ewt, *ycor, *delta;
+  sunrealtype** cols;  // SUNLinSol_Dense's LU factors (nullptr: another direct solver)
+  sunindextype* pivots;
 };
 
 Raw RawArrays(const CEodeMemRec* ce) {
-  return {ce->n,
-          N_VGetArrayPointer(ce->apred),
-          N_VGetArrayPointer(ce->atmp),
-          N_VGetArrayPointer(ce->vtmp),
-          N_VGetArrayPointer(ce->V0),
-          N_VGetArrayPointer(ce->ftmp),
-          N_VGetArrayPointer(ce->lstmp),
-          N_VGetArrayPointer(ce->ewt),
-          N_VGetArrayPointer(ce->ycor),
-          N_VGetArrayPointer(ce->nls_delta)};
+  Raw r{ce->n,
+        NV_DATA_S(ce->apred),
+        NV_DATA_S(ce->atmp),
+        NV_DATA_S(ce->vtmp),
+        NV_DATA_S(ce->V0),
+        NV_DATA_S(ce->ftmp),
+        NV_DATA_S(ce->lstmp),
+        NV_DATA_S(ce->ewt),
+        NV_DATA_S(ce->ycor),
+        NV_DATA_S(ce->nls_delta),
+        nullptr,
+        nullptr};
+  if (SUNLinSolGetID(ce->LS) == SUNLINEARSOLVER_DENSE && SUNMatGetID(ce->A) == SUNMATRIX_DENSE) {
+    r.cols = SUNDenseMatrix_Cols(ce->A);
+    r.pivots = static_cast<SUNLinearSolverContent_Dense>(ce->LS->content)->pivots;
+  }
+  return r;
+}
+
+// z = sum_j c_j X_j (j < m) on raw arrays, with N_VLinearCombination_Serial's values: its
+// m = 1 and m = 2 cases are N_VScale and N_VLinearSum, whose a = b and a = -b branches factor.
+void RawCombination(sunindextype n, int m, const sunrealtype* c, N_Vector* X, sunrealtype* z) {
+  const sunrealtype* x0 = NV_DATA_S(X[0]);
+  const sunrealtype* x1 = m >= 2 ? NV_DATA_S(X[1]) : nullptr;
+  if (m == 2 && (c[0] == c[1] || c[0] == -c[1])) {
+    const sunrealtype sgn = c[0] == c[1] ? 1 : -1;
+    for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * (x0[i] + (sgn * x1[i]));
+    return;
+  }
+  for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * x0[i];
+  for (int j = 1; j < m; ++j) {
+    const sunrealtype* xj = NV_DATA_S(X[j]);
+    for (sunindextype i = 0; i < n; ++i) z[i] += c[j] * xj[i];
+  }
+}
+
+// SolveImplicit's VelocityOffset and PredictAccel (both N_VLinearCombination) on raw arrays.
+void DirectOffsetAndPredict(const CEodeMemRec* ce, const Raw& r) {
+  const int d = ce->degree;
+  RawCombination(r.n, d - 1, ce->co.V0 + 1, const_cast<N_Vector*>(ce->D + 1), r.V0);
+  RawCombination(r.n, d - 2, ce->co.pred, const_cast<N_Vector*>(ce->D + 2), r.apred);
+}
+
+// SUNLinSolSolve_Dense on raw arrays: x = b, then SUNDlsMat_denseGETRS's permutation and
+// triangular solves in its order (SUNDIALS 6.4 and 7.x alike).
+void DirectDenseSolve(const Raw& r, const sunrealtype* b, sunrealtype* x) {
+  const sunindextype n = r.n;
+  for (sunindextype i = 0; i < n; ++i) x[i] = b[i];
+  for (sunindextype k = 0; k < n; ++k) std::swap(x[k], x[r.pivots[k]]);
+  for (sunindextype k = 0; k + 1 < n; ++k) {
+    const sunrealtype* col = r.cols[k];
+    for (sunindextype i = k + 1; i < n; ++i) x[i] -= col[i] * x[k];
+  }
+  for (sunindextype k = n - 1; k > 0; --k) {
+    const sunrealtype* col = r.cols[k];
+    x[k] /= col[k];
+    for (sunindextype i = 0; i < k; ++i) x[i] -= col[i] * x[k];
+  }
+  x[0] /= r.cols[0][0];
 }
 
 // ewt = 1 / (reltol |apred| + atol), atol from max |apred| (SolveImplicit's N_VMaxNorm, N_VAbs,
@@ -174,7 +233,12 @@ int DirectResidual(CEodeMemRec* ce, const Raw& r) {
 int DirectIterate(CEodeMemRec* ce, const Raw& r, int m) {
   sunrealtype* d = r.delta;
   for (sunindextype i = 0; i < r.n; ++i) d[i] = -d[i];
-  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, ce->nls_delta, SUN_RCONST(0.05));
+  int rv = 0;
+  if (r.cols != nullptr) {
+    DirectDenseSolve(r, d, r.lstmp);
+  } else {
+    rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, ce->nls_delta, SUN_RCONST(0.05));
+  }
   ++ce->nls_solves;
   if (rv != 0) {
     if (rv < 0) {
@@ -240,6 +304,36 @@ void ErrorWeights(CEodeMemRec* ce, bool direct, const Raw& raw) {
   N_VInv(ce->ewt, ce->ewt);
 }
 
+// Velocity offset and predictor (v(a) = V0 + kappa a; a0 = Taylor of a from t - h) and the
+// error weights, on raw arrays on the direct path.
+void PrepareSolve(CEodeMemRec* ce, bool direct, const Raw& raw) {
+  if (direct) {
+    DirectOffsetAndPredict(ce, raw);
+  } else {
+    VelocityOffset(ce->degree, ce->co, ce->D, ce->V0);
+    PredictAccel(ce, ce->apred);
+  }
+  ErrorWeights(ce, direct, raw);
+}
+
+void ZeroCorrection(CEodeMemRec* ce, bool direct, const Raw& raw) {
+  if (direct) {
+    std::fill(raw.ycor, raw.ycor + raw.n, SUN_RCONST(0.0));
+  } else {
+    N_VConst(0, ce->ycor);
+  }
+}
+
+// a = apred + ycor (N_VLinearSum's VSum on the direct path).
+void CorrectedAccel(CEodeMemRec* ce, bool direct, const Raw& raw, N_Vector a) {
+  if (direct) {
+    sunrealtype* ad = NV_DATA_S(a);
+    for (sunindextype i = 0; i < raw.n; ++i) ad[i] = raw.apred[i] + raw.ycor[i];
+  } else {
+    N_VLinearSum(1, ce->apred, 1, ce->ycor, a);
+  }
+}
+
 }  // namespace
 
 int NlsInitialize(CEodeMemRec* ce, const char* func) {
@@ -284,6 +378,8 @@ int NlsInitialize(CEodeMemRec* ce, const char* func) {
 void NlsFree(CEodeMemRec* ce) {
   if (ce->nls_delta != nullptr) N_VDestroy(ce->nls_delta);
   ce->nls_delta = nullptr;
+  if (ce->pc_dir != nullptr) N_VDestroy(ce->pc_dir);  // CE_IMPLICIT_AUTO's (ceode_pc.cpp)
+  ce->pc_dir = nullptr;
   if (ce->NLS != nullptr && ce->own_nls) SUNNonlinSolFree(ce->NLS);
   if (ce->own_nls) ce->NLS = nullptr;
   ce->own_nls = false;
@@ -295,13 +391,9 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
   int flag = MassUpdate(ce, t, x, func);
   if (flag != CE_SUCCESS) return flag;
 
-  // Velocity offset and predictor: v(a) = V0 + kappa a; a0 = Taylor of a from t - h.
-  VelocityOffset(ce->degree, co, ce->D, ce->V0);
-  PredictAccel(ce, ce->apred);
-
   const bool direct = DirectNewtonApplies(ce);
   const Raw raw = direct ? RawArrays(ce) : Raw{};
-  ErrorWeights(ce, direct, raw);
+  PrepareSolve(ce, direct, raw);
 
   ce->t_eval = t;
   ce->x_eval = x;
@@ -313,7 +405,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
                           ce->mass_dirty || ce->kappa_setup != co.kappa);
   int rv = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
-    N_VConst(0, ce->ycor);
+    ZeroCorrection(ce, direct, raw);
     rv = direct ? DirectNewton(ce, raw, setup)
                 : SUNNonlinSolSolve(ce->NLS, ce->zero, ce->ycor, ce->ewt, 1,
                                     setup ? SUNTRUE : SUNFALSE, ce);
@@ -335,7 +427,7 @@ int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vecto
                         "attach a linear solver for Newton, or raise CEodeSetMaxNonlinIters.",
                         newton ? "Newton" : "fixed-point", ce->maxcor, static_cast<double>(t));
   }
-  N_VLinearSum(1, ce->apred, 1, ce->ycor, a);
+  CorrectedAccel(ce, direct, raw, a);
   ++ce->nnls_steps;
   return CE_SUCCESS;
 }

@@ -61,32 +61,62 @@ int BaseForce(CEodeMemRec* ce, N_Vector fbase, const char* func) {
   return CountedRhs(ce, ce->tcur, ce->xcur, ce->D[1], fbase, func);
 }
 
-// u = (f(t0, x0, v0 + sig w) - fbase) / sig for w with max |w_i| = 1: df/dv w.
-int DirectionalDifference(CEodeMemRec* ce, N_Vector w, N_Vector fbase, N_Vector u,
-                          const char* func) {
-  const sunrealtype sig =
-      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(ce->D[1]));
-  N_VLinearSum(1, ce->D[1], sig, w, ce->vtmp);
-  const int flag = CountedRhs(ce, ce->tcur, ce->xcur, ce->vtmp, u, func);
+// The increment of the velocity in a directional difference at velocity v.
+sunrealtype ProbeIncrement(N_Vector v) {
+  return std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(v));
+}
+
+// u = (f(t, x, v + sig w) - fbase) / sig for w with max |w_i| = 1: df/dv w (vp: scratch).
+int DirectionalDifference(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector vp,
+                          N_Vector w, N_Vector fbase, N_Vector u, const char* func) {
+  const sunrealtype sig = ProbeIncrement(v);
+  N_VLinearSum(1, v, sig, w, vp);
+  const int flag = CountedRhs(ce, t, x, vp, u, func);
   if (flag == CE_SUCCESS) N_VLinearSum(1 / sig, u, -1 / sig, fbase, u);
   return flag;
 }
 
-// kappa ||M^{-1} df/dv||: power steps from the probe direction; w, u, fbase are scratch.
-int EstimateCoupling(CEodeMemRec* ce, N_Vector w, N_Vector u, N_Vector fbase, const char* func) {
+// The start's first probe, shared by the dependence check and the coupling estimate:
+// fbase = f(t0, x0, v0), w = the probe direction, u = df/dv w (no mass solve).
+int FirstProbe(CEodeMemRec* ce, N_Vector w, N_Vector u, N_Vector fbase, const char* func) {
   int flag = BaseForce(ce, fbase, func);
   ProbeDirection(w);
   N_VScale(1 / N_VMaxNorm(w), w, w);
+  if (flag == CE_SUCCESS) {
+    flag = DirectionalDifference(ce, ce->tcur, ce->xcur, ce->D[1], ce->vtmp, w, fbase, u, func);
+  }
+  return flag;
+}
+
+// One power step on u = df/dv w: u <- M^{-1} u, w <- u / ||u||; *r = ||u|| (0: none).
+int PowerStep(CEodeMemRec* ce, N_Vector w, N_Vector u, sunrealtype* r, const char* func) {
+  const int flag = MassSolve(ce, u, func);
+  *r = flag == CE_SUCCESS ? MaxNormOrNaN(u) : 0;
+  if (!(*r > 0) || !std::isfinite(*r)) {
+    *r = 0;
+    return flag;
+  }
+  N_VScale(1 / *r, u, w);
+  return flag;
+}
+
+// kappa ||M^{-1} df/dv||: power steps from the probe direction at the start, into pc_dir (kept
+// for the refreshes); atmp, ftmp are scratch.
+int EstimateCoupling(CEodeMemRec* ce, const char* func) {
+  N_Vector w = ce->pc_dir, u = ce->atmp, fbase = ce->ftmp;
+  int flag = FirstProbe(ce, w, u, fbase, func);
   sunrealtype rho = 0;
   for (int i = 0; i < kPowerSteps && flag == CE_SUCCESS; ++i) {
-    flag = DirectionalDifference(ce, w, fbase, u, func);
-    if (flag == CE_SUCCESS) flag = MassSolve(ce, u, func);
-    const sunrealtype r = flag == CE_SUCCESS ? MaxNormOrNaN(u) : 0;
-    if (!(r > 0) || !std::isfinite(r)) break;
+    if (i > 0) {
+      flag = DirectionalDifference(ce, ce->tcur, ce->xcur, ce->D[1], ce->vtmp, w, fbase, u, func);
+    }
+    sunrealtype r = 0;
+    if (flag == CE_SUCCESS) flag = PowerStep(ce, w, u, &r, func);
+    if (!(r > 0)) break;
     rho = std::max(rho, r);
-    N_VScale(1 / r, u, w);
   }
   ce->coupling = std::fabs(ce->co.kappa) * rho;
+  ce->nst_coupling = ce->nst;
   return flag;
 }
 
@@ -98,15 +128,11 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != ce->f))) {
     return CE_SUCCESS;
   }
-  N_Vector w = ce->ycor, u = ce->atmp, fbase = ce->ftmp;
-  int flag = BaseForce(ce, fbase, func);
-  ProbeDirection(w);
-  N_VScale(1 / N_VMaxNorm(w), w, w);
-  if (flag == CE_SUCCESS) flag = DirectionalDifference(ce, w, fbase, u, func);
+  N_Vector u = ce->atmp, fbase = ce->ftmp;
+  int flag = FirstProbe(ce, ce->ycor, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
   if (!detect) ce->vel_checked_f = ce->f;  // once per right-hand side, not at every restart
-  const sunrealtype sig =
-      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(SUN_RCONST(1.0), N_VMaxNorm(ce->D[1]));
+  const sunrealtype sig = ProbeIncrement(ce->D[1]);
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
   const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
   if (!(df > floor)) return CE_SUCCESS;  // also for NaN: the start's checks report those
@@ -126,6 +152,29 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
   flag = LsInitialize(ce, func);
   return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
+}
+
+// AUTO's refresh after a step at (t, x): the step's own last evaluation f(t, x, vtmp) is the
+// base (PC: M a; the nonlinear solver leaves it in ftmp), so one power step from the kept
+// direction costs one f. The switch has hysteresis (back to PC only below half the limit), so
+// that an estimate near the limit does not alternate the modes from one refresh to the next.
+int RefreshCoupling(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func) {
+  N_Vector fbase = ce->ftmp;
+  if (ce->pc_active) {
+    fbase = a;
+    if (ce->M != nullptr && SUNMatMatvec(ce->M, a, (fbase = ce->ftmp)) != 0) {
+      return ProcessError(ce, CE_LSOLVE_FAIL, func, "The mass matrix product M a failed.");
+    }
+  }
+  int flag = DirectionalDifference(ce, t, x, ce->vtmp, ce->ycor, ce->pc_dir, fbase, ce->atmp, func);
+  sunrealtype r = 0;
+  if (flag == CE_SUCCESS) flag = PowerStep(ce, ce->pc_dir, ce->atmp, &r, func);
+  if (flag != CE_SUCCESS) return flag;
+  ce->coupling = std::fabs(ce->co.kappa) * r;
+  ce->nst_coupling = ce->nst;
+  if (ce->pc_active && ce->coupling > kPcCouplingLimit) ce->pc_active = false;
+  if (!ce->pc_active && ce->coupling <= kPcCouplingLimit / 2) ce->pc_active = true;
+  return CE_SUCCESS;
 }
 
 // out = sum_j c_j X_j. On serial vectors one loop of the library's own code, with the
@@ -150,17 +199,44 @@ void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_V
 
 }  // namespace
 
+namespace {
+
+// The mode in use: AUTO unless the user chose one, or attached a nonlinear solver of their own
+// without choosing (that solver is then what the user asked for).
+int ImplicitMode(const CEodeMemRec* ce) {
+  if (!ce->implicit_mode_set && !ce->own_nls) return CE_IMPLICIT_NEWTON;
+  return ce->implicit_mode;
+}
+
+}  // namespace
+
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   if (HasConstraints(ce)) return CE_SUCCESS;
   int flag = CheckVelocityDependence(ce, func);
   if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
-  bool pc = ce->implicit_mode == CE_IMPLICIT_PC;
-  if (ce->implicit_mode == CE_IMPLICIT_AUTO) {
-    flag = EstimateCoupling(ce, ce->ycor, ce->atmp, ce->ftmp, func);
-    pc = flag == CE_SUCCESS && ce->coupling <= kPcCouplingLimit;
+  const int mode = ImplicitMode(ce);
+  ce->solve_accel = mode == CE_IMPLICIT_PC ? SolvePC : SolveImplicit;
+  if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
+  if (ce->pc_dir == nullptr && (ce->pc_dir = N_VClone(ce->ycor)) == nullptr) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
-  ce->solve_accel = pc ? SolvePC : SolveImplicit;
+  flag = EstimateCoupling(ce, func);
+  ce->pc_active = flag == CE_SUCCESS && ce->coupling <= kPcCouplingLimit;
+  ce->solve_accel = SolveAuto;
   return flag;
+}
+
+// CE_IMPLICIT_AUTO's step: the solve in use, then every msbj steps the coupling estimate anew
+// (one f), which moves a problem whose damping grows to the nonlinear solver and back. At least
+// kDefaultJacEvalFrequency steps apart: a user's msbj = 1 (a fresh Newton matrix every step,
+// cheap with an analytic df/dv) would otherwise add an f to every step.
+int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+              const char* func) {
+  const int flag =
+      ce->pc_active ? SolvePC(ce, t, tnext, x, a, func) : SolveImplicit(ce, t, tnext, x, a, func);
+  const long int every = std::max(ce->msbj, kDefaultJacEvalFrequency);
+  if (flag != CE_SUCCESS || ce->nst - ce->nst_coupling < every) return flag;
+  return RefreshCoupling(ce, t, x, a, func);
 }
 
 // P(EC)^k: the predicted acceleration gives the velocity, each evaluation-correction
@@ -213,6 +289,7 @@ int CEodeSetImplicitMode(void* mem, int mode) {
                                mode);
   }
   ce->implicit_mode = mode;
+  ce->implicit_mode_set = true;
   ceode::Restart(ce);  // the choice is made at the start
   return CE_SUCCESS;
 }

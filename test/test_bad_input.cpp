@@ -566,6 +566,7 @@ TEST_F(HostileInput, AFailingVelocityJacobianReturnsCE_JACFUNC_FAIL) {
   Matrix A(SUNDenseMatrix(2, 2, ctx_));
   LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
   ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem(), CE_IMPLICIT_NEWTON), CE_SUCCESS);  // calls the Jacobian
   ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
   ASSERT_EQ(CEodeSetVelJacFn(mem(), Oscillator::Jac), CE_SUCCESS);
   sunrealtype t = -1;

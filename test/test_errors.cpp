@@ -256,7 +256,8 @@ TEST_F(BadInput, ARightHandSideFailingInsideTheNonlinearSolveIsReported) {
   prob_.t_bad = SUN_RCONST(0.5);
   prob_.retval = -2;
   ASSERT_EQ(SetUpRun(), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);  // fixed point
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);       // fixed point
+  ASSERT_EQ(CEodeSetImplicitMode(mem(), CE_IMPLICIT_NEWTON), CE_SUCCESS);  // not AUTO's PC
   sunrealtype t = 0;
   EXPECT_EQ(Evolve(1, &t), CE_RHSFUNC_FAIL);
   EXPECT_TRUE(Contains(LastMessage("CEodeEvolve"), "nonlinear solve"));

@@ -257,6 +257,9 @@ inline RunResult RunExact(const ExactProblem& prob, const RunOptions& opt) {
     A.reset(SUNDenseMatrix(1, 1, ctx));
     LS.reset(SUNLinSol_Dense(x.get(), A.get(), ctx));
     if (fail(CEodeSetVelocityDependence(mem.get(), SUNTRUE)) ||
+        // Newton, not the library's AUTO choice: the sets' orders are those of the exact solve
+        // (prediction-correction's own orders: test_pc.cpp).
+        fail(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON)) ||
         fail(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()))) {
       return r;
     }

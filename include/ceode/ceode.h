@@ -176,12 +176,12 @@ SUNDIALS_EXPORT int CEodeGetGuardStats(void* mem, long int* nfevals, long int* n
 
 /* ---- Implicit-step modes and velocity-dependence detection (ceode_pc.cpp) ----
  * CEodeSetImplicitMode chooses how a velocity-dependent step solves for the
- * acceleration: CE_IMPLICIT_NEWTON (default, unchanged behaviour) hands it to the
- * nonlinear solver (Newton with a linear solver attached, fixed point otherwise);
- * CE_IMPLICIT_PC predicts and corrects a fixed number of times, no convergence
- * test (CEodeSetPCCorrections: k = 1 or 2, 0 = 1 for degree <= 4, 2 above);
- * CE_IMPLICIT_AUTO estimates kappa ||M^{-1} df/dv|| at every (re)start and takes
- * PC when it is at most 0.05, the nonlinear solver above (docs/api.md).
+ * acceleration: CE_IMPLICIT_NEWTON hands it to the nonlinear solver (Newton with
+ * a linear solver attached, fixed point otherwise); CE_IMPLICIT_PC predicts and
+ * corrects a fixed number of times, no convergence test (CEodeSetPCCorrections:
+ * k = 1 or 2, 0 = 1 for degree <= 4, 2 above); CE_IMPLICIT_AUTO (default)
+ * estimates kappa ||M^{-1} df/dv|| at every (re)start and every msbj steps and
+ * takes PC when it is at most 0.05, the nonlinear solver above (docs/api.md).
  * CE_VELOCITY_DETECT (CEodeSetVelocityDependence) switches the implicit step on
  * when one directional difference at the start shows that f depends on x'; if the
  * setter was never called and f depends on x', CEODE warns (CE_WARNING). */
