@@ -500,6 +500,37 @@ INSTANTIATE_TEST_SUITE_P(Operators, GuardNonSymmetric, ::testing::ValuesIn(kNonS
                            return std::string(info.param.name);
                          });
 
+// The MRI fast part as forces with a dense M = diag(2, 3): M^{-1} K = [[w^2/2, -w^2/2], [0, 0]],
+// omega_max = w / sqrt(2); Arnoldi then works in the M inner product, through the mass solve.
+int DiagonalMass23(sunrealtype, N_Vector, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+  SM_ELEMENT_D(M, 0, 0) = 2;
+  SM_ELEMENT_D(M, 1, 1) = 3;
+  return 0;
+}
+
+TEST(StabilityGuard, EstimatesANonSymmetricPencilWithADenseMassMatrixInThreeEvaluations) {
+  Context ctx;
+  Vector x = ceode_test::SerialVector(2, ctx, 0.5);
+  Vector v = ceode_test::SerialVector(2, ctx, 0);
+  NV_Ith_S(x.get(), 1) = 0.55;
+  ceode_test::Matrix M(SUNDenseMatrix(2, 2, ctx));
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), MriFast, 0, x.get(), v.get()), CE_SUCCESS);
+  CEodeSetUserData(mem.get(), &kOmega100);
+  ASSERT_EQ(CEodeSetMassFn(mem.get(), DiagonalMass23, M.get(), SUNTRUE), CE_SUCCESS);
+  sunrealtype hmax = 0;
+  sunrealtype omega = 0;
+  ASSERT_EQ(CEodeGetStableStep(mem.get(), 1, &hmax), CE_SUCCESS);
+  ASSERT_EQ(CEodeGetMaxFrequencyEstimate(mem.get(), &omega), CE_SUCCESS);
+  EXPECT_NEAR(omega, 100 / std::sqrt(2.0), 1e-6 * 100);
+  long int nfe = 0;
+  long int nme = 0;
+  long int nsetups = 0;
+  ASSERT_EQ(CEodeGetGuardStats(mem.get(), &nfe, &nme, &nsetups), CE_SUCCESS);
+  EXPECT_LE(nfe, 3);
+  EXPECT_EQ(nme, 1);
+}
+
 TEST(StabilityGuard, StaysWithLanczosOnSymmetricGridsAndSaysSo) {
   Context ctx;
   Grid grid{"Chain100", 100, 1};
