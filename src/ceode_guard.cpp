@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -29,6 +30,19 @@ constexpr int kCheckEvery = 5;
 // Stop once the top Ritz pair's residual is below this fraction of its value:
 // the estimate theta + residual is then at most 0.1 % above omega_max^2.
 constexpr sunrealtype kLanczosTol = 1e-3;
+// Is the pencil symmetric? In exact arithmetic <q_{j-1}, K q_j> = beta_{j-1} for a symmetric one.
+// Two things move the computed coefficient c off beta_{j-1} when it is symmetric: the rounding of
+// the difference quotients (eps |f| / sig per entry, bounded per step with kDqNoise), and the
+// local loss of orthogonality it causes, which grows like amax / beta_{j-1} as beta falls (near
+// breakdown the next vector is mostly that rounding). Measured over the test suite and the
+// examples, |c - beta| / (amax + beta) <= 5e-8 on the symmetric problems but for those two cases
+// (the spinning top just after beta = 6e-9 amax; pendulums at rest, K at rounding level), and
+// >= 0.5 at j = 1 on the non-symmetric ones (the MRI fast part, triangular and scaled-chain K).
+// kSymmetryTol sits between (docs/theory.md, the runtime guard).
+constexpr sunrealtype kSymmetryTol = 1e-4;
+constexpr sunrealtype kDqNoise = 10;  // safety factor on the Cauchy-Schwarz bound of the rounding
+// Arnoldi (non-symmetric K): basis vectors per cycle before an explicit restart.
+constexpr int kArnoldiDim = 20;
 // Recommended steps and CEodeGetStableStep's default: this fraction of the limit,
 // so that a step at the recommendation stays stable even at a Jordan-block edge.
 constexpr sunrealtype kRecommendSafety = 0.99;
@@ -41,12 +55,22 @@ struct GuardWork {
   N_Vector xp = nullptr;  // perturbed position
   N_Vector f0 = nullptr;  // f at the guard's point
   SUNMatrix M = nullptr;  // the guard's own M(t, x) and its factorisation
+  // M itself for the M products when the solver factors in place (dense, band): without it the
+  // products would use the LU factors
+  SUNMatrix M_prod = nullptr;
   SUNLinearSolver LS = nullptr;
   SUNMatrix M_source = nullptr;  // the user's matrix M was cloned from
   CEodeMassFn mfn_source = nullptr;
   N_Vector wts = nullptr;   // CEodeSetGuardMass: f returns M^{-1} force with this diagonal M
   bool mass_ready = false;  // M evaluated and factored (constant M: once per run)
   std::vector<sunrealtype> alpha, beta;
+  sunrealtype f0_norm = 0;  // ||f(x)||_2: the scale of the difference quotients' rounding
+  sunrealtype sig = 0;      // the last difference quotient's step
+  // Arnoldi, for a non-symmetric K: its M-orthonormal basis (cloned when first needed) and
+  // Hessenberg matrix; which estimator the last estimate came from (for the warning)
+  std::vector<N_Vector> basis;
+  Eigen::MatrixXd H;
+  bool arnoldi = false;
 };
 
 GuardWork* Work(CEodeMemRec* ce) { return static_cast<GuardWork*>(ce->guard); }
@@ -72,8 +96,10 @@ SUNLinearSolver MassSolver(CEodeMemRec* ce, GuardWork* g) {
 void FreeMass(GuardWork* g) {
   if (g->LS != nullptr) SUNLinSolFree(g->LS);
   if (g->M != nullptr) SUNMatDestroy(g->M);
+  if (g->M_prod != nullptr) SUNMatDestroy(g->M_prod);
   g->LS = nullptr;
   g->M = nullptr;
+  g->M_prod = nullptr;
   g->M_source = nullptr;
   g->mass_ready = false;
 }
@@ -90,7 +116,11 @@ int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
     g->M_source = ce->M;
     g->mfn_source = ce->mfn;
     g->M = SUNMatClone(ce->M);
-    if (g->M == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
+    const SUNMatrix_ID id = SUNMatGetID(ce->M);
+    if (id == SUNMATRIX_DENSE || id == SUNMATRIX_BAND) g->M_prod = SUNMatClone(ce->M);
+    if (g->M == nullptr ||
+        ((id == SUNMATRIX_DENSE || id == SUNMATRIX_BAND) && g->M_prod == nullptr))
+      return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
     g->LS = MassSolver(ce, g);
     if (g->LS == nullptr || SUNLinSolInitialize(g->LS) != 0) {
       *usable = false;
@@ -109,6 +139,9 @@ int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
                         "The mass matrix function failed (returned %d) in the stability guard at "
                         "t = %.17g.",
                         rv, static_cast<double>(ce->tcur));
+  }
+  if (g->M_prod != nullptr && SUNMatCopy(g->M, g->M_prod) != 0) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "The stability guard could not copy M.");
   }
   rv = SUNLinSolSetup(g->LS, g->M);
   ++ce->nsetups_guard;
@@ -140,7 +173,8 @@ void StartVector(N_Vector q) {
 
 // out = M in: the mass matrix, else CEodeSetGuardMass's diagonal, else M = I.
 void MassTimes(const GuardWork* g, N_Vector in, N_Vector out) {
-  if (g->M != nullptr && SUNMatMatvec(g->M, in, out) == 0) return;
+  const SUNMatrix M = g->M_prod != nullptr ? g->M_prod : g->M;
+  if (M != nullptr && SUNMatMatvec(M, in, out) == 0) return;
   if (g->M == nullptr && g->wts != nullptr) {
     N_VProd(g->wts, in, out);
     return;
@@ -152,6 +186,7 @@ void MassTimes(const GuardWork* g, N_Vector in, N_Vector out) {
 int StiffnessTimes(CEodeMemRec* ce, GuardWork* g, const char* func) {
   const sunrealtype qmax = N_VMaxNorm(g->q);
   const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * (1 + N_VMaxNorm(ce->xcur)) / qmax;
+  g->sig = sig;
   N_VLinearSum(1, ce->xcur, sig, g->q, g->xp);
   const int rv = ce->f(ce->tcur, g->xp, ce->D[1], g->w, ce->user_data);
   ++ce->nfe_guard;
@@ -176,17 +211,30 @@ void TopRitz(const GuardWork* g, sunrealtype beta_k, sunrealtype* theta, sunreal
   *res = std::fabs(beta_k * es.eigenvectors()(k - 1, k - 1));
 }
 
-// One Lanczos step on q: alpha_j, the next vector in w, its M-norm beta_j.
+// The symmetry test's two numbers at step j: c = <q_{j-1}, A q_j>_M and a bound on the part of it
+// that is the difference quotient's rounding, |q_{j-1}|_2 eps (|f(x)| + |f(x + sig q)|) / sig
+// (Cauchy-Schwarz; with lumped masses |W q_{j-1}|_2, as the product is then weighted).
+struct Coupling {
+  sunrealtype c = 0;
+  sunrealtype noise = 0;
+};
+
+// One Lanczos step on q: alpha_j, the next vector in w, its M-norm beta_j, and the coupling.
 int LanczosStep(CEodeMemRec* ce, GuardWork* g, bool mass, sunrealtype beta_prev, const char* func,
-                sunrealtype* beta) {
+                sunrealtype* beta, Coupling* cp) {
   int flag = StiffnessTimes(ce, g, func);
   if (flag != CE_SUCCESS) return flag;
+  const sunrealtype rounding = kDqNoise * 2 * SUN_UNIT_ROUNDOFF * g->f0_norm / g->sig;
   if (!mass && g->wts != nullptr) {
     // w = M^{-1} K q already (f divides by the lumped mass): <q, w>_M, in which it is symmetric.
     MassTimes(g, g->w, g->mw);
     g->alpha.push_back(N_VDotProd(g->q, g->mw));
+    cp->c = N_VDotProd(g->q_prev, g->mw);
+    cp->noise = rounding * N_VWL2Norm(g->q_prev, g->wts);
   } else {
     g->alpha.push_back(N_VDotProd(g->q, g->w));  // q^T K q = <q, M^{-1} K q>_M
+    cp->c = N_VDotProd(g->q_prev, g->w);
+    cp->noise = rounding * std::sqrt(N_VDotProd(g->q_prev, g->q_prev));
   }
   if (mass) {
     N_VConst(0, g->mw);
@@ -200,6 +248,169 @@ int LanczosStep(CEodeMemRec* ce, GuardWork* g, bool mass, sunrealtype beta_prev,
   MassTimes(g, g->w, g->mw);
   *beta = std::sqrt(std::max(N_VDotProd(g->w, g->mw), SUN_RCONST(0.0)));
   return CE_SUCCESS;
+}
+
+// A q = M^{-1} K q into g->w.
+int OperatorTimes(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func) {
+  const int flag = StiffnessTimes(ce, g, func);
+  if (flag != CE_SUCCESS || !mass) return flag;  // without M, f's K (or M^{-1} K) is A already
+  N_VConst(0, g->mw);
+  if (SUNLinSolSolve(g->LS, g->M, g->mw, g->w, 0) != 0) {
+    return ProcessError(ce, CE_LSOLVE_FAIL, func, "The stability guard's mass solve failed.");
+  }
+  std::swap(g->w, g->mw);
+  return CE_SUCCESS;
+}
+
+// g->w minus its M-projection on basis[0..k-1], the coefficients added to column col of H:
+// classical Gram-Schmidt twice (one M product per pass; "twice is enough" for orthogonality
+// to round-off). Returns the M-norm of what is left.
+sunrealtype Orthogonalise(GuardWork* g, int k, int col) {
+  for (int pass = 0; pass < 2; ++pass) {
+    MassTimes(g, g->w, g->mw);
+    for (int i = 0; i < k; ++i) {
+      const sunrealtype h = N_VDotProd(g->basis[i], g->mw);
+      g->H(i, col) += h;
+      N_VLinearSum(1, g->w, -h, g->basis[i], g->w);
+    }
+  }
+  MassTimes(g, g->w, g->mw);
+  return std::sqrt(std::max(N_VDotProd(g->w, g->mw), SUN_RCONST(0.0)));
+}
+
+// Arnoldi vectors are cloned when first needed: a symmetric f never allocates them.
+int EnsureBasis(CEodeMemRec* ce, GuardWork* g, int k, const char* func) {
+  while (static_cast<int>(g->basis.size()) < k) {
+    N_Vector v = N_VClone(ce->xcur);
+    if (v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
+    g->basis.push_back(v);
+  }
+  return CE_SUCCESS;
+}
+
+struct ArnoldiRitz {
+  bool found = false;  // a Ritz value with a positive real part
+  sunrealtype theta = 0;
+  sunrealtype res = 0;
+  Eigen::VectorXcd y;
+};
+
+// Among the Ritz values of H_k with a positive real part (the oscillations a step must resolve;
+// the others grow or decay whatever h is), the one of largest modulus, its unit eigenvector y and
+// residual norm beta |e_k^T y|.
+ArnoldiRitz TopArnoldiRitz(const GuardWork* g, int k, sunrealtype beta) {
+  ArnoldiRitz r;
+  Eigen::EigenSolver<Eigen::MatrixXd> es(g->H.topLeftCorner(k, k));
+  if (es.info() != Eigen::Success) {
+    r.theta = NAN;
+    return r;
+  }
+  int best = -1;
+  for (int i = 0; i < k; ++i) {
+    const std::complex<double> lam = es.eigenvalues()(i);
+    if (lam.real() > 0 && (best < 0 || std::abs(lam) > r.theta)) {
+      best = i;
+      r.theta = std::abs(lam);
+    }
+  }
+  if (best < 0) return r;
+  r.found = true;
+  r.y = es.eigenvectors().col(best);
+  r.res = std::fabs(beta) * std::abs(r.y(k - 1));
+  return r;
+}
+
+// Explicit restart: basis[0] = the real Ritz vector of y (y turned so that its largest entry is
+// real, whose real part therefore does not vanish), M-normalised.
+void RestartFrom(GuardWork* g, int k, const Eigen::VectorXcd& y) {
+  Eigen::Index m = 0;
+  y.cwiseAbs().maxCoeff(&m);
+  const std::complex<double> turn = std::conj(y(m)) / std::abs(y(m));
+  N_VConst(0, g->q);
+  for (int i = 0; i < k; ++i) N_VLinearSum(1, g->q, (y(i) * turn).real(), g->basis[i], g->q);
+  MassTimes(g, g->q, g->mw);
+  N_VScale(1 / std::sqrt(N_VDotProd(g->q, g->mw)), g->q, g->basis[0]);
+  g->H.setZero();
+}
+
+// Column k of H from A basis[k]; the next residual is left in g->w, its M-norm in *beta.
+int ArnoldiColumn(CEodeMemRec* ce, GuardWork* g, bool mass, int k, const char* func,
+                  sunrealtype* beta) {
+  N_VScale(1, g->basis[k], g->q);
+  const int flag = OperatorTimes(ce, g, mass, func);
+  if (flag != CE_SUCCESS) return flag;
+  *beta = Orthogonalise(g, k + 1, k);
+  g->H(k + 1, k) = *beta;
+  return CE_SUCCESS;
+}
+
+// Arnoldi from k basis vectors whose k columns of H are done (residual in g->w, M-norm beta):
+// lam_hat = theta + r for the top Ritz value theta (TopArnoldiRitz), restarted from its Ritz
+// vector every kArnoldiDim steps, at most budget products of A. Without symmetry a small residual
+// does not put an eigenvalue near theta (the error can be the eigenvector condition number times
+// r: a scaled chain of cond 1e3 stopped at -5 % on r alone), so theta must also have stopped
+// moving; an invariant subspace (beta ~ 0) makes theta exact.
+int ArnoldiTop(CEodeMemRec* ce, GuardWork* g, bool mass, int k, sunrealtype beta, int budget,
+               const char* func, sunrealtype* lam_hat) {
+  sunrealtype theta_prev = -1;
+  for (;;) {
+    const ArnoldiRitz r = TopArnoldiRitz(g, k, beta);
+    const sunrealtype scale = g->H.topLeftCorner(k + 1, k).cwiseAbs().maxCoeff();
+    const bool breakdown = !(beta > 1e-9 * (scale + SUN_UNIT_ROUNDOFF));
+    const bool settled = r.found && r.res <= kLanczosTol * r.theta &&
+                         std::fabs(r.theta - theta_prev) <= kLanczosTol * r.theta;
+    *lam_hat = r.theta + r.res;
+    if (!std::isfinite(*lam_hat) || breakdown || budget == 0 || settled) return CE_SUCCESS;
+    theta_prev = r.theta;
+    int flag = CE_SUCCESS;
+    if (k == kArnoldiDim) {
+      RestartFrom(g, k, r.found ? r.y : Eigen::VectorXcd::Ones(k).eval());
+      k = 0;
+    } else {
+      if ((flag = EnsureBasis(ce, g, k + 1, func)) != CE_SUCCESS) return flag;
+      N_VScale(1 / beta, g->w, g->basis[k]);
+    }
+    if ((flag = ArnoldiColumn(ce, g, mass, k, func, &beta)) != CE_SUCCESS) return flag;
+    ++k;
+    --budget;
+  }
+}
+
+// The symmetry test (kSymmetryTol): a mismatch |c - beta_{j-1}| beyond what the rounding and the
+// loss of orthogonality it causes explain.
+bool NotSymmetric(const Coupling& cp, sunrealtype beta_prev, sunrealtype amax) {
+  const sunrealtype amplification = 1 + amax / beta_prev;
+  return std::fabs(cp.c - beta_prev) >
+         (kSymmetryTol * (amax + beta_prev) + cp.noise) * amplification;
+}
+
+// K is not symmetric at step j: continue by Arnoldi (docs/theory.md, the runtime guard). At j = 1
+// no product is lost: q_0 and q_1 = (A q_0 - alpha_0 q_0) / beta_0 are Arnoldi's first two vectors
+// too, and A q_1 differs from Lanczos's only in its coefficient on q_0 (c, not beta_0). Later the
+// earlier Lanczos vectors are gone (and not orthogonal to q_j), so Arnoldi starts from q_j.
+int SwitchToArnoldi(CEodeMemRec* ce, GuardWork* g, bool mass, int j, sunrealtype beta_prev,
+                    sunrealtype c, const char* func, sunrealtype* lam_hat) {
+  g->arnoldi = true;
+  g->H.setZero(kArnoldiDim + 1, kArnoldiDim);
+  int flag = EnsureBasis(ce, g, 2, func);
+  if (flag != CE_SUCCESS) return flag;
+  const int budget = kMaxLanczos - (j + 1);
+  sunrealtype beta = 0;
+  if (j == 1) {
+    N_VScale(1, g->q_prev, g->basis[0]);
+    N_VScale(1, g->q, g->basis[1]);
+    g->H(0, 0) = g->alpha[0];
+    g->H(1, 0) = beta_prev;
+    g->H(0, 1) = c;
+    g->H(1, 1) = g->alpha[1];
+    N_VLinearSum(1, g->w, beta_prev - c, g->q_prev, g->w);  // w = A q_1 - c q_0 - alpha_1 q_1
+    beta = Orthogonalise(g, 2, 1);
+    g->H(2, 1) = beta;
+    return ArnoldiTop(ce, g, mass, 2, beta, budget, func, lam_hat);
+  }
+  N_VScale(1, g->q, g->basis[0]);
+  if ((flag = ArnoldiColumn(ce, g, mass, 0, func, &beta)) != CE_SUCCESS) return flag;
+  return ArnoldiTop(ce, g, mass, 1, beta, budget - 1, func, lam_hat);
 }
 
 // lam_hat >= omega_max^2: the top Ritz value plus its residual norm once that is
@@ -218,9 +429,13 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
   sunrealtype res = 0;
   sunrealtype beta = 0;
   sunrealtype amax = 0;  // scale of the operator seen so far
+  Coupling cp;
   for (int j = 0; j < kMaxLanczos; ++j) {
-    if ((flag = LanczosStep(ce, g, mass, beta_prev, func, &beta)) != CE_SUCCESS) return flag;
+    if ((flag = LanczosStep(ce, g, mass, beta_prev, func, &beta, &cp)) != CE_SUCCESS) return flag;
     amax = std::max(amax, std::fabs(g->alpha.back()));
+    if (j >= 1 && NotSymmetric(cp, beta_prev, amax)) {
+      return SwitchToArnoldi(ce, g, mass, j, beta_prev, cp.c, func, lam_hat);
+    }
     // beta ~ 0: the Krylov space is invariant (e.g. n is small), theta is exact.
     const bool breakdown = !(beta > 1e-9 * (amax + SUN_UNIT_ROUNDOFF));
     // The Ritz values are only looked at every kCheckEvery steps: cheap next to f.
@@ -264,6 +479,8 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
                         "f failed (returned %d) in the stability guard at t = %.17g.", rv,
                         static_cast<double>(ce->tcur));
   }
+  g->f0_norm = std::sqrt(N_VDotProd(g->f0, g->f0));
+  g->arnoldi = false;
   sunrealtype lam = 0;
   flag = LanczosTop(ce, g, ce->M != nullptr, func, &lam);
   if (flag == CE_SUCCESS && lam > 0 && std::isfinite(lam)) *omega = std::sqrt(lam);
@@ -353,8 +570,12 @@ std::string SetAdvice(const CEodeMemRec* ce, sunrealtype Omega) {
 
 void Report(CEodeMemRec* ce, const char* func, sunrealtype Omega, sunrealtype rho, bool refuse) {
   const int flag = refuse ? CE_UNSTABLE : CE_WARNING;
-  const char* source =
-      ce->omega_user > 0 ? "given by CEodeSetMaxFrequency" : "an upper estimate by Lanczos";
+  const GuardWork* g = Work(ce);
+  const char* source = ce->omega_user > 0 ? "given by CEodeSetMaxFrequency"
+                       : g != nullptr && g->arnoldi
+                           ? "estimated by Arnoldi, as df/dx is not symmetric: the square root of "
+                             "the spectral radius of M^{-1} df/dx, not a bound"
+                           : "an upper estimate by Lanczos";
   const char* tail = refuse ? "" : " (CE_GUARD_REFUSE stops instead of warning)";
   const std::string growth = GrowthText(ce, rho);
   if (ce->omega_limit < 0) {
@@ -405,6 +626,7 @@ void GuardFree(CEodeMemRec* ce) {
   for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0, g->wts}) {
     if (v != nullptr) N_VDestroy(v);
   }
+  for (N_Vector v : g->basis) N_VDestroy(v);
   FreeMass(g);
   delete g;
   ce->guard = nullptr;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <cmath>
@@ -374,6 +375,247 @@ TEST(StabilityGuard, GetStableStepRejectsBadArgumentsWithIllInput) {
   ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G4_A54"), CE_SUCCESS);
   ASSERT_EQ(CEodeGetStableStep(mem.get(), 0.5, &hmax), CE_SUCCESS);
   EXPECT_EQ(hmax, 0);  // unstable for every step
+}
+
+// ---- Non-symmetric df/dx: the guard's Lanczos detects it and switches to Arnoldi ----
+// Each operator's spectrum is known in closed form; the counts are bounds of the method: one f at
+// the guard's point plus at most n products of df/dx, since Arnoldi's Krylov space of an n x n
+// operator is invariant after n vectors (and the switch at the second Lanczos step loses none).
+
+// MRIStep's fast part of examples/mri_two_scale.c, x = (q, s): q'' = -omega^2 (q - s), s'' = 0.
+// -df/dx = [[omega^2, -omega^2], [0, 0]]: eigenvalues omega^2 and 0.
+int MriFast(sunrealtype, N_Vector x, N_Vector, N_Vector f, void* data) {
+  const double w2 = std::pow(*static_cast<const double*>(data), 2);
+  NV_Ith_S(f, 0) = -w2 * (NV_Ith_S(x, 0) - NV_Ith_S(x, 1));
+  NV_Ith_S(f, 1) = 0;
+  return 0;
+}
+
+// Upper triangular -df/dx = [[9, 5, 7], [0, 4, 3], [0, 0, 1]]: eigenvalues 9, 4, 1.
+int Triangular(sunrealtype, N_Vector x, N_Vector, N_Vector f, void*) {
+  const double* u = N_VGetArrayPointer(x);
+  double* a = N_VGetArrayPointer(f);
+  a[0] = -(9 * u[0] + 5 * u[1] + 7 * u[2]);
+  a[1] = -(4 * u[1] + 3 * u[2]);
+  a[2] = -u[2];
+  return 0;
+}
+
+// A chain D^{-1} K D with D = diag(r^i), r^{n-1} = cond: far from normal, the spectrum of the
+// symmetric chain K, lambda_max = 4 sin^2(n pi / (2 (n + 1))).
+struct ScaledChain {
+  int n;
+  double r;
+};
+
+int ScaledChainRhs(sunrealtype, N_Vector x, N_Vector, N_Vector f, void* data) {
+  const auto* c = static_cast<const ScaledChain*>(data);
+  const double* u = N_VGetArrayPointer(x);
+  double* a = N_VGetArrayPointer(f);
+  for (int i = 0; i < c->n; ++i) {
+    a[i] = -(2 * u[i] - (i > 0 ? u[i - 1] / c->r : 0) - (i + 1 < c->n ? c->r * u[i + 1] : 0));
+  }
+  return 0;
+}
+
+struct NonSymmetricCase {
+  const char* name;
+  CEodeRhsFn f;
+  int n;
+  double omega_max;  // exact: the square root of the spectral radius
+  long max_nfe;      // 1 + n
+};
+
+double kOmega10 = 10;
+double kOmega100 = 100;
+ScaledChain kScaled10{10, std::pow(1000.0, 1.0 / 9)};
+
+void* DataFor(const NonSymmetricCase& c) {
+  if (c.f == MriFast) return c.omega_max == 10 ? &kOmega10 : &kOmega100;
+  return c.f == ScaledChainRhs ? &kScaled10 : nullptr;
+}
+
+class GuardNonSymmetric : public ::testing::TestWithParam<NonSymmetricCase> {
+ protected:
+  void SetUp() override {
+    x_ = ceode_test::SerialVector(GetParam().n, ctx_);
+    v_ = ceode_test::SerialVector(GetParam().n, ctx_);
+    for (int i = 0; i < GetParam().n; ++i) NV_Ith_S(x_.get(), i) = 0.5 + 0.05 * i;
+    N_VConst(0, v_.get());
+    mem_.reset(CEodeCreate(ctx_));
+    ASSERT_EQ(CEodeInit(mem_.get(), GetParam().f, 0, x_.get(), v_.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetUserData(mem_.get(), DataFor(GetParam())), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(mem_.get(), "G4_A34"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetErrHandlerFn(mem_.get(), Capture, &captured_), CE_SUCCESS);
+  }
+  // The warning (empty when silent) of one step of h with the guard warning.
+  std::string WarningAt(sunrealtype h) {
+    captured_ = Captured{};
+    EXPECT_EQ(CEodeSetFixedStep(mem_.get(), h), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetStabilityGuard(mem_.get(), CE_GUARD_WARN, 0), CE_SUCCESS);
+    sunrealtype t = 0;
+    EXPECT_EQ(CEodeEvolve(mem_.get(), h, x_.get(), v_.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+    return captured_.msg;
+  }
+
+  Context ctx_;
+  Vector x_;
+  Vector v_;
+  Mem mem_;
+  Captured captured_;
+};
+
+TEST_P(GuardNonSymmetric, EstimatesTheSpectralRadiusWithinOnePpmInAtMostOnePlusNEvaluations) {
+  sunrealtype hmax = 0;
+  ASSERT_EQ(CEodeGetStableStep(mem_.get(), 1, &hmax), CE_SUCCESS);
+  sunrealtype omega = 0;
+  ASSERT_EQ(CEodeGetMaxFrequencyEstimate(mem_.get(), &omega), CE_SUCCESS);
+  // Exact but for the difference quotients' rounding (relative sqrt(eps) in df/dx).
+  EXPECT_NEAR(omega, GetParam().omega_max, 1e-6 * GetParam().omega_max);
+  long int nfe = 0;
+  long int nme = 0;
+  long int nsetups = 0;
+  ASSERT_EQ(CEodeGetGuardStats(mem_.get(), &nfe, &nme, &nsetups), CE_SUCCESS);
+  EXPECT_LE(nfe, GetParam().max_nfe);
+  EXPECT_GE(nfe, 2);
+}
+
+TEST_P(GuardNonSymmetric, IsSilentJustBelowTheTrueLimitAndNamesArnoldiJustAbove) {
+  const double h_lim = std::sqrt(3.0) / GetParam().omega_max;  // G4_A34: Omega_max = sqrt(3)
+  EXPECT_EQ(WarningAt(0.99 * h_lim), "");
+  ASSERT_EQ(CEodeReInit(mem_.get(), 0, x_.get(), v_.get()), CE_SUCCESS);
+  const std::string msg = WarningAt(1.01 * h_lim);
+  EXPECT_TRUE(ceode_test::Contains(msg, "estimated by Arnoldi, as df/dx is not symmetric"));
+  EXPECT_EQ(msg.find("Lanczos"), std::string::npos) << msg;
+}
+
+const NonSymmetricCase kNonSymmetric[] = {
+    {"MriFastOmega10", MriFast, 2, 10, 3},
+    {"MriFastOmega100", MriFast, 2, 100, 3},
+    {"Triangular3x3", Triangular, 3, 3, 4},
+    {"ScaledChain10Cond1000", ScaledChainRhs, 10, 2 * std::sin(10 * M_PI / 22), 11},
+};
+INSTANTIATE_TEST_SUITE_P(Operators, GuardNonSymmetric, ::testing::ValuesIn(kNonSymmetric),
+                         [](const ::testing::TestParamInfo<NonSymmetricCase>& info) {
+                           return std::string(info.param.name);
+                         });
+
+// The MRI fast part as forces with a dense M = diag(2, 3): M^{-1} K = [[w^2/2, -w^2/2], [0, 0]],
+// omega_max = w / sqrt(2); Arnoldi then works in the M inner product, through the mass solve.
+int DiagonalMass23(sunrealtype, N_Vector, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+  SM_ELEMENT_D(M, 0, 0) = 2;
+  SM_ELEMENT_D(M, 1, 1) = 3;
+  return 0;
+}
+
+TEST(StabilityGuard, EstimatesANonSymmetricPencilWithADenseMassMatrixInThreeEvaluations) {
+  Context ctx;
+  Vector x = ceode_test::SerialVector(2, ctx, 0.5);
+  Vector v = ceode_test::SerialVector(2, ctx, 0);
+  NV_Ith_S(x.get(), 1) = 0.55;
+  ceode_test::Matrix M(SUNDenseMatrix(2, 2, ctx));
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), MriFast, 0, x.get(), v.get()), CE_SUCCESS);
+  CEodeSetUserData(mem.get(), &kOmega100);
+  ASSERT_EQ(CEodeSetMassFn(mem.get(), DiagonalMass23, M.get(), SUNTRUE), CE_SUCCESS);
+  sunrealtype hmax = 0;
+  sunrealtype omega = 0;
+  ASSERT_EQ(CEodeGetStableStep(mem.get(), 1, &hmax), CE_SUCCESS);
+  ASSERT_EQ(CEodeGetMaxFrequencyEstimate(mem.get(), &omega), CE_SUCCESS);
+  EXPECT_NEAR(omega, 100 / std::sqrt(2.0), 1e-6 * 100);
+  long int nfe = 0;
+  long int nme = 0;
+  long int nsetups = 0;
+  ASSERT_EQ(CEodeGetGuardStats(mem.get(), &nfe, &nme, &nsetups), CE_SUCCESS);
+  EXPECT_LE(nfe, 3);
+  EXPECT_EQ(nme, 1);
+}
+
+// n = 200, cond D = 1e3: more Arnoldi steps than one cycle holds (kArnoldiDim = 20), so the
+// estimate goes through explicit restarts. Without symmetry the Ritz values approach the top
+// eigenvalue from the field of values (measured +0.06 %); the check is two-sided, within 0.2 %.
+TEST(StabilityGuard, ConvergesThroughArnoldiRestartsOnALargerScaledChain) {
+  Context ctx;
+  ScaledChain chain{200, std::pow(1000.0, 1.0 / 199)};
+  Vector x = ceode_test::SerialVector(chain.n, ctx);
+  Vector v = ceode_test::SerialVector(chain.n, ctx, 0);
+  for (int i = 0; i < chain.n; ++i) NV_Ith_S(x.get(), i) = std::sin(0.01 * i);
+  Mem mem(CEodeCreate(ctx));
+  Captured c;
+  ASSERT_EQ(CEodeInit(mem.get(), ScaledChainRhs, 0, x.get(), v.get()), CE_SUCCESS);
+  CEodeSetUserData(mem.get(), &chain);
+  CEodeSetErrHandlerFn(mem.get(), Capture, &c);
+  const double exact = 2 * std::sin(chain.n * M_PI / (2.0 * (chain.n + 1)));
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), 1.01 * 2 / exact), CE_SUCCESS);  // G3_CD: limit 2
+  sunrealtype t = 0;
+  CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_ONE_STEP);
+  EXPECT_TRUE(ceode_test::Contains(c.msg, "estimated by Arnoldi"));
+  sunrealtype omega = 0;
+  ASSERT_EQ(CEodeGetMaxFrequencyEstimate(mem.get(), &omega), CE_SUCCESS);
+  EXPECT_NEAR(omega, exact, 2e-3 * exact);
+  long int nfe = 0;
+  ASSERT_EQ(CEodeGetNumGuardRhsEvals(mem.get(), &nfe), CE_SUCCESS);
+  EXPECT_LT(nfe, 151);  // settled before the cap of 150 products
+  EXPECT_GT(nfe, 1 + 2 + 20) << "the case no longer reaches an Arnoldi restart";
+}
+
+TEST(StabilityGuard, StaysWithLanczosOnSymmetricGridsAndSaysSo) {
+  Context ctx;
+  Grid grid{"Chain100", 100, 1};
+  Vector x = ceode_test::SerialVector(grid.n(), ctx, 1);
+  Vector v = ceode_test::SerialVector(grid.n(), ctx, 0);
+  Mem mem(CEodeCreate(ctx));
+  Captured c;
+  ASSERT_EQ(CEodeInit(mem.get(), GridRhs, 0, x.get(), v.get()), CE_SUCCESS);
+  CEodeSetUserData(mem.get(), &grid);
+  CEodeSetErrHandlerFn(mem.get(), Capture, &c);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), 1.01 * 2 / grid.OmegaMax()), CE_SUCCESS);  // G3_CD
+  sunrealtype t = 0;
+  CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_ONE_STEP);
+  EXPECT_TRUE(ceode_test::Contains(c.msg, "(omega_max an upper estimate by Lanczos)"));
+}
+
+// The damped chain's consistent mass in dense and in band storage: both solvers factor in place,
+// so the guard's M products must use its own unfactored copy. Exact omega_max^2: the top
+// eigenvalue of (100 K, M), 100 (2 - 2 cos th) / ((4 + 2 cos th) / 6), th = 12 pi / 13.
+int ConsistentMassBand(sunrealtype, N_Vector, SUNMatrix M, void* data, N_Vector, N_Vector,
+                       N_Vector) {
+  const int n = static_cast<const DampedChain*>(data)->n;
+  for (int i = 0; i < n; ++i) {
+    SM_ELEMENT_B(M, i, i) = 4.0 / 6;
+    if (i > 0) SM_ELEMENT_B(M, i, i - 1) = SM_ELEMENT_B(M, i - 1, i) = 1.0 / 6;
+  }
+  return 0;
+}
+
+double DampedChainEstimate(bool band) {
+  Context ctx;
+  DampedChain chain;
+  Vector x = ceode_test::SerialVector(chain.n, ctx);
+  Vector v = ceode_test::SerialVector(chain.n, ctx, 0);
+  for (int i = 0; i < chain.n; ++i) NV_Ith_S(x.get(), i) = std::sin(0.7 * i);
+  ceode_test::Matrix M(band ? SUNBandMatrix(chain.n, 1, 1, ctx)
+                            : SUNDenseMatrix(chain.n, chain.n, ctx));
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), DampedRhs, 0, x.get(), v.get()), CE_SUCCESS);
+  CEodeSetUserData(mem.get(), &chain);
+  EXPECT_EQ(CEodeSetMassFn(mem.get(), band ? ConsistentMassBand : ConsistentMass, M.get(), SUNTRUE),
+            CE_SUCCESS);
+  sunrealtype hmax = 0;
+  sunrealtype omega = 0;
+  EXPECT_EQ(CEodeGetStableStep(mem.get(), 1, &hmax), CE_SUCCESS);
+  EXPECT_EQ(CEodeGetMaxFrequencyEstimate(mem.get(), &omega), CE_SUCCESS);
+  return omega;
+}
+
+TEST(StabilityGuard, EstimatesFromAboveWithinPointOnePercentWithADenseOrBandMassMatrix) {
+  const double th = 12 * M_PI / 13;
+  const double exact = std::sqrt(100 * (2 - 2 * std::cos(th)) / ((4 + 2 * std::cos(th)) / 6));
+  for (bool band : {false, true}) {
+    const double omega = DampedChainEstimate(band);
+    EXPECT_GE(omega, exact) << (band ? "band" : "dense");
+    EXPECT_LE(omega, 1.001 * exact) << (band ? "band" : "dense");
+  }
 }
 
 }  // namespace

@@ -158,6 +158,10 @@ SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector 
  * (directional differences of f) as theta + r: the top Ritz value plus its
  * residual norm, an upper bound of omega_max^2 for a symmetric stiffness (at
  * most 0.1 % above it), or CEodeSetMaxFrequency's value when one is given.
+ * When df/dx is not symmetric in that product (tested at every Lanczos step, at no
+ * extra evaluation) the guard continues by Arnoldi: omega_max^2 is then the largest
+ * |Ritz value| with a positive real part (the spectral radius of M^{-1} df/dx when
+ * converged), an estimate and not a bound; the warning names the estimator.
  * CEodeGetStableStep returns hmax = safety * Omega_max / omega_max for the chosen
  * set; safety in (0, 1], 0 selects the default 0.99 (the guard's own recommended
  * step uses 0.99 too). hmax = 0 for a set unstable for every step, SUN_BIG_REAL
