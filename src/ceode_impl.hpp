@@ -248,7 +248,8 @@ struct CEodeMemRec {
   bool pc_active = false;                // AUTO: the step in use is prediction-correction
   long int nst_coupling = 0;             // AUTO: nst at the last coupling estimate
   N_Vector pc_dir = nullptr;             // AUTO: the power iteration's direction, kept warm
-  int pc_corrections = 0;                // 0: 1 for degree <= 4, 2 above
+  int pc_corrections = 0;                // 0: pc_k_default
+  int pc_k_default = 1;                  // with the method (DefaultPCCorrections)
   int vel_request = -1;                  // CEodeSetVelocityDependence's value; -1: never called
   CEodeRhsFn vel_checked_f = nullptr;    // f already probed for an undeclared dependence
   sunrealtype coupling = 0;              // last estimate of kappa ||M^{-1} df/dv|| (0: none)
@@ -374,6 +375,11 @@ int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Ome
 // ceode_validate.cpp: one validation point per attached object, called by its setter and again
 // at the first CEodeEvolve after a configuration change (the problem size may have changed).
 int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_t len);  // pure
+// The k of P(EC)^k that keeps the set's order when the user did not choose (ceode_pc.cpp).
+int DefaultPCCorrections(int degree, const sunrealtype* params);
+// Orders in x and x' of a set from its order conditions (ceode_order.cpp; may throw bad_alloc).
+int MethodOrders(int d, const sunrealtype* p, int* order_x, int* order_v, long double* const_x,
+                 long double* const_v);
 int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
                              sunrealtype abstol);
 int ValidateStep(CEodeMemRec* ce, const char* func);  // h against t and the method

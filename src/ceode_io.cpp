@@ -34,6 +34,7 @@ int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
     return ProcessError(ce, CE_ILL_INPUT, __func__, "%s.", why);
   ce->degree = degree;
   for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
+  ce->pc_k_default = ceode::DefaultPCCorrections(degree, params);
   try {
     ce->method_name = "custom G" + std::to_string(degree);
   } catch (...) {

@@ -18,10 +18,7 @@ constexpr int kPowerSteps = 3;  // power steps of the coupling estimate (one f e
 constexpr sunrealtype kDependenceUlps = 16;
 
 int PCCorrections(const CEodeMemRec* ce) {
-  if (ce->pc_corrections > 0) return ce->pc_corrections;
-  // Measured (test_pc): one correction keeps the order everywhere, but from degree 5 on its
-  // velocity error is up to 12 times Newton's; two make the answers Newton's to one order more.
-  return ce->degree <= 4 ? 1 : 2;
+  return ce->pc_corrections > 0 ? ce->pc_corrections : ce->pc_k_default;
 }
 
 // A fixed direction with unequal entries, so that no simple structure of df/dv (dampers on
@@ -199,6 +196,20 @@ void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_V
 
 }  // namespace
 
+// One correction leaves an error of global order d - 1 (section 4.3): enough for a set whose
+// order in x or x' is below d, one order short for a set of order d in both (G4_A54, measured
+// 3.06 with one correction against 4 with Newton, test_pc). From degree 5 on one correction
+// keeps the order but its velocity error is up to 12 times Newton's (test_pc): two.
+int DefaultPCCorrections(int degree, const sunrealtype* params) {
+  if (degree > 4) return 2;
+  int ox = degree, ov = degree;  // two corrections, should the conditions not be computed
+  try {
+    MethodOrders(degree, params, &ox, &ov, nullptr, nullptr);
+  } catch (...) {
+  }
+  return std::min(ox, ov) >= degree ? 2 : 1;
+}
+
 namespace {
 
 // The mode in use: AUTO unless the user chose one, or attached a nonlinear solver of their own
@@ -299,9 +310,9 @@ int CEodeSetPCCorrections(void* mem, int k) {
   int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (k < 0 || k > 2) {
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                               "k = %d: use 1 or 2 corrections (0: 1 for degree <= 4, 2 above).",
-                               k);
+    return ceode::ProcessError(
+        ce, CE_ILL_INPUT, __func__,
+        "k = %d: use 1 or 2 corrections (0: the set's default, docs/theory.md 4.3).", k);
   }
   ce->pc_corrections = k;
   return CE_SUCCESS;

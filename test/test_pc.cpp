@@ -123,8 +123,8 @@ const SetCase kSets[] = {
     {"G3_CD", 1, 2, 0.04, "CentralDifferencesWithOneCorrection"},
     {"G3_A2", 1, 2, 0.04, "G3AlphaTwoWithOneCorrection"},
     {"G4_A34", 1, 3, 0.04, "G4AlphaThreeQuartersWithOneCorrection"},
-    {"G4_A14", 2, 3, 0.04, "G4AlphaOneQuarterWithTwoCorrections"},
-    {"G4_A54", 2, 4, 0.08, "G4AlphaFiveQuartersWithTwoCorrections"},
+    {"G4_A14", 0, 3, 0.04, "G4AlphaOneQuarterWithTheDefaultCorrections"},
+    {"G4_A54", 0, 4, 0.08, "G4AlphaFiveQuartersWithTheDefaultCorrections"},
     {"G5", 1, 4, 0.08, "G5WithOneCorrection"},
     {"G5_ONES", 2, 4, 0.08, "G5OnesWithTwoCorrections"},
 };
@@ -192,8 +192,8 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, PredictorCorrector, ::testing::ValuesIn(kSet
 
 // One correction gives a degree-d set the global order d - 1 (predictor error O(h^(d-2)) in a,
 // one order per correction, kappa = O(h) in v): G4_A54's claimed third order, not the fourth it
-// measures with Newton (test_convergence). AUTO's default k = 1 at degree 4 gives this; two
-// corrections (the case above) give the fourth back.
+// measures with Newton (test_convergence); the set's default, two corrections, gives the fourth
+// back (the case above).
 TEST(PredictorCorrectorWithOneCorrection, GivesG4AlphaFiveQuartersItsClaimedThirdOrderOnly) {
   const Fit f = FitBothModes({"G4_A54", 1, 3, 0.08, "G4AlphaFiveQuartersWithOneCorrection"});
   std::printf("[ pc order ] G4_A54  k=1  x: %.3f  v: %.3f\n", f.x, f.v);

@@ -183,7 +183,8 @@ SUNDIALS_EXPORT int CEodeGetGuardStats(void* mem, long int* nfevals, long int* n
  * acceleration: CE_IMPLICIT_NEWTON hands it to the nonlinear solver (Newton with
  * a linear solver attached, fixed point otherwise); CE_IMPLICIT_PC predicts and
  * corrects a fixed number of times, no convergence test (CEodeSetPCCorrections:
- * k = 1 or 2, 0 = 1 for degree <= 4, 2 above); CE_IMPLICIT_AUTO (default)
+ * k = 1 or 2, 0 = the set's default: 2 for sets of order d and from degree 5
+ * on, 1 otherwise); CE_IMPLICIT_AUTO (default)
  * estimates kappa ||M^{-1} df/dv|| at every (re)start and every msbj steps and
  * takes PC when it is at most 0.05, the nonlinear solver above (docs/api.md).
  * CE_VELOCITY_DETECT (CEodeSetVelocityDependence) switches the implicit step on
