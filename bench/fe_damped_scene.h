@@ -298,7 +298,7 @@ inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
   int bad = 0;
   {
     Scene s;
-    BuildScene(&s, args.quick ? 4 : 35);                      // 160 or 10 080 DOF
+    BuildScene(&s, args.quick ? 4 : 20);                      // 160 or 3 360 DOF
     const double hs = fes::GuardStep(ctx, &s.prob, "G3_CD");  // undamped: f ignores v here
     const double omega_max = 2 / hs;
     SetDamping(&s, kind, omega_max);
