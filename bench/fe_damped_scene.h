@@ -246,7 +246,7 @@ inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
   // G4_A34 diverges here at every step tried: G4Probe shows it, untimed.
   return {{"G3_CD-AUTO", autom, V{0.9}},
           {"G3_CD-Newton-SPGMR", newton, f_few},
-          {"G3_CD-Newton-SPGMR-rtol1e-7", loose, f_cd},
+          {"G3_CD-Newton-SPGMR-rtol1e-7", loose, quick ? f_cd : V{0.9, 0.6, 0.4, 0.25, 0.12}},
           {"G3_CD-lagged", lag, quick ? V{0.1, 0.05} : V{0.1, 0.05, 0.025}}};
 }
 
