@@ -9,7 +9,8 @@
 // damped oscillator (bench/fe_plate_modes.h): that is the reference. One period of
 // mode 1, error = max over 20 output instants of ||x - x_ref||_2 / ||x0||_2.
 //
-// Curves (fixed steps as fractions of the undamped G3_CD stable step h_s from the guard):
+// Mesh 80 x 20 (3 360 DOF; --quick 16 x 4). Curves (fixed steps as fractions of each set's
+// undamped stable step h_s from the guard):
 //  * CEODE-hand: the explicit central-difference loop a user writes for damping:
 //    v_{n+1/2} = ((1 - a h/2) v_{n-1/2} - h M^{-1} K (x_n + b v_{n-1/2})) / (1 + a h/2),
 //    x_{n+1} = x_n + h v_{n+1/2}: the mass term at the mean velocity (exact, diagonal),
@@ -17,8 +18,10 @@
 //    step limit shrinks with b omega_max, and it is first order in b).
 //  * CEODE with the velocity dependence declared: prediction-correction (CE_IMPLICIT_PC),
 //    CE_IMPLICIT_AUTO (PC when kappa ||df/dv|| <= 0.05, else the nonlinear solver),
-//    Newton with a matrix-free SPGMR on M - kappa df/dv; and (stiff variant) the
-//    undeclared, lagged-velocity explicit step (first order, docs/theory.md 4.1).
+//    Newton with a matrix-free SPGMR on M - kappa df/dv (stiff variant: also at a loosened
+//    Newton tolerance, 1e-7); G4_A34 with AUTO (mass variant; with C = b K it diverges at
+//    every step tried, printed by G4Probe); and (stiff variant) the undeclared,
+//    lagged-velocity explicit step (first order, docs/theory.md 4.1).
 //  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
 //    ARKStep IMEX (damping -C v implicit and linear, K x explicit) + SPGMR; ARKStep
 //    DIRK (all implicit) + SPGMR.
