@@ -1,0 +1,352 @@
+// -----------------------------------------------------------------------------
+// fe_damped_scene.h: the Rayleigh-damped FE plate (issue 11, scene 3), shared by
+// bench/wp_fe_damped_mass.cpp (C = a M: mass-proportional) and
+// bench/wp_fe_damped_stiff.cpp (C = b K: stiffness-proportional).
+//
+// The Q4 cantilever of bench/fe_plate_model.h, f = -M^{-1} (K x + C v), C = a M + b K,
+// lumped M. Start x0 = phi_1 + 0.3 phi_2, v0 = 0; Rayleigh damping keeps the modes
+// decoupled, so x(t) = phi_1 q_1(t) + 0.3 phi_2 q_2(t) with each q the closed-form
+// damped oscillator (bench/fe_plate_modes.h): that is the reference. One period of
+// mode 1, error = max over 20 output instants of ||x - x_ref||_2 / ||x0||_2.
+//
+// Mesh 80 x 20 (3 360 DOF; --quick 16 x 4). Curves (fixed steps as fractions of each set's
+// undamped stable step h_s from the guard):
+//  * CEODE-hand: the explicit central-difference loop a user writes for damping:
+//    v_{n+1/2} = ((1 - a h/2) v_{n-1/2} - h M^{-1} K (x_n + b v_{n-1/2})) / (1 + a h/2),
+//    x_{n+1} = x_n + h v_{n+1/2}: the mass term at the mean velocity (exact, diagonal),
+//    the stiffness term at the lagged half-step velocity (as explicit FE codes do; its
+//    step limit shrinks with b omega_max, and it is first order in b).
+//  * CEODE with the velocity dependence declared: prediction-correction (CE_IMPLICIT_PC),
+//    CE_IMPLICIT_AUTO (PC when kappa ||df/dv|| <= 0.05, else the nonlinear solver),
+//    Newton with a matrix-free SPGMR on M - kappa df/dv (stiff variant: also at a loosened
+//    Newton tolerance, 1e-7); G4_A34 with AUTO (mass variant; with C = b K it diverges at
+//    every step tried, printed by G4Probe); and (stiff variant) the undeclared,
+//    lagged-velocity explicit step (first order, docs/theory.md 4.1).
+//  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
+//    ARKStep IMEX (damping -C v implicit and linear, K x explicit) + SPGMR; ARKStep
+//    DIRK (all implicit) + SPGMR.
+// Checks (exit 1): the modes converged, every run succeeded, the mass-proportional hand
+// loop equals CEODE G3_CD with Newton (same method), CEODE G3_CD converges at order 2.
+// -----------------------------------------------------------------------------
+#ifndef CEODE_BENCH_FE_DAMPED_SCENE_H_
+#define CEODE_BENCH_FE_DAMPED_SCENE_H_
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "fe_plate_model.h"
+#include "fe_plate_modes.h"
+#include "fe_scene.h"
+
+namespace fed {
+
+using fes::Vec;
+
+enum class Damping { kMass, kStiffness };
+
+struct Scene {
+  fe::Plate plate;
+  fe::Modes modes;
+  double amp2 = 0.3;
+  fes::Problem prob;
+};
+
+inline int Rhs2(sunrealtype, N_Vector x, N_Vector v, N_Vector a, void* user) {
+  const auto* s = static_cast<const Scene*>(user);
+  fe::AccelDamped(s->plate, N_VGetArrayPointer(x), N_VGetArrayPointer(v), N_VGetArrayPointer(a));
+  return 0;
+}
+
+inline int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
+  const auto* s = static_cast<const Scene*>(user);
+  const int n = s->plate.n;
+  const double* Y = N_VGetArrayPointer(y);
+  double* D = N_VGetArrayPointer(yd);
+  std::copy(Y + n, Y + 2 * n, D);
+  fe::AccelDamped(s->plate, Y, Y + n, D + n);
+  return 0;
+}
+
+// IMEX: the elastic force explicit, the damping force -M^{-1} C v implicit (linear in y).
+inline int RhsExplicit(sunrealtype, N_Vector y, N_Vector yd, void* user) {
+  const auto* s = static_cast<const Scene*>(user);
+  const int n = s->plate.n;
+  const double* Y = N_VGetArrayPointer(y);
+  double* D = N_VGetArrayPointer(yd);
+  std::copy(Y + n, Y + 2 * n, D);
+  fe::Accel(s->plate, Y, D + n);
+  return 0;
+}
+
+inline int RhsImplicit(sunrealtype, N_Vector y, N_Vector yd, void* user) {
+  const auto* s = static_cast<const Scene*>(user);
+  const fe::Plate& p = s->plate;
+  const int n = p.n;
+  const double* V = N_VGetArrayPointer(y) + n;
+  double* D = N_VGetArrayPointer(yd);
+  std::fill(D, D + n, 0.0);
+  if (p.damp_k != 0) {
+    fe::Accel(p, V, D + n);  // -M^{-1} K v
+    for (int k = 0; k < n; ++k) D[n + k] *= p.damp_k;
+  } else {
+    std::fill(D + n, D + 2 * n, 0.0);
+  }
+  for (int k = 0; k < n; ++k) D[n + k] -= p.damp_m * V[k];
+  return 0;
+}
+
+// The plate of 4 ny x ny square elements, its two lowest modes and the undamped problem.
+inline void BuildScene(Scene* s, int ny) {
+  s->plate = fe::MakePlate(4 * ny, ny);
+  s->modes = fe::LowestModes(s->plate, 2);
+  const double w1 = s->modes.w[0];
+  fes::Problem& p = s->prob;
+  p.n = s->plate.n;
+  p.user = s;
+  p.f2 = Rhs2;
+  p.f1 = Rhs1;
+  p.fe = RhsExplicit;
+  p.fi = RhsImplicit;
+  p.fi_linear = true;
+  p.x0.resize(p.n);
+  for (int k = 0; k < p.n; ++k) p.x0[k] = s->modes.phi[0][k] + s->amp2 * s->modes.phi[1][k];
+  p.v0.assign(p.n, 0.0);
+  p.mass = s->plate.mass;
+  p.x0norm = fes::Norm2(p.x0);
+  p.tend = 2 * M_PI / w1;
+}
+
+// Rayleigh coefficients: 5 % of critical in mode 1 (mass), or b such that the top
+// mode has zeta = 2 (stiffness: the damping structural codes add against high-frequency
+// noise; mode 1 then has zeta = omega_1 / omega_max * 2).
+inline void SetDamping(Scene* s, Damping kind, double omega_max) {
+  if (kind == Damping::kMass) {
+    s->plate.damp_m = 2 * 0.05 * s->modes.w[0];
+  } else {
+    s->plate.damp_k = 2 * 2.0 / omega_max;
+  }
+  fes::Problem& p = s->prob;
+  p.ref.clear();
+  const double z1 = fe::RayleighZeta(s->plate, s->modes.w[0]);
+  const double z2 = fe::RayleighZeta(s->plate, s->modes.w[1]);
+  for (int k = 1; k <= p.nout; ++k) {
+    const double t = fes::OutputTime(p, k);
+    const double q1 = fe::DampedModeResponse(s->modes.w[0], z1, t);
+    const double q2 = s->amp2 * fe::DampedModeResponse(s->modes.w[1], z2, t);
+    Vec x(p.n);
+    for (int i = 0; i < p.n; ++i) x[i] = q1 * s->modes.phi[0][i] + q2 * s->modes.phi[1][i];
+    p.ref.push_back(x);
+  }
+}
+
+// The explicit central-difference loop with damping (see the header comment).
+inline int HandRun(Scene* s, double h_req, wp::Outcome* out) {
+  const fe::Plate& p = s->plate;
+  const fes::Problem& pr = s->prob;
+  const int n = p.n;
+  const long m = fes::StepsPerOutput(pr, h_req);
+  const double h = fes::FixedStep(pr, h_req);
+  const double am = p.damp_m, bk = p.damp_k;
+  const double c0 = (1 - 0.5 * am * h) / (1 + 0.5 * am * h), c1 = h / (1 + 0.5 * am * h);
+  Vec x(pr.x0), v(n), a(n), w(n);
+  fe::AccelDamped(p, x.data(), pr.v0.data(), a.data());
+  for (int k = 0; k < n; ++k) v[k] = pr.v0[k] + 0.5 * h * a[k];  // v_{1/2}
+  for (int k = 0; k < n; ++k) x[k] += h * v[k];
+  double emax = 0;
+  long steps = 1;
+  for (int o = 1; o <= pr.nout; ++o) {
+    for (long j = (o == 1 ? 1 : 0); j < m; ++j, ++steps) {
+      if (bk != 0) {
+        for (int k = 0; k < n; ++k) w[k] = x[k] + bk * v[k];
+        fe::Accel(p, w.data(), a.data());
+      } else {
+        fe::Accel(p, x.data(), a.data());
+      }
+      for (int k = 0; k < n; ++k) {
+        v[k] = c0 * v[k] + c1 * a[k];
+        x[k] += h * v[k];
+      }
+    }
+    const double e = fes::RelError(pr, o, x.data());
+    if (!(e <= emax)) emax = e;
+  }
+  out->steps = steps;
+  out->rhs_evals = steps;
+  out->error = emax;
+  return std::isfinite(emax) ? 0 : 1;
+}
+
+struct CeCurve {
+  std::string label;
+  fes::CeodeCfg cfg;
+  std::vector<double> frac;  // fractions of h_s
+};
+
+// Steps are fractions of each set's own (undamped) stable step from the guard.
+inline void CeodeCurves(SUNContext ctx, Scene* s, const std::vector<CeCurve>& curves,
+                        wp::Table* table) {
+  for (const CeCurve& c : curves) {
+    const double hs = fes::GuardStep(ctx, &s->prob, c.cfg.method);
+    for (double f : c.frac) {
+      const double h = fes::FixedStep(s->prob, f * hs);
+      fes::CeodeStats st;
+      wp::Outcome got;
+      const bool ok = wp::Measure(
+          table, "CEODE", c.label, h,
+          [&](wp::Outcome* o) { return fes::CeodeRun(ctx, &s->prob, c.cfg, f * hs, o, &st); },
+          &got);
+      if (ok && c.cfg.vel) {
+        std::printf(
+            "    %s h = %.3e: %.3f f/step, %.3f nonlinear iters/step, %ld PC steps, "
+            "%ld NLS steps, coupling kappa |df/dv| = %.3e\n",
+            c.label.c_str(), h, static_cast<double>(got.rhs_evals) / got.steps,
+            static_cast<double>(st.nni) / got.steps, st.npc, st.nnls, st.coupling);
+      }
+    }
+  }
+}
+
+inline void HandCurve(Scene* s, const std::vector<double>& frac, double hs, wp::Table* table) {
+  for (double f : frac) {
+    const double h = fes::FixedStep(s->prob, f * hs);
+    wp::Measure(table, "CEODE-hand", "CD-damped", h,
+                [&](wp::Outcome* o) { return HandRun(s, f * hs, o); });
+  }
+}
+
+// Per-step time of one curve at its first row (seconds / steps).
+inline double NsPerStep(const wp::Table& t, const std::string& solver, const std::string& config) {
+  for (const wp::Row& r : t.rows()) {
+    if (r.solver == solver && r.config == config && r.steps > 0) return 1e9 * r.seconds / r.steps;
+  }
+  return 0;
+}
+
+// Fewer points for the costly curves: the main job's few minutes per scene.
+inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
+  using V = std::vector<double>;
+  const V f_cd = quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4, 0.25, 0.12, 0.06};
+  const V f_few = quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4, 0.25};
+  fes::CeodeCfg pc, autom, newton;
+  pc.vel = autom.vel = newton.vel = true;
+  pc.mode = CE_IMPLICIT_PC;
+  autom.mode = CE_IMPLICIT_AUTO;
+  autom.spgmr = newton.spgmr = true;
+  newton.mode = CE_IMPLICIT_NEWTON;
+  fes::CeodeCfg a34 = autom;
+  a34.method = "G4_A34";
+  if (kind == Damping::kMass) {
+    return {{"G3_CD-AUTO", autom, f_cd},
+            {"G3_CD-PC", pc, quick ? V{0.9, 0.45} : V{0.9, 0.4, 0.12}},
+            {"G3_CD-Newton-SPGMR", newton, quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4}},
+            {"G4_A34-AUTO", a34, f_few}};
+  }
+  // The Newton tolerance is CEODE's 1e-12 by default; a user at 1e-4 .. 1e-6 can loosen it.
+  fes::CeodeCfg loose = newton;
+  loose.nls_rtol = 1e-7;
+  fes::CeodeCfg lag;  // velocity dependence declared absent: f sees the lagged velocity
+  // G4_A34 diverges here at every step tried: G4Probe shows it, untimed.
+  return {{"G3_CD-AUTO", autom, V{0.9}},
+          {"G3_CD-Newton-SPGMR", newton, f_few},
+          {"G3_CD-Newton-SPGMR-rtol1e-7", loose, quick ? f_cd : V{0.9, 0.6, 0.4, 0.25, 0.12}},
+          {"G3_CD-lagged", lag, quick ? V{0.1, 0.05} : V{0.1, 0.05, 0.025}}};
+}
+
+// G4_A34 with stiffness-proportional damping declared (zeta = 2 at the top): how far one
+// period gets at fractions of its undamped stable step. Shown, not timed, not a check.
+inline void G4Probe(SUNContext ctx, Scene* s) {
+  fes::CeodeCfg c;
+  c.method = "G4_A34";
+  c.vel = c.spgmr = true;
+  const double hs = fes::GuardStep(ctx, &s->prob, c.method);
+  for (double f : {0.45, 0.1, 0.02}) {
+    wp::Outcome o;
+    const int rc = fes::CeodeRun(ctx, &s->prob, c, f * hs, &o);
+    std::printf("G4_A34 (Newton-SPGMR) at %.2f x its undamped stable step: %s (error %.3e)\n", f,
+                rc != 0 ? "stopped (CE_UNSTABLE)" : "ran", o.error);
+  }
+}
+
+inline std::vector<double> HandFractions(Damping kind, bool quick) {
+  // The stiffness term at v_{n-1/2}: stable below h_s (sqrt(1 + z^2) - z), z = 2 at the top.
+  if (kind == Damping::kStiffness) {
+    return quick ? std::vector<double>{0.2, 0.1, 0.05} : std::vector<double>{0.2, 0.12, 0.06, 0.03};
+  }
+  return quick ? std::vector<double>{0.9, 0.45, 0.225}
+               : std::vector<double>{0.9, 0.6, 0.4, 0.25, 0.12, 0.06};
+}
+
+inline int Checks(const wp::Table& table, Damping kind) {
+  int bad = 0;
+  if (kind == Damping::kMass) {
+    // Newton solves the diagonal step exactly: the same method as the hand loop.
+    bad +=
+        fes::CheckSameMethod(table, "CEODE", "G3_CD-Newton-SPGMR", "CEODE-hand", "CD-damped", 1e-6);
+  }
+  for (const char* c : {kind == Damping::kMass ? "G3_CD-AUTO" : "G3_CD-Newton-SPGMR-rtol1e-7",
+                        "G3_CD-Newton-SPGMR"}) {
+    const double p = fes::CurveOrder(table, "CEODE", c);
+    const bool ok = p > 1.8 && p < 2.3;
+    std::printf("CEODE %s order from the last three steps: %.3f %s\n", c, p, ok ? "ok" : "-- OFF");
+    bad += !ok;
+  }
+  return bad;
+}
+
+inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
+  const wp::Args args = wp::ParseArgs(argc, argv);
+  SUNContext ctx = nullptr;
+  if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
+  int bad = 0;
+  {
+    Scene s;
+    BuildScene(&s, args.quick ? 4 : 20);                      // 160 or 3 360 DOF
+    const double hs = fes::GuardStep(ctx, &s.prob, "G3_CD");  // undamped: f ignores v here
+    const double omega_max = 2 / hs;
+    SetDamping(&s, kind, omega_max);
+    bad += s.modes.residual < 1e-9 ? 0 : 1;
+    const double z1 = fe::RayleighZeta(s.plate, s.modes.w[0]);
+    const double zt = fe::RayleighZeta(s.plate, omega_max);
+    std::printf(
+        "%s: Q4 cantilever %dx%d, %d DOF, C = %.4e M + %.4e K; w1 = %.6e, w2 = %.6e, guard "
+        "omega_max = %.6e (G3_CD h_s = %.6e); zeta: mode 1 %.4e, mode 2 %.4e, top %.4e; "
+        "modes residual %.2e; one period %.6e, %d outputs\n",
+        scene, s.plate.nx, s.plate.ny, s.plate.n, s.plate.damp_m, s.plate.damp_k, s.modes.w[0],
+        s.modes.w[1], omega_max, hs, z1, fe::RayleighZeta(s.plate, s.modes.w[1]), zt,
+        s.modes.residual, s.prob.tend, s.prob.nout);
+    wp::Table table(scene, args.csv);
+    HandCurve(&s, HandFractions(kind, args.quick), hs, &table);
+    CeodeCurves(ctx, &s, CeodeConfigs(kind, args.quick), &table);
+    const std::vector<fes::SunConfig> configs = {
+        {fes::Kind::kErk, 3, "ARKODE-ERK", "order3"},
+        {fes::Kind::kErk, 4, "ARKODE-ERK", "order4"},
+        {fes::Kind::kErk, 5, "ARKODE-ERK", "order5"},
+        {fes::Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
+        {fes::Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},
+        {fes::Kind::kImexSpgmr, 0, "ARKODE-IMEX", "SPGMR"},
+        {fes::Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
+    const std::vector<double> tols =
+        args.quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7};
+    fes::SundialsCurves(ctx, &s.prob, configs, tols, args.quick ? 0.3 : 5.0, &table);
+    if (kind == Damping::kStiffness) G4Probe(ctx, &s);
+    bad += Checks(table, kind);
+    fes::PrintJudged(table, {1e-3, 1e-4, 1e-6});
+    const double hand = NsPerStep(table, "CEODE-hand", "CD-damped");
+    std::printf("\nper-step time at the first row of each curve (ns/step; CPU clock, one run):\n");
+    for (const char* c : {"G3_CD-AUTO", "G3_CD-PC", "G3_CD-Newton-SPGMR",
+                          "G3_CD-Newton-SPGMR-rtol1e-7", "G3_CD-lagged"}) {
+      const double t = NsPerStep(table, "CEODE", c);
+      if (t > 0)
+        std::printf("  CEODE %-20s %10.1f  (%.3f x hand loop %.1f)\n", c, t, t / hand, hand);
+    }
+    bad += table.failures();
+  }
+  std::printf("%d problem(s)\n", bad);
+  SUNContext_Free(&ctx);
+  return bad == 0 ? 0 : 1;
+}
+
+}  // namespace fed
+
+#endif  // CEODE_BENCH_FE_DAMPED_SCENE_H_
