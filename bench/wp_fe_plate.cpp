@@ -50,6 +50,7 @@
 #include <vector>
 
 #include "fe_plate_model.h"
+#include "fe_plate_modes.h"
 #include "wp_common.h"
 
 namespace {
@@ -121,51 +122,16 @@ void InitialState(const Scene& s, double* x) {
 }
 
 // ------------------------------------------------------ the reference modes
-using SpMat = Eigen::SparseMatrix<double>;
-
-SpMat StiffnessMatrix(const fe::Plate& p) {
-  std::vector<Eigen::Triplet<double>> tr;
-  tr.reserve(p.val.size());
-  for (int r = 0; r < p.n; ++r) {
-    for (int k = p.rowptr[r]; k < p.rowptr[r + 1]; ++k) tr.emplace_back(r, p.col[k], p.val[k]);
-  }
-  SpMat K(p.n, p.n);
-  K.setFromTriplets(tr.begin(), tr.end());
-  return K;
-}
-
-// The two lowest modes by subspace iteration (block of 6) with Rayleigh-Ritz;
-// returns the largest relative residual ||K phi - w^2 M phi|| / ||K phi||.
+// The two lowest modes (bench/fe_plate_modes.h); returns the largest relative residual
+// ||K phi - w^2 M phi|| / ||K phi||.
 double LowestModes(Scene* s) {
   const fe::Plate& p = s->plate;
-  const SpMat K = StiffnessMatrix(p);
-  Eigen::SimplicialLDLT<SpMat> ldlt(K);
-  const Eigen::Map<const Eigen::VectorXd> m(p.mass.data(), p.n);
-  const int b = 6;
-  Eigen::MatrixXd X = Eigen::MatrixXd::Random(p.n, b);
-  Eigen::VectorXd lam;
-  for (int it = 0; it < 60; ++it) {
-    const Eigen::MatrixXd Y = ldlt.solve(m.asDiagonal() * X);
-    const Eigen::MatrixXd Kr = Y.transpose() * (K * Y);
-    const Eigen::MatrixXd Mr = Y.transpose() * m.asDiagonal() * Y;
-    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kr, Mr);
-    X = Y * es.eigenvectors();
-    lam = es.eigenvalues();
-  }
-  double worst = 0;
-  for (int j = 0; j < 2; ++j) {
-    const Eigen::VectorXd kx = K * X.col(j);
-    worst = std::max(worst, (kx - lam(j) * (m.asDiagonal() * X.col(j))).norm() / kx.norm());
-  }
-  s->w1 = std::sqrt(lam(0));
-  s->w2 = std::sqrt(lam(1));
-  s->phi1.assign(X.col(0).data(), X.col(0).data() + p.n);
-  s->phi2.assign(X.col(1).data(), X.col(1).data() + p.n);
-  for (Vec* v : {&s->phi1, &s->phi2}) {
-    double mx = 0;
-    for (double q : *v) mx = std::max(mx, std::fabs(q));
-    for (double& q : *v) q /= mx;
-  }
+  const fe::Modes md = fe::LowestModes(p, 2);
+  s->w1 = md.w[0];
+  s->w2 = md.w[1];
+  s->phi1 = md.phi[0];
+  s->phi2 = md.phi[1];
+  const double worst = md.residual;
   Vec x0(p.n);
   InitialState(*s, x0.data());
   double n2 = 0;
@@ -193,7 +159,7 @@ double ElementBound(const fe::Plate& p) {
 }
 
 double ExactOmegaMax(const fe::Plate& p) {
-  Eigen::MatrixXd A = Eigen::MatrixXd(StiffnessMatrix(p));
+  Eigen::MatrixXd A = Eigen::MatrixXd(fe::StiffnessSparse(p));
   Eigen::VectorXd s(p.n);
   for (int k = 0; k < p.n; ++k) s(k) = 1 / std::sqrt(p.mass[k]);
   A = s.asDiagonal() * A * s.asDiagonal();
