@@ -280,6 +280,11 @@ inline int SunRun(SUNContext ctx, Problem* p, const SunConfig& c, double tol, wp
   return bad || !std::isfinite(emax) ? 1 : 0;
 }
 
+// A SUNDIALS curve stops after the first tolerance whose run takes longer than this (CPU s; the
+// run that crosses it is kept). Each timed point runs six times (wp::TimeMedian): with 5 s and
+// tolerances down to 1e-7, wp_fe_damped_mass alone took 757 s.
+constexpr double kSundialsCutoff = 1.5;
+
 // One curve per configuration over the tolerances; a curve stops once one run costs
 // max_seconds (it is past every CEODE point by then) or fails.
 inline void SundialsCurves(SUNContext ctx, Problem* p, const std::vector<SunConfig>& configs,
