@@ -321,18 +321,7 @@ inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
     wp::Table table(scene, args.csv);
     HandCurve(&s, HandFractions(kind, args.quick), hs, &table);
     CeodeCurves(ctx, &s, CeodeConfigs(kind, args.quick), &table);
-    const std::vector<fes::SunConfig> configs = {
-        {fes::Kind::kErk, 3, "ARKODE-ERK", "order3"},
-        {fes::Kind::kErk, 4, "ARKODE-ERK", "order4"},
-        {fes::Kind::kErk, 5, "ARKODE-ERK", "order5"},
-        {fes::Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
-        {fes::Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},
-        {fes::Kind::kImexSpgmr, 0, "ARKODE-IMEX", "SPGMR"},
-        {fes::Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
-    const std::vector<double> tols =
-        args.quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
-    fes::SundialsCurves(ctx, &s.prob, configs, tols, args.quick ? 0.3 : fes::kSundialsCutoff,
-                        &table);
+    fes::PeerCurves(ctx, &s.prob, args.quick, &table);
     if (kind == Damping::kStiffness) G4Probe(ctx, &s);
     bad += Checks(table, kind);
     fes::PrintJudged(table, {1e-3, 1e-4, 1e-6});

@@ -300,6 +300,18 @@ inline void SundialsCurves(SUNContext ctx, Problem* p, const std::vector<SunConf
   }
 }
 
+// The SUNDIALS configurations every plate variant is compared with, over one tolerance list.
+inline void PeerCurves(SUNContext ctx, Problem* p, bool quick, wp::Table* table) {
+  const std::vector<SunConfig> configs = {
+      {Kind::kErk, 3, "ARKODE-ERK", "order3"},      {Kind::kErk, 4, "ARKODE-ERK", "order4"},
+      {Kind::kErk, 5, "ARKODE-ERK", "order5"},      {Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
+      {Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},   {Kind::kImexSpgmr, 0, "ARKODE-IMEX", "SPGMR"},
+      {Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
+  const std::vector<double> tols =
+      quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
+  SundialsCurves(ctx, p, configs, tols, quick ? 0.3 : kSundialsCutoff, table);
+}
+
 // ------------------------------------------------------------ equal error
 // At each level, the best CEODE curve against the best SUNDIALS curve and the best hand loop
 // (time at equal error, wp::TimeAtError); < 1 means CEODE is faster.

@@ -347,18 +347,7 @@ int main(int argc, char** argv) {
     bad += Reference(ctx, &s, md);
     wp::Table table("fe_nonlinear", args.csv);
     CeodeCurves(ctx, &s, args.quick, &table);
-    const std::vector<fes::SunConfig> configs = {
-        {fes::Kind::kErk, 3, "ARKODE-ERK", "order3"},
-        {fes::Kind::kErk, 4, "ARKODE-ERK", "order4"},
-        {fes::Kind::kErk, 5, "ARKODE-ERK", "order5"},
-        {fes::Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
-        {fes::Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},
-        {fes::Kind::kImexSpgmr, 0, "ARKODE-IMEX", "SPGMR"},
-        {fes::Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
-    const std::vector<double> tols =
-        args.quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
-    fes::SundialsCurves(ctx, &s.prob, configs, tols, args.quick ? 0.3 : fes::kSundialsCutoff,
-                        &table);
+    fes::PeerCurves(ctx, &s.prob, args.quick, &table);
     bad += fes::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6);
     const double p = fes::CurveOrder(table, "CEODE", "G3_CD");
     const bool ok = p > 1.8 && p < 2.3;
