@@ -281,7 +281,7 @@ inline int SunRun(SUNContext ctx, Problem* p, const SunConfig& c, double tol, wp
 }
 
 // A SUNDIALS curve stops after the first tolerance whose run takes longer than this (CPU s; the
-// run that crosses it is kept). Each timed point runs six times (wp::TimeMedian): with 5 s and
+// run that crosses it is kept). A timed point used to run six times (wp::TimeMedian): with 5 s and
 // tolerances down to 1e-7, wp_fe_damped_mass alone took 757 s.
 constexpr double kSundialsCutoff = 1.5;
 

@@ -2,7 +2,8 @@
 // wp_common.h: shared pieces of the work-precision scenes (bench/wp_*.cpp).
 //
 //  * Timing: every configuration is run back to back until one repetition has
-//    lasted >= 50 ms, and the per-run time is the median of >= 5 repetitions.
+//    lasted >= 50 ms, and the per-run time is the median of 5 repetitions (3 for
+//    runs of >= 0.5 s, one run of >= 2 s is its own measurement).
 //    Each timed run is the whole user-visible cost: create, init, integrate in
 //    one-step mode with the error measured after every step, free. The clock
 //    is the process CPU time (see Now).
@@ -100,19 +101,27 @@ inline double Now() {
 
 constexpr double kMinRepSeconds = 0.05;
 constexpr int kReps = 5;
+// Runs this long are far past every equal-error comparison (the FE scenes' implicit SUNDIALS
+// curves take 5-17 s a point); six of each made wp_fe_damped_mass last 9 minutes. A run of
+// >= kFewRepSeconds is repeated 3 times, one of >= kOneRunSeconds is measured once.
+constexpr double kFewRepSeconds = 0.5;
+constexpr double kOneRunSeconds = 2.0;
 
 // Median seconds of one call of run(), which returns 0 on success. The first
 // call calibrates how many calls fill 50 ms (it also warms caches and the
-// allocator, so it is not counted). Returns < 0 if any call failed.
+// allocator, so it is not counted unless it is a run of >= kOneRunSeconds).
+// Returns < 0 if any call failed.
 template <class F>
 double TimeMedian(F&& run) {
   double t0 = Now();
   if (run() != 0) return -1;
   const double first = Now() - t0;
+  if (first >= kOneRunSeconds) return first;
   const long calls =
       first >= kMinRepSeconds ? 1 : static_cast<long>(std::ceil(kMinRepSeconds / first));
+  const int reps = first >= kFewRepSeconds ? 3 : kReps;
   std::vector<double> per_call;
-  for (int r = 0; r < kReps; ++r) {
+  for (int r = 0; r < reps; ++r) {
     t0 = Now();
     for (long c = 0; c < calls; ++c) {
       if (run() != 0) return -1;
