@@ -17,7 +17,8 @@ built -O3 (CEODE linked against it too); the others ran against Debian's
 libsundials-dev 6.4.1, which is built -O0. Column sundials_build says which;
 the -O3 rows come first in each scene and are the headline figures.
 
-Usage: ratios.py --out ratios.csv [--levels 1e-6,1e-9,1e-11] FILE.csv ...
+Usage: ratios.py --out ratios.csv [--levels 1e-6,1e-9,1e-11] [--scene-levels fe_=1e-4,1e-6]
+                 FILE.csv ...
 """
 import argparse
 import csv
@@ -45,8 +46,13 @@ def main():
     ap.add_argument("csv", nargs="+")
     ap.add_argument("--out", required=True)
     ap.add_argument("--levels", default="1e-6,1e-9,1e-11")
+    ap.add_argument("--scene-levels", action="append", default=[], metavar="PREFIX=LEVELS",
+                    help="levels for the scenes whose name starts with PREFIX, e.g. "
+                         "fe_=1e-4,1e-6 (the FE scenes' errors are relative)")
     args = ap.parse_args()
-    levels = [float(x) for x in args.levels.split(",")]
+    default_levels = [float(x) for x in args.levels.split(",")]
+    special = [(p, [float(x) for x in lv.split(",")])
+               for p, lv in (s.split("=", 1) for s in args.scene_levels)]
     rows = []
     for path in args.csv:
         scene, curves = read_curves(path)
@@ -54,6 +60,7 @@ def main():
             continue
         o3 = os.path.splitext(os.path.basename(path))[0].endswith("_o3")
         build = "6.4.1 -O3" if o3 else "Debian 6.4.1 -O0"
+        levels = next((lv for p, lv in special if scene.startswith(p)), default_levels)
         for lv in levels:
             c = best(curves, is_ceode, lv)
             s = best(curves, is_sundials, lv)

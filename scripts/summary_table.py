@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""The summary table of docs/results.md, as Markdown, from ratios.csv.
+
+One row per scene and error level: the best CEODE and best SUNDIALS curves of the
+-O3 half with their times and ratio, the best peer (Boost.Odeint, GSL) with the
+CEODE / peer ratio, the CEODE / SUNDIALS ratio of the Debian (-O0) half, and
+CEODE's time over the hand-written loop's ("CEODE-hand" curves) where a scene has one.
+Scenes run only against Debian's SUNDIALS (no -O3 row) show that half.
+
+Usage: summary_table.py ratios.csv [--out summary.md]
+"""
+import argparse
+import csv
+import sys
+
+O3 = "6.4.1 -O3"
+
+
+def cell(v):
+    return v if v else "–"
+
+
+def secs(v):
+    return f"{float(v):.3g}" if v else "–"
+
+
+def hand(r):
+    """CEODE's time over the hand-written loop's of the same method (scenes that have one)."""
+    if not (r["hand_loop_seconds"] and r["ceode_seconds"]):
+        return "–"
+    return f"{float(r['ceode_seconds']) / float(r['hand_loop_seconds']):.3g}"
+
+
+def strip(name):
+    return name[len("CEODE "):] if name.startswith("CEODE ") else name
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("ratios")
+    ap.add_argument("--out")
+    args = ap.parse_args()
+    rows = list(csv.DictReader(open(args.ratios)))
+    debian = {(r["scene"], r["error_level"]): r for r in rows if r["sundials_build"] != O3}
+    keys = [(r["scene"], r["error_level"]) for r in rows if r["sundials_build"] == O3]
+    keys += [k for k in debian if k not in keys]
+    head = ("| scene | error | best CEODE | s | best SUNDIALS | s | **CEODE / SUNDIALS** | best peer | s "
+            "| **CEODE / peer** | CEODE / SUNDIALS, Debian -O0 | CEODE / hand loop |\n|" + "---|" * 12)
+    lines = [head]
+    by_key = {(r["scene"], r["error_level"], r["sundials_build"]): r for r in rows}
+    for scene, level in keys:
+        r = by_key.get((scene, level, O3)) or debian[(scene, level)]
+        half = "" if r["sundials_build"] == O3 else " (Debian)"
+        d = debian.get((scene, level), {})
+        lines.append(
+            f"| {scene}{half} | {level} | {strip(r['ceode_best'])} | {secs(r['ceode_seconds'])} "
+            f"| {r['sundials_best']} | {secs(r['sundials_seconds'])} "
+            f"| **{cell(r['ratio_ceode_over_sundials'])}** | {cell(r['peer_best'])} "
+            f"| {secs(r['peer_seconds'])} | **{cell(r['ratio_ceode_over_peer'])}** "
+            f"| {cell(d.get('ratio_ceode_over_sundials', ''))} |")
+    text = "\n".join(lines) + "\n"
+    if args.out:
+        with open(args.out, "w") as f:
+            f.write(text)
+    sys.stdout.write(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
