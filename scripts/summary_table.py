@@ -57,7 +57,7 @@ def main():
             f"| {r['sundials_best']} | {secs(r['sundials_seconds'])} "
             f"| **{cell(r['ratio_ceode_over_sundials'])}** | {cell(r['peer_best'])} "
             f"| {secs(r['peer_seconds'])} | **{cell(r['ratio_ceode_over_peer'])}** "
-            f"| {cell(d.get('ratio_ceode_over_sundials', ''))} |")
+            f"| {cell(d.get('ratio_ceode_over_sundials', ''))} | {hand(r)} |")
     text = "\n".join(lines) + "\n"
     if args.out:
         with open(args.out, "w") as f:
