@@ -1,9 +1,10 @@
 // -----------------------------------------------------------------------------
-// fe_scene.h: the runners shared by the FE plate variants (bench/wp_fe_nonlinear.cpp,
-// bench/wp_fe_damped.cpp): one problem description, CEODE on the second-order form
-// (explicit, or implicit with prediction-correction, fixed point or Newton with a
-// matrix-free SPGMR), SUNDIALS on the first-order form y = (x, v) (ARKODE ERK
-// adaptive, CVODE Adams, CVODE BDF + SPGMR, ARKStep IMEX + SPGMR, ARKStep DIRK +
+// fe_scene.h: the runners shared by the FE plate scenes (bench/wp_fe_plate.cpp,
+// wp_fe_nonlinear.cpp, wp_fe_damped_mass.cpp, wp_fe_damped_stiff.cpp): one problem
+// description, CEODE on the second-order form (explicit, or implicit with
+// prediction-correction, fixed point or Newton with a matrix-free SPGMR), SUNDIALS on
+// the first-order form y = (x, v) (ARKODE ERK adaptive, CVODE Adams, CVODE BDF + SPGMR
+// or + KLU with the scene's sparse Jacobian, ARKStep IMEX + SPGMR, ARKStep DIRK +
 // SPGMR), and the equal-error figures the scenes print.
 //
 // Every solver integrates to the nout output instants tend k / nout in its normal
@@ -35,6 +36,9 @@ struct Problem {
   ARKRhsFn f1 = nullptr;                // (v, a) on y = (x, v)
   ARKRhsFn fe = nullptr, fi = nullptr;  // IMEX split of f1 (fi the stiff, implicit part)
   bool fi_linear = false;               // fi linear in y (ARKStepSetLinear)
+  bool f1_linear = false;               // f1 linear in y (ARKStepSetLinear for the DIRK)
+  CVLsJacFn jac1 = nullptr;             // sparse CSR Jacobian of f1 (CVODE BDF + KLU)
+  long jac_nnz = 0;                     // its nonzeros
   Vec x0, v0, mass;                     // mass: lumped, for the guard's inner product
   double tend = 0;
   int nout = 20;
@@ -160,7 +164,7 @@ inline double GuardStep(SUNContext ctx, Problem* p, const char* method) {
 }
 
 // ---------------------------------------------------------------- SUNDIALS
-enum class Kind { kErk, kAdams, kBdfSpgmr, kImexSpgmr, kDirkSpgmr };
+enum class Kind { kErk, kAdams, kBdfSpgmr, kBdfKlu, kImexSpgmr, kDirkSpgmr };
 
 struct SunConfig {
   Kind kind;
@@ -172,6 +176,7 @@ struct SunConfig {
 // The objects of one SUNDIALS run, freed together.
 struct SunObjects {
   N_Vector y = nullptr;
+  SUNMatrix J = nullptr;
   SUNLinearSolver LS = nullptr;
   SUNNonlinearSolver NLS = nullptr;
   void* mem = nullptr;
@@ -182,9 +187,10 @@ struct SunObjects {
   ~SunObjects() {
     if (kind == Kind::kErk) ERKStepFree(&mem);
     if (kind == Kind::kImexSpgmr || kind == Kind::kDirkSpgmr) ARKStepFree(&mem);
-    if (kind == Kind::kAdams || kind == Kind::kBdfSpgmr) CVodeFree(&mem);
+    if (kind == Kind::kAdams || kind == Kind::kBdfSpgmr || kind == Kind::kBdfKlu) CVodeFree(&mem);
     if (NLS != nullptr) SUNNonlinSolFree(NLS);
     if (LS != nullptr) SUNLinSolFree(LS);
+    if (J != nullptr) SUNMatDestroy(J);
     if (y != nullptr) N_VDestroy(y);
   }
 };
@@ -202,7 +208,8 @@ inline bool ArkSetup(Problem* p, const SunConfig& c, double tol, SUNContext ctx,
          !wp::Failed(ARKStepSetMaxNumSteps(o->mem, 100000000L), "ARKStepSetMaxNumSteps") &&
          !wp::Failed(ARKStepSStolerances(o->mem, tol, tol), "ARKStepSStolerances") &&
          !wp::Failed(ARKStepSetLinearSolver(o->mem, o->LS, nullptr), "ARKStepSetLinearSolver") &&
-         (!(imex && p->fi_linear) || !wp::Failed(ARKStepSetLinear(o->mem, 0), "ARKStepSetLinear"));
+         (!(imex ? p->fi_linear : p->f1_linear) ||
+          !wp::Failed(ARKStepSetLinear(o->mem, 0), "ARKStepSetLinear"));
 }
 
 // atol = tol: |x| <= O(1) and the error is relative to ||x0||.
@@ -228,9 +235,16 @@ inline bool SunSetup(SUNContext ctx, Problem* p, const SunConfig& c, double tol,
     return o->NLS != nullptr &&
            !wp::Failed(CVodeSetNonlinearSolver(o->mem, o->NLS), "CVodeSetNonlinearSolver");
   }
-  o->LS = SUNLinSol_SPGMR(o->y, SUN_PREC_NONE, kMaxl, ctx);
-  return o->LS != nullptr &&
-         !wp::Failed(CVodeSetLinearSolver(o->mem, o->LS, nullptr), "CVodeSetLinearSolver");
+  if (c.kind == Kind::kBdfSpgmr) {
+    o->LS = SUNLinSol_SPGMR(o->y, SUN_PREC_NONE, kMaxl, ctx);
+    return o->LS != nullptr &&
+           !wp::Failed(CVodeSetLinearSolver(o->mem, o->LS, nullptr), "CVodeSetLinearSolver");
+  }
+  o->J = SUNSparseMatrix(2 * p->n, 2 * p->n, p->jac_nnz, CSR_MAT, ctx);
+  o->LS = o->J != nullptr ? SUNLinSol_KLU(o->y, o->J, ctx) : nullptr;
+  return o->LS != nullptr && p->jac1 != nullptr &&
+         !wp::Failed(CVodeSetLinearSolver(o->mem, o->LS, o->J), "CVodeSetLinearSolver") &&
+         !wp::Failed(CVodeSetJacFn(o->mem, p->jac1), "CVodeSetJacFn");
 }
 
 inline int SunEvolve(const SunObjects& o, double tout, double* t) {
