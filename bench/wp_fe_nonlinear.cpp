@@ -265,35 +265,9 @@ int Reference(SUNContext ctx, Scene* s, const fe::Modes& md) {
   return bad + !conv + !(nl > 1e-3);
 }
 
-// Leapfrog: v_{n+1/2} = v_{n-1/2} + h a_n, x_{n+1} = x_n + h v_{n+1/2}.
 int HandRun(Scene* s, double h_req, wp::Outcome* out) {
-  const fes::Problem& pr = s->prob;
-  const int n = pr.n;
-  const long m = fes::StepsPerOutput(pr, h_req);
-  const double h = fes::FixedStep(pr, h_req);
-  Vec x(pr.x0), v(n), a(n);
-  Accel(*s, x.data(), a.data());
-  for (int k = 0; k < n; ++k) {
-    v[k] = pr.v0[k] + 0.5 * h * a[k];
-    x[k] += h * v[k];
-  }
-  double emax = 0;
-  long steps = 1;
-  for (int o = 1; o <= pr.nout; ++o) {
-    for (long j = (o == 1 ? 1 : 0); j < m; ++j, ++steps) {
-      Accel(*s, x.data(), a.data());
-      for (int k = 0; k < n; ++k) {
-        v[k] += h * a[k];
-        x[k] += h * v[k];
-      }
-    }
-    const double e = fes::RelError(pr, o, x.data());
-    if (!(e <= emax)) emax = e;
-  }
-  out->steps = steps;
-  out->rhs_evals = steps;
-  out->error = emax;
-  return std::isfinite(emax) ? 0 : 1;
+  return fes::LeapfrogRun(
+      s->prob, h_req, [s](const double* x, double* a) { Accel(*s, x, a); }, out);
 }
 
 void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Table* table) {

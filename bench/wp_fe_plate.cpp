@@ -257,38 +257,11 @@ int StableStepPart(SUNContext ctx, bool quick, Scene* wp_scene) {
   return bad;
 }
 
-// Leapfrog, the form explicit FE codes use: v_{n+1/2} = v_{n-1/2} + h a_n,
-// x_{n+1} = x_n + h v_{n+1/2}; one f call and one fused update pass per step.
+// The hand-written central-differences loop on the same f (fes::LeapfrogRun).
 int HandRun(Scene* s, double h_req, wp::Outcome* out) {
   const fe::Plate& p = s->plate;
-  const fes::Problem& q = s->p;
-  const int n = p.n;
-  const long m = fes::StepsPerOutput(q, h_req);
-  const double h = fes::FixedStep(q, h_req);
-  Vec x = q.x0, v(n, 0.0), a(n);
-  fe::Accel(p, x.data(), a.data());
-  for (int k = 0; k < n; ++k) v[k] = 0.5 * h * a[k];  // v_{1/2} from v0 = 0
-  double emax = 0;
-  long steps = 0;
-  for (int o = 1; o <= q.nout; ++o) {
-    for (long j = 0; j < m; ++j, ++steps) {
-      if (steps == 0) {
-        for (int k = 0; k < n; ++k) x[k] += h * v[k];
-        continue;
-      }
-      fe::Accel(p, x.data(), a.data());
-      for (int k = 0; k < n; ++k) {
-        v[k] += h * a[k];
-        x[k] += h * v[k];
-      }
-    }
-    const double e = q.ref.empty() ? 0 : fes::RelError(q, o, x.data());
-    if (!(e <= emax)) emax = e;
-  }
-  out->steps = steps;
-  out->rhs_evals = steps;
-  out->error = emax;
-  return std::isfinite(emax) ? 0 : 1;
+  return fes::LeapfrogRun(
+      s->p, h_req, [&p](const double* x, double* a) { fe::Accel(p, x, a); }, out);
 }
 
 struct WpResult {
