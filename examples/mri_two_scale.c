@@ -33,9 +33,9 @@
 #include <nvector/nvector_serial.h>
 #include <stdio.h>
 
+#include "mri_two_scale_model.h"
+
 #define OMEGA 10.0
-#define LAMBDA 2.0
-#define S0 1.0
 #define TEND 2.0
 #define HINNER 0.001
 #define NRUNS 4
@@ -46,37 +46,6 @@
 #define CTX_COMM NULL
 #endif
 
-/* Closed-form solution: q, s and p = q' at t. */
-static void exact(double t, double* q, double* s, double* p) {
-  const double a = LAMBDA / (1 + LAMBDA * LAMBDA), b = 1 / (1 + LAMBDA * LAMBDA);
-  const double C = S0 - a, w2 = OMEGA * OMEGA;
-  const double K = w2 * C / (w2 + LAMBDA * LAMBDA);
-  const double M = w2 * a / (w2 - 1), N = w2 * b / (w2 - 1);
-  const double e = exp(-LAMBDA * t);
-  *s = C * e + a * cos(t) + b * sin(t);
-  *q = K * e + M * cos(t) + N * sin(t);
-  *p = -LAMBDA * K * e - M * sin(t) + N * cos(t);
-}
-
-/* Fast acceleration for CEODE: x = (q, s). */
-static int fast_accel(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
-  long* nfast = (long*)data;
-  (void)t;
-  (void)v;
-  ++*nfast;
-  NV_Ith_S(f, 0) = -OMEGA * OMEGA * (NV_Ith_S(x, 0) - NV_Ith_S(x, 1));
-  NV_Ith_S(f, 1) = 0;
-  return 0;
-}
-
-/* Slow part of y' for MRIStep: y = (q, s, p, w). */
-static int slow_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
-  (void)data;
-  N_VConst(0, ydot);
-  NV_Ith_S(ydot, 1) = -LAMBDA * NV_Ith_S(y, 1) + cos(t);
-  return 0;
-}
-
 static int check(int flag, const char* call) {
   if (flag < 0) fprintf(stderr, "ERROR: %s returned %d\n", call, flag);
   return flag < 0;
@@ -84,33 +53,29 @@ static int check(int flag, const char* call) {
 
 /* One MRI run with nslow slow steps; returns the max error at TEND (or -1). */
 static double run(SUNContext ctx, int nslow, long* nfast, long* nrestart) {
-  double q0, s0, p0, err = -1;
+  TwoScale m = {OMEGA, 0.0, 0};
+  double err = -1;
   sunrealtype t = 0;
-  exact(0, &q0, &s0, &p0);
   N_Vector x0 = N_VNew_Serial(2, ctx), v0 = N_VNew_Serial(2, ctx), y = N_VNew_Serial(4, ctx);
-  NV_Ith_S(x0, 0) = q0;
-  NV_Ith_S(x0, 1) = s0;
-  NV_Ith_S(v0, 0) = p0;
+  two_scale_state(&m, 0, y);
+  NV_Ith_S(x0, 0) = NV_Ith_S(y, 0);
+  NV_Ith_S(x0, 1) = NV_Ith_S(y, 1);
+  NV_Ith_S(v0, 0) = NV_Ith_S(y, 2);
   NV_Ith_S(v0, 1) = 0;
-  NV_Ith_S(y, 0) = q0;
-  NV_Ith_S(y, 1) = s0;
-  NV_Ith_S(y, 2) = p0;
-  NV_Ith_S(y, 3) = 0;
-  *nfast = 0;
 
   void* ce = CEodeCreate(ctx);
   MRIStepInnerStepper inner = NULL;
   void* mri = NULL;
   MRIStepCoupling C = NULL;
   if (ce == NULL) goto done;
-  if (check(CEodeInit(ce, fast_accel, 0, x0, v0), "CEodeInit")) goto done;
-  if (check(CEodeSetUserData(ce, nfast), "CEodeSetUserData")) goto done;
+  if (check(CEodeInit(ce, two_scale_fast_accel, 0, x0, v0), "CEodeInit")) goto done;
+  if (check(CEodeSetUserData(ce, &m), "CEodeSetUserData")) goto done;
   if (check(CEodeSetMethodByName(ce, "G4_A34"), "CEodeSetMethodByName")) goto done;
   if (check(CEodeSetFixedStep(ce, HINNER), "CEodeSetFixedStep")) goto done;
   if (check(CEodeCreateMRIStepInnerStepper(ce, &inner), "CEodeCreateMRIStepInnerStepper"))
     goto done;
 
-  mri = MRIStepCreate(slow_rhs, NULL, 0, y, inner, ctx);
+  mri = MRIStepCreate(two_scale_slow_rhs, NULL, 0, y, inner, ctx);
   if (mri == NULL) goto done;
   C = MRIStepCoupling_LoadTable(ARKODE_MRI_GARK_ERK33a);
   if (C == NULL || check(MRIStepSetCoupling(mri, C), "MRIStepSetCoupling")) goto done;
@@ -119,11 +84,9 @@ static double run(SUNContext ctx, int nslow, long* nfast, long* nrestart) {
   if (check(MRIStepEvolve(mri, TEND, y, &t, ARK_NORMAL), "MRIStepEvolve")) goto done;
   if (check(CEodeGetNumInnerRestarts(ce, nrestart), "CEodeGetNumInnerRestarts")) goto done;
 
-  double q, s, p;
-  exact(t, &q, &s, &p);
-  err = fmax(fabs(NV_Ith_S(y, 0) - q), fabs(NV_Ith_S(y, 1) - s));
-  err = fmax(err, fabs(NV_Ith_S(y, 2) - p) / OMEGA);
+  err = two_scale_error(&m, t, y);
 done:
+  *nfast = m.nfast;
   MRIStepCoupling_Free(C);
   MRIStepFree(&mri);
   CEodeFreeMRIStepInnerStepper(&inner);
