@@ -81,14 +81,6 @@ static int QUIET = 0; /* equal-error: no guard warnings (the search starts beyon
 #define CTX_COMM NULL
 #endif
 
-static ARKodeButcherTable classic_rk4(void) {
-  const sunrealtype c[4] = {0, 0.5, 0.5, 1};
-  const sunrealtype A[16] = {0, 0, 0, 0, 0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 1, 0};
-  const sunrealtype b[4] = {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6};
-  return ARKodeButcherTable_Create(4, 4, 0, (sunrealtype*)c, (sunrealtype*)A, (sunrealtype*)b,
-                                   NULL);
-}
-
 /* The inner stepper of the chosen kind; *mem is its integrator memory. */
 static int is_ceode(const char* kind) { return strncmp(kind, "ceode", 5) == 0; }
 
@@ -113,7 +105,7 @@ static int make_inner(SUNContext ctx, const char* kind, double hin, const char* 
     return flag;
   }
   *mem = ARKStepCreate(two_scale_fast_first_order, NULL, 0, y, ctx);
-  ARKodeButcherTable B = classic_rk4();
+  ARKodeButcherTable B = two_scale_rk4_table();
   int flag = ARKStepSetTables(*mem, 4, 0, NULL, B);
   ARKodeButcherTable_Free(B);
   if (!flag) flag = ARKStepSetUserData(*mem, m);

@@ -16,6 +16,7 @@
 #ifndef CEODE_EXAMPLES_MRI_TWO_SCALE_MODEL_H
 #define CEODE_EXAMPLES_MRI_TWO_SCALE_MODEL_H
 
+#include <arkode/arkode_butcher.h>
 #include <math.h>
 #include <nvector/nvector_serial.h>
 
@@ -84,6 +85,15 @@ static inline int two_scale_slow_rhs(sunrealtype t, N_Vector y, N_Vector ydot, v
   N_VConst(0, ydot);
   NV_Ith_S(ydot, 1) = -TWO_SCALE_LAMBDA * NV_Ith_S(y, 1) + cos(t);
   return 0;
+}
+
+/* Classic RK4 (ARKODE has no such built-in table): the ARKStep inner stepper compared. */
+static inline ARKodeButcherTable two_scale_rk4_table(void) {
+  const sunrealtype c[4] = {0, 0.5, 0.5, 1};
+  const sunrealtype A[16] = {0, 0, 0, 0, 0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 1, 0};
+  const sunrealtype b[4] = {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6};
+  return ARKodeButcherTable_Create(4, 4, 0, (sunrealtype*)c, (sunrealtype*)A, (sunrealtype*)b,
+                                   NULL);
 }
 
 #endif
