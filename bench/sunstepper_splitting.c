@@ -1,8 +1,8 @@
 /* -----------------------------------------------------------------------------
  * sunstepper_splitting: CEODE's SUNStepper (SUNDIALS >= 7.2) inside ARKODE's
  * SplittingStep and MRIStep, on the two-scale problem of examples/mri_two_scale.c
- * (q'' = -omega^2 (q - s) fast, s' = -lambda s + cos t slow, omega = 10,
- * closed-form solution there), y = [q, s, p, w] serial.
+ * (q'' = -omega^2 (q - s) fast, s' = -lambda s + cos t slow, omega = 10; the
+ * model and its closed form from examples/mri_two_scale_model.h), y = [q, s, p, w] serial.
  *
  *   1. SplittingStep, Strang: CEODE (G4_A34, h <= 1e-3) for the fast partition,
  *      ERKStep (order 4, h = 1e-3) for the slow one; order of a log-log fit of the
@@ -29,52 +29,16 @@ int main(void) {
 #include <math.h>
 #include <nvector/nvector_serial.h>
 
+#include "../examples/mri_two_scale_model.h"
+
 #define OMEGA 10.0
-#define LAMBDA 2.0
 #define TEND 2.0
-
-static void exact(double t, double* q, double* s, double* p) {
-  const double a = LAMBDA / (1 + LAMBDA * LAMBDA), b = 1 / (1 + LAMBDA * LAMBDA);
-  const double C = 1.0 - a, w2 = OMEGA * OMEGA;
-  const double K = w2 * C / (w2 + LAMBDA * LAMBDA);
-  const double M = w2 * a / (w2 - 1), N = w2 * b / (w2 - 1);
-  const double e = exp(-LAMBDA * t);
-  *s = C * e + a * cos(t) + b * sin(t);
-  *q = K * e + M * cos(t) + N * sin(t);
-  *p = -LAMBDA * K * e - M * sin(t) + N * cos(t);
-}
-
-static int fast_accel(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
-  (void)t, (void)v, (void)data;
-  NV_Ith_S(f, 0) = -OMEGA * OMEGA * (NV_Ith_S(x, 0) - NV_Ith_S(x, 1));
-  NV_Ith_S(f, 1) = 0;
-  return 0;
-}
-
-static int slow_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
-  (void)data;
-  N_VConst(0, ydot);
-  NV_Ith_S(ydot, 1) = -LAMBDA * NV_Ith_S(y, 1) + cos(t);
-  return 0;
-}
-
-static void initial(N_Vector y) {
-  double q, s, p;
-  exact(0, &q, &s, &p);
-  NV_Ith_S(y, 0) = q, NV_Ith_S(y, 1) = s, NV_Ith_S(y, 2) = p, NV_Ith_S(y, 3) = 0;
-}
-
-static double error_at(N_Vector y, double t) {
-  double q, s, p;
-  exact(t, &q, &s, &p);
-  double e = fmax(fabs(NV_Ith_S(y, 0) - q), fabs(NV_Ith_S(y, 1) - s));
-  return fmax(e, fabs(NV_Ith_S(y, 2) - p) / OMEGA);
-}
 
 /* kind 0: Strang, 1: MRI ERK33a, 2: Yoshida 4th order. Returns the error or -1. */
 static double run(SUNContext ctx, int kind, int nslow) {
   N_Vector y = N_VNew_Serial(4, ctx), x0 = N_VNew_Serial(2, ctx), v0 = N_VNew_Serial(2, ctx);
-  initial(y);
+  TwoScale m = {OMEGA, 0.0, 0};
+  two_scale_state(&m, 0, y);
   NV_Ith_S(x0, 0) = NV_Ith_S(y, 0), NV_Ith_S(x0, 1) = NV_Ith_S(y, 1);
   NV_Ith_S(v0, 0) = NV_Ith_S(y, 2), NV_Ith_S(v0, 1) = 0;
   void* ce = CEodeCreate(ctx);
@@ -83,19 +47,20 @@ static double run(SUNContext ctx, int kind, int nslow) {
   MRIStepInnerStepper inner = NULL;
   double err = -1;
   sunrealtype t = 0;
-  int flag = CEodeInit(ce, fast_accel, 0, x0, v0);
+  int flag = CEodeInit(ce, two_scale_fast_accel, 0, x0, v0);
+  if (!flag) flag = CEodeSetUserData(ce, &m);
   if (!flag) flag = CEodeSetMethodByName(ce, "G4_A34");
   if (!flag) flag = CEodeSetFixedStep(ce, 1e-3);
   if (!flag) flag = CEodeCreateSUNStepper(ce, &steppers[0]);
   if (flag) goto done;
   if (kind == 1) {
     if (MRIStepInnerStepper_CreateFromSUNStepper(steppers[0], &inner)) goto done;
-    outer = MRIStepCreate(slow_rhs, NULL, 0, y, inner, ctx);
+    outer = MRIStepCreate(two_scale_slow_rhs, NULL, 0, y, inner, ctx);
     MRIStepCoupling C = MRIStepCoupling_LoadTable(ARKODE_MRI_GARK_ERK33a);
     flag = MRIStepSetCoupling(outer, C);
     MRIStepCoupling_Free(C);
   } else {
-    erk = ERKStepCreate(slow_rhs, 0, y, ctx);
+    erk = ERKStepCreate(two_scale_slow_rhs, 0, y, ctx);
     if (ARKodeSetFixedStep(erk, 1e-3) || ARKodeCreateSUNStepper(erk, &steppers[1])) goto done;
     outer = SplittingStepCreate(steppers, 2, 0, y, ctx);
     SplittingStepCoefficients c = SplittingStepCoefficients_LoadCoefficients(
@@ -106,7 +71,7 @@ static double run(SUNContext ctx, int kind, int nslow) {
   if (!flag) flag = ARKodeSetFixedStep(outer, TEND / nslow);
   if (!flag) flag = ARKodeSetMaxNumSteps(outer, 100000);
   if (!flag) flag = ARKodeEvolve(outer, TEND, y, &t, ARK_NORMAL);
-  if (flag >= 0) err = error_at(y, t);
+  if (flag >= 0) err = two_scale_error(&m, t, y);
   if (kind == 2 && flag < 0) {
     const char* msg = NULL;
     CEodeGetLastErrorMessage(ce, &msg);

@@ -13,6 +13,7 @@
 
 #include <cstring>
 
+#include "../examples/mri_two_scale_model.h"
 #include "test_util.hpp"
 
 namespace {
@@ -23,22 +24,14 @@ using ceode_test::SerialVector;
 using ceode_test::Vector;
 
 // Problem A (examples/mri_two_scale.c): x = (q, s), v = (p, w),
-// q'' = -omega^2 (q - s) fast, s' = -lambda s + cos t slow; closed form below.
+// q'' = -omega^2 (q - s) fast, s' = -lambda s + cos t slow; closed form in
+// examples/mri_two_scale_model.h.
 constexpr double kOmega = 10.0;
-constexpr double kLambda = 2.0;
+constexpr double kLambda = TWO_SCALE_LAMBDA;
 
 void ExactA(double t, double* q, double* s, double* p) {
-  const double a = kLambda / (1 + kLambda * kLambda);
-  const double b = 1 / (1 + kLambda * kLambda);
-  const double C = 1.0 - a;
-  const double w2 = kOmega * kOmega;
-  const double K = w2 * C / (w2 + kLambda * kLambda);
-  const double M = w2 * a / (w2 - 1);
-  const double N = w2 * b / (w2 - 1);
-  const double e = std::exp(-kLambda * t);
-  *s = C * e + a * std::cos(t) + b * std::sin(t);
-  *q = K * e + M * std::cos(t) + N * std::sin(t);
-  *p = -kLambda * K * e - M * std::sin(t) + N * std::cos(t);
+  const TwoScale model = {kOmega, 0.0, 0};
+  two_scale_exact(&model, t, q, s, p);
 }
 
 int FastA(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
