@@ -17,7 +17,7 @@
 //    the stiffness term at the lagged half-step velocity (as explicit FE codes do; its
 //    step limit shrinks with b omega_max, and it is first order in b).
 //  * CEODE with the velocity dependence declared: prediction-correction (CE_IMPLICIT_PC),
-//    CE_IMPLICIT_AUTO (PC when kappa ||df/dv|| <= 0.05, else the nonlinear solver),
+//    CE_IMPLICIT_AUTO (PC while its corrections contract by 5, else the nonlinear solver),
 //    Newton with a matrix-free SPGMR on M - kappa df/dv (stiff variant: also at a loosened
 //    Newton tolerance, 1e-7); G4_A34 with AUTO (mass variant; with C = b K it diverges at
 //    every step tried, printed by G4Probe); and (stiff variant) the undeclared,

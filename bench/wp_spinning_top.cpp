@@ -21,10 +21,9 @@
 //    with SUNLinSol_Dense, analytic dg/dq'), h = 1e-2 ... 1e-5, both with the
 //    paper's zero start (CEodeSetZeroStart: reproduces its Table 7) and with the
 //    default consistent start;
-//  * CEODE's other implicit-step choices (consistent start): G5_TOP-auto (the
-//    library's default CE_IMPLICIT_AUTO), G5_TOP-pc and G6_O6-pc (forced
-//    prediction-correction), G8_O8-auto (the eighth-order set), G5_TOP-J1-nls8 (Newton, df/dv every
-//    step, Newton tolerance 1e-8);
+//  * CEODE's other implicit-step choices (consistent start): G5_TOP-auto, G6_O6-auto
+//    and G8_O8-auto (the library's default CE_IMPLICIT_AUTO), G5_TOP-J1-nls8 (Newton, df/dv
+//    every step, Newton tolerance 1e-8);
 //  * ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8);
 //  * ARKODE ERKStep adaptive (default order 4), CVODE Adams (fixed point) and
 //    CVODE BDF (Newton, dense), rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol (angles
@@ -206,27 +205,23 @@ int main(int argc, char** argv) {
   }
   for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, true, "G5_TOP-zero");
   for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP");
-  // The curves a user would pick for the implicit step (docs/theory.md section 4.3; measured
-  // choices in docs/results.md). AUTO, the library's default: prediction-correction where
-  // kappa ||df/dv|| <= 0.05 (here h <= 1e-3), Newton above. Forced prediction-correction
-  // (CE_IMPLICIT_PC, 2 corrections from degree 5) where it stays stable on this top: G5_TOP
-  // from h = 5e-3, the sixth-order G6_O6 from 7e-3 (unstable at 8e-3; Newton does not converge
-  // for G6_O6 at h >= 5e-3).
-  // G8_O8 with AUTO for the tight errors (it fails at h >= 5e-3: Newton does not converge).
+  // The curves a user would pick for the implicit step, at the library's default
+  // CE_IMPLICIT_AUTO (docs/theory.md section 4.3): prediction-correction where the start's
+  // estimate kappa ||df/dv|| is at most 0.2 and the corrections keep contracting by 5 per
+  // correction (checked every 20 steps), Newton above. Here: G5_TOP PC from h = 5e-3 (estimate
+  // 0.17; 0.228 at 7e-3, where forced PC is unstable), G6_O6 PC from 6e-3 (0.18; at 7e-3 the
+  // estimate 0.216 takes Newton, measured 8.6e-6 with 4523 f, against 1.7e-7 and 2875 f with
+  // forced PC), G8_O8 PC from 5e-3 (Newton does not converge for G6_O6 and G8_O8 at h >= 7e-3).
   // Newton with the analytic df/dv refreshed every step (CEodeSetJacEvalFrequency 1) and a
   // Newton tolerance of 1e-8 instead of 1e-12: 3 f per step at h = 1e-2 instead of 6.8.
   p2.implicit_mode = CE_IMPLICIT_AUTO;
   std::vector<double> fine = {1e-2, 7e-3, 5e-3, 3e-3, 2e-3, 1e-3, 1e-4, 1e-5};
-  std::vector<double> pc_top = {5e-3, 3e-3, 2e-3, 1e-3};
-  std::vector<double> pc_o6 = {7e-3, 5e-3, 3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
-  std::vector<double> tight = {3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
+  std::vector<double> auto_o6 = {6e-3, 5e-3, 4e-3, 3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
+  std::vector<double> tight = {5e-3, 4e-3, 3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
   std::vector<double> coarse = {1e-2, 7e-3, 5e-3, 3e-3, 2e-3, 1e-3};
-  if (args.quick) fine = pc_top = pc_o6 = coarse = tight = {3e-3, 1e-3};
+  if (args.quick) fine = auto_o6 = coarse = tight = {3e-3, 1e-3};
   for (double h : fine) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP-auto");
-  p2.implicit_mode = CE_IMPLICIT_PC;
-  for (double h : pc_top) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP-pc");
-  for (double h : pc_o6) wp::MeasureCeode(&table, ctx, p2, "G6_O6", h, false, "G6_O6-pc");
-  p2.implicit_mode = CE_IMPLICIT_AUTO;  // the eighth-order set for tight errors (PC at h <= 1e-3)
+  for (double h : auto_o6) wp::MeasureCeode(&table, ctx, p2, "G6_O6", h, false, "G6_O6-auto");
   for (double h : tight) wp::MeasureCeode(&table, ctx, p2, "G8_O8", h, false, "G8_O8-auto");
   p2.implicit_mode = CE_IMPLICIT_NEWTON;
   p2.msbj = 1;
