@@ -16,6 +16,7 @@
 //   wp_high_order [--csv FILE] [--quick]
 //   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
 //                                                     bench/high_order_instructions.sh)
+//   wp_high_order --count gsl_rk8pd TOL REPS         (the same for rk8pd at one tolerance)
 // Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
 // (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
 // --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
@@ -295,7 +296,7 @@ void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
 // ones, create to free, so callgrind's counts split into a fixed cost per run and a cost per step).
 int CountRuns(int argc, char** argv) {
   if (argc < 5) {
-    std::fprintf(stderr, "usage: %s --count METHOD STEPS REPS [comp]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s --count METHOD STEPS|TOL REPS [comp]\n", argv[0]);
     return 2;
   }
   SUNContext ctx;
@@ -307,9 +308,17 @@ int CountRuns(int argc, char** argv) {
   int rc = 0;
   double err = 0;
   pend.ref = {0};
-  for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
-  std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
-              comp ? " +comp" : "", err);
+  if (std::strcmp(argv[2], "gsl_rk8pd") == 0) {  // STEPS is then the tolerance
+    peers::Setup();
+    const double tol = std::atof(argv[3]);
+    const peers::Problem pp = PeerProblem(pend);
+    for (int r = 0; r < reps && rc == 0; ++r) rc = PeerRun(pp, peers::Kind::kRk8pd, tol, &err);
+    std::printf("gsl_rk8pd tol %g x %d runs: |theta(10)| = %.17g\n", tol, reps, err);
+  } else {
+    for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
+    std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
+                comp ? " +comp" : "", err);
+  }
   SUNContext_Free(&ctx);
   return rc;
 }
