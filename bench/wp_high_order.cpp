@@ -16,10 +16,14 @@
 //   wp_high_order [--csv FILE] [--quick]
 //   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
 //                                                     bench/high_order_instructions.sh)
+//   wp_high_order --count gsl_rk8pd TOL REPS         (the same for rk8pd at one tolerance)
+//   wp_high_order --interleave ROUNDS                (pendulum, G8_O8 and rk8pd at 1e-9 and 1e-11
+//                                                     only, alternating; see Interleave)
 // Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
 // (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
 // --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
 // -----------------------------------------------------------------------------
+#include <algorithm>
 #include <map>
 
 #include "peers.h"  // GSL rk8pd, odeint rkf78 and Bulirsch-Stoer: the peers of every scene
@@ -295,7 +299,7 @@ void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
 // ones, create to free, so callgrind's counts split into a fixed cost per run and a cost per step).
 int CountRuns(int argc, char** argv) {
   if (argc < 5) {
-    std::fprintf(stderr, "usage: %s --count METHOD STEPS REPS [comp]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s --count METHOD STEPS|TOL REPS [comp]\n", argv[0]);
     return 2;
   }
   SUNContext ctx;
@@ -307,17 +311,81 @@ int CountRuns(int argc, char** argv) {
   int rc = 0;
   double err = 0;
   pend.ref = {0};
-  for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
-  std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
-              comp ? " +comp" : "", err);
+  if (std::strcmp(argv[2], "gsl_rk8pd") == 0) {  // STEPS is then the tolerance
+    peers::Setup();
+    const double tol = std::atof(argv[3]);
+    const peers::Problem pp = PeerProblem(pend);
+    for (int r = 0; r < reps && rc == 0; ++r) rc = PeerRun(pp, peers::Kind::kRk8pd, tol, &err);
+    std::printf("gsl_rk8pd tol %g x %d runs: |theta(10)| = %.17g\n", tol, reps, err);
+  } else {
+    for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
+    std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
+                comp ? " +comp" : "", err);
+  }
   SUNContext_Free(&ctx);
   return rc;
+}
+
+// rk8pd's time at a target error: log-log between the two tolerances whose errors bracket it.
+double BracketTime(const Result& a, const Result& b, double target) {
+  const double f = std::log(a.error / target) / std::log(a.error / b.error);
+  return std::exp(std::log(a.seconds) + f * std::log(b.seconds / a.seconds));
+}
+
+// --interleave ROUNDS: the pendulum's equal-error comparison at 1e-9 and 1e-11 only, CEODE and
+// rk8pd alternating in every round (G8_O8 at 665 and 1100 steps: errors 9.8e-10, 9.9e-12;
+// rk8pd at tol 1e-9 ... 1e-12, its time at the target interpolated between the bracketing
+// tolerances), each point wp::TimeMedian as in the full run; prints every round and the
+// median ratios. For a loaded machine, where separate runs of the two sides drift apart.
+int Interleave(int argc, char** argv) {
+  const int rounds = argc > 2 ? std::atoi(argv[2]) : 5;
+  SUNContext ctx;
+  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
+  peers::Setup();
+  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
+  pend.ref = Reference(pend);
+  std::printf("reference theta(10) = %.17g\n", pend.ref[0]);
+  const peers::Problem pp = PeerProblem(pend);
+  const long steps[2] = {665, 1100};
+  const double tols[4] = {1e-9, 1e-10, 1e-11, 1e-12};
+  std::vector<double> r9, r11;
+  bool ok = true;
+  for (int r = 0; r < rounds && ok; ++r) {
+    std::vector<Result> rs;
+    for (int i = 0; i < 4; ++i) {
+      if (i < 2) {
+        ok &= Measure(
+            pend, "G8_O8", pend.tend / steps[i],
+            [&](double* e) { return CeodeRun(ctx, pend, "G8_O8", steps[i], false, e); }, &rs);
+      }
+      ok &= Measure(
+          pend, "gsl_rk8pd", tols[i],
+          [&](double* e) { return PeerRun(pp, peers::Kind::kRk8pd, tols[i], e); }, &rs);
+    }
+    if (!ok) break;
+    // rs: G8_O8 665, rk8pd 1e-9, G8_O8 1100, rk8pd 1e-10, rk8pd 1e-11, rk8pd 1e-12.
+    r9.push_back(rs[0].seconds / BracketTime(rs[1], rs[3], 1e-9));
+    r11.push_back(rs[2].seconds / BracketTime(rs[4], rs[5], 1e-11));
+    std::printf("round %d: G8_O8 / rk8pd at 1e-9 %.3f, at 1e-11 %.3f\n", r + 1, r9.back(),
+                r11.back());
+  }
+  SUNContext_Free(&ctx);
+  if (!ok || r9.empty()) return 1;
+  std::sort(r9.begin(), r9.end());
+  std::sort(r11.begin(), r11.end());
+  std::printf(
+      "median of %zu rounds: G8_O8 / rk8pd at 1e-9 %.3f (%.3f .. %.3f), at 1e-11 %.3f "
+      "(%.3f .. %.3f)\n",
+      r9.size(), r9[r9.size() / 2], r9.front(), r9.back(), r11[r11.size() / 2], r11.front(),
+      r11.back());
+  return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::strcmp(argv[1], "--count") == 0) return CountRuns(argc, argv);
+  if (argc > 1 && std::strcmp(argv[1], "--interleave") == 0) return Interleave(argc, argv);
   const wp::Args args = wp::ParseArgs(argc, argv);
   peers::Setup();
   SUNContext ctx;

@@ -99,7 +99,8 @@ int Prepare(CEodeMemRec* ce, const char* func) {
         "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
   }
   if (ce->started) return CE_SUCCESS;
-  int flag = ValidateConfiguration(ce, func);
+  int flag = NeedsSolverWork(ce) ? AllocSolverWork(ce, func) : CE_SUCCESS;
+  if (flag == CE_SUCCESS) flag = ValidateConfiguration(ce, func);
   if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = NlsInitialize(ce, func);

@@ -325,6 +325,10 @@ int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a
               const char* func);  // a = M^{-1} f(t, x, v)
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
 int AllocVectors(CEodeMemRec* ce, N_Vector tmpl);
+// The work vectors of the linear, nonlinear and constraint solvers and the mass solve, cloned
+// when a (re)start first needs them (Prepare).
+bool NeedsSolverWork(const CEodeMemRec* ce);
+int AllocSolverWork(CEodeMemRec* ce, const char* func);
 void FreeVectors(CEodeMemRec* ce);
 
 // ceode_ls.cpp

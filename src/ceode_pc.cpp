@@ -131,8 +131,9 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != ce->f))) {
     return CE_SUCCESS;
   }
-  N_Vector u = ce->atmp, fbase = ce->ftmp;
-  int flag = FirstProbe(ce, ce->ycor, u, fbase, func);
+  // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
+  N_Vector u = ce->atmp, fbase = ce->tmp2;
+  int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
   if (!detect) ce->vel_checked_f = ce->f;  // once per right-hand side, not at every restart
   const sunrealtype sig = ProbeIncrement(ce->D[1]);
@@ -153,7 +154,8 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
     return CE_SUCCESS;
   }
   ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
-  flag = LsInitialize(ce, func);
+  flag = AllocSolverWork(ce, func);
+  if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
 }
 

@@ -13,6 +13,14 @@ namespace {
 // keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p. Orders reach d (never d + 1).
 int HalfWidth(int d) { return d / 2; }
 
+// Sweeps until only the stencil's truncation is left (see StartDerivativesHigh): d - 3 when f
+// reads the velocity (the samples lose one power of s to it); when it does not, the samples are
+// as accurate as the polynomial and a sweep gains two powers (x'' = a), so R sweeps reach the
+// same O(h^(2R+3-k)) (docs/theory.md section 6.3).
+int Sweeps(int d, bool vel_dependent) {
+  return vel_dependent ? d - 3 : std::min(d - 3, HalfWidth(d));
+}
+
 // The start's linear combinations go through the step's kernel: on serial vectors the fused
 // backend when the fused kernel is on (one call per plan instead of one N_Vector operation per
 // term), elsewhere the N_Vector reference; the two give the same numbers (ceode_fused.hpp).
@@ -96,7 +104,8 @@ int StartDerivativesHigh(
   }
   for (int k = 3; k < d; ++k) N_VConst(0, ce->D[k]);
   int flag = CE_SUCCESS;
-  for (int sweep = 0; sweep < d - 3 && flag == CE_SUCCESS; ++sweep) {
+  const int sweeps = Sweeps(d, ce->vel_dependent);
+  for (int sweep = 0; sweep < sweeps && flag == CE_SUCCESS; ++sweep) {
     for (int j = 0; j < 2 * R && flag == CE_SUCCESS; ++j) {
       Run(taylor[j], ce->n);
       flag = accel(t0 + nodes[j < R ? j : j + 1], xs, vs, sample[j]);

@@ -127,13 +127,29 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
 }
 
 int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
-  N_Vector* all[] = {&ce->xcur,  &ce->xnext, &ce->xnew,    &ce->ftmp,   &ce->vtmp,
-                     &ce->atmp,  &ce->tmp1,  &ce->tmp2,    &ce->tmp3,   &ce->V0,
-                     &ce->apred, &ce->ycor,  &ce->ewt,     &ce->zero,   &ce->lstmp,
-                     &ce->D[1],  &ce->D[2],  &ce->Dnew[1], &ce->Dnew[2]};
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->vtmp, &ce->atmp,    &ce->tmp1,
+                     &ce->tmp2, &ce->tmp3,  &ce->D[1], &ce->D[2], &ce->Dnew[1], &ce->Dnew[2]};
   for (N_Vector* v : all) {
     *v = N_VClone(tmpl);
     if (*v == nullptr) return CE_MEM_FAIL;
+  }
+  return CE_SUCCESS;
+}
+
+bool NeedsSolverWork(const CEodeMemRec* ce) {
+  return ce->LS != nullptr || ce->NLS != nullptr || ce->mfn != nullptr || ce->M != nullptr ||
+         ce->vel_dependent || ce->fo != nullptr || HasConstraints(ce);
+}
+
+// Each N_VClone costs about a thousand instructions in Debian's -O0 SUNDIALS (the operation
+// table is copied entry by entry): an explicit run without a mass matrix, linear or nonlinear
+// solver never clones these seven (docs/results.md, high-degree sets).
+int AllocSolverWork(CEodeMemRec* ce, const char* func) {
+  if (ce->zero != nullptr) return CE_SUCCESS;
+  N_Vector* work[] = {&ce->ftmp, &ce->V0, &ce->apred, &ce->ycor, &ce->ewt, &ce->lstmp, &ce->zero};
+  for (N_Vector* v : work) {
+    if (*v == nullptr) *v = N_VClone(ce->xcur);
+    if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   N_VConst(0, ce->zero);
   return CE_SUCCESS;
