@@ -19,6 +19,7 @@
 //   bench_step --count VARIANT METHOD N STEPS   (no timing: for valgrind --tool=callgrind;
 //                                               VARIANT also ceode_generic: the N_Vector
 //                                               reference update, to count its passes;
+//                                               ceode_two_buffers: CEodeSetInPlaceUpdate off;
 //                                               instructions per step = difference of two
 //                                               STEPS divided by their difference)
 // Before timing, the program checks that CEODE and both hand loops agree with the exact
@@ -386,8 +387,11 @@ int CountMode(int argc, char** argv) {
   const long n = std::atol(argv[4]);
   const long steps = std::atol(argv[5]);
   if (m == nullptr || n < 1 || steps < 0) return 2;
-  if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic") {
+  if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic" ||
+      variant == "ceode_two_buffers") {
     CeodeRun run(*m, n, variant == "ceode_generic");
+    if (variant == "ceode_two_buffers" && CEodeSetInPlaceUpdate(run.mem, SUNFALSE) != CE_SUCCESS)
+      return 1;
     return run.ok && run.Steps(steps, variant == "ceode_1step") ? 0 : 1;
   }
   const Coeffs co = MakeCoeffs(*m, kStep);
