@@ -309,7 +309,7 @@ sunrealtype UpdateBlocked(const FusedPlan& fp, sunindextype n) {
   sunrealtype y[kBlockLen];
   const FusedTerms& last = fp.terms[fp.n - 1];
   const sunrealtype* xout = last.out;
-  const bool stream = kCanStream && n >= kStreamSystem && last.old == nullptr &&
+  const bool stream = kCanStream && n >= kStreamSystem && last.old == nullptr && !last.in_place &&
                       reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
   sunrealtype s[4] = {0, 0, 0, 0};
   for (sunindextype off = 0; off < n; off += kBlockLen) {
@@ -318,6 +318,11 @@ sunrealtype UpdateBlocked(const FusedPlan& fp, sunindextype n) {
       const FusedTerms& tk = fp.terms[k];
       if (stream && k == fp.n - 1) {
         kStream[tk.form](tk, off, len, tk.out + off, s);
+        continue;
+      }
+      if (tk.in_place) {  // through the block buffer: SumBlock's output must not alias an input
+        kBlock[tk.form](tk, off, len, y);
+        std::copy(y, y + len, tk.out + off);
         continue;
       }
       if (tk.old == nullptr) {
@@ -392,7 +397,9 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     }
     tk.out = DataOf(cb.out);
     tk.form = FormOf(tk.m, tk.c);
-    for (int j = 0; j < tk.m; ++j) distinct = distinct && tk.X[j] != tk.out;
+    // In place: the accumulated quantity written over itself, entry by entry after it is read.
+    tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
+    for (int j = 0; j < tk.m - (tk.in_place ? 1 : 0); ++j) distinct = distinct && tk.X[j] != tk.out;
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }

@@ -29,7 +29,9 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
 // those of UpdateReference.
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
 // The raw-pointer form of a plan (vectors that expose their data). Returns false when some
-// combination writes a vector it also reads: the serial backend must not run that plan.
+// combination writes a vector it also reads, other than its own accumulated quantity without
+// compensation (an in-place plan's, read entry by entry before it is written): the serial
+// backend must not run that plan.
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
 
 }  // namespace ceode

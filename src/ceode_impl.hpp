@@ -81,7 +81,8 @@ struct UpdatePlan {
 // The same plan on raw arrays, for the one-pass kernel on serial vectors.
 struct FusedTerms {
   int m;
-  int form;  // the arithmetic of the sum, fixed when the plan is built (ceode_fused.cpp)
+  int form;       // the arithmetic of the sum, fixed when the plan is built (ceode_fused.cpp)
+  bool in_place;  // out is also the accumulated term X[m - 1] (an in-place plan)
   sunrealtype c[kMaxDegree + 3];
   sunrealtype* X[kMaxDegree + 3];
   sunrealtype* old;
@@ -104,6 +105,14 @@ constexpr long int kDefaultJacEvalFrequency = 20;
 // rotate with period 3: six configurations in all.
 constexpr int kNumPlans = 6;
 
+// In-place plans (docs/theory.md, "In-place update"): from this many (local) entries on, the
+// fused explicit step updates D_1 and D_3 .. D_{d-2} in their own buffers; below it the
+// vectors of a step fit in the first cache levels and there is no traffic to save.
+constexpr sunindextype kInPlaceMinLen = 1024;
+// Whether derivative level k of degree d is updated in place by an in-place plan: all but
+// D_2 (f's output buffer) and the top derivative z (read as history by later sums).
+constexpr bool InPlaceLevel(int d, int k) { return k != 2 && k != d - 1; }
+
 }  // namespace ceode
 
 // The solver memory. Named like SUNDIALS' CVodeMemRec so users reading a
@@ -123,10 +132,12 @@ struct CEodeMemRec {
   std::string method_name = "G3_CD";
   bool zero_start = false;
   bool compensated = false;
-  bool fused = true;           // one-pass update kernel for serial vectors
-  bool fused_ready = false;    // serial vectors: fused_plans valid, raw arrays of length n
-  bool fused_mpi = false;      // NVECTOR_PARALLEL: fused_plans valid on the local part
-  sunindextype fused_len = 0;  // entries the fused update runs over (local on NVECTOR_PARALLEL)
+  bool fused = true;             // one-pass update kernel for serial vectors
+  bool in_place = true;          // CEodeSetInPlaceUpdate: in-place plans allowed
+  bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place
+  bool fused_ready = false;      // serial vectors: fused_plans valid, raw arrays of length n
+  bool fused_mpi = false;        // NVECTOR_PARALLEL: fused_plans valid on the local part
+  sunindextype fused_len = 0;    // entries the fused update runs over (local on NVECTOR_PARALLEL)
   std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
   std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep
@@ -318,7 +329,9 @@ int StartDerivativesHigh(
 // stability analysis's step map are built by this one routine.
 void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
                      N_Vector xnew, UpdatePlan* plan);
-void BuildPlans(CEodeMemRec* ce);  // the step's update plans, after every (re)start
+// The step's update plans for the current vectors (plan (nsteps_h + i) % kNumPlans is the
+// configuration i steps ahead), after every (re)start and every change of the update options.
+void BuildPlans(CEodeMemRec* ce);
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
             const char* func);  // f(t, x, v), counted, failures reported
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,

@@ -6,6 +6,7 @@
 #include "ceode_impl.hpp"
 
 using ceode::Access;
+using ceode::BuildPlans;
 using ceode::ProcessError;
 using ceode::Restart;
 
@@ -105,6 +106,16 @@ int CEodeSetFusedKernel(void* mem, sunbooleantype on) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->fused = on != SUNFALSE;
+  if (ce->started) BuildPlans(ce);  // in-place plans run on the fused kernel only
+  return CE_SUCCESS;
+}
+
+int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->in_place = on != SUNFALSE;
+  if (ce->started) BuildPlans(ce);  // from the current vectors: the run goes on unchanged
   return CE_SUCCESS;
 }
 

@@ -253,8 +253,13 @@ void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_V
 
 // The vectors only trade places from step to step (history <-> new every step,
 // the three positions in a cycle of three), so six plans, built once per start,
-// cover every step: the step itself builds nothing.
-void BuildPlans(CEodeMemRec* ce) {
+// cover every step: the step itself builds nothing. In-place plans write the InPlaceLevel
+// derivatives over their history (Dn[k] = D[k], never swapped): the explicit fused step only,
+// whose update runs once per step after f, uncompensated (docs/theory.md, "In-place update").
+namespace {
+
+// The six plans from the current vectors; returns whether the fused backend can run them.
+bool BuildPlanCycle(CEodeMemRec* ce, bool in_place, bool fusable) {
   const int d = ce->degree;
   N_Vector D[kMaxDegree];
   N_Vector Dn[kMaxDegree];
@@ -262,22 +267,19 @@ void BuildPlans(CEodeMemRec* ce) {
   N_Vector compnew[kMaxDegree];
   for (int k = 0; k < kMaxDegree; ++k) {
     D[k] = ce->D[k];
-    Dn[k] = ce->Dnew[k];
+    Dn[k] = in_place && k > 0 && k < d && InPlaceLevel(d, k) ? ce->D[k] : ce->Dnew[k];
     comp[k] = ce->comp[k];
     compnew[k] = ce->compnew[k];
   }
   N_Vector xcur = ce->xcur;
   N_Vector xnext = ce->xnext;
   N_Vector xnew = ce->xnew;
-  const bool serial = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
-  const bool mpi = !serial && sun::LocalArrayWithReduce(ce->xnext);
-  bool fusable = serial || mpi;
-  ce->fused_len = serial ? ce->n : (mpi ? ce->xnext->ops->nvgetlocallength(ce->xnext) : 0);
   for (int i = 0; i < kNumPlans; ++i) {
-    BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[i]);
+    const int ip = static_cast<int>((ce->nsteps_h + i) % kNumPlans);
+    BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[ip]);
     if (fusable) {
-      fusable = BuildFusedPlan(ce->plans[i], {ce->compensated, comp, compnew, nullptr},
-                               &ce->fused_plans[i]);
+      fusable = BuildFusedPlan(ce->plans[ip], {ce->compensated, comp, compnew, nullptr},
+                               &ce->fused_plans[ip]);
     }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
@@ -286,6 +288,25 @@ void BuildPlans(CEodeMemRec* ce) {
     xnext = xnew;
     xnew = old;
   }
+  return fusable;
+}
+
+}  // namespace
+
+void BuildPlans(CEodeMemRec* ce) {
+  const bool serial = N_VGetVectorID(ce->xnext) == SUNDIALS_NVEC_SERIAL;
+  const bool mpi = !serial && sun::LocalArrayWithReduce(ce->xnext);
+  ce->fused_len = serial ? ce->n : (mpi ? ce->xnext->ops->nvgetlocallength(ce->xnext) : 0);
+  // In-place plans run on the fused backend only (the N_Vector reference's combinations must
+  // not write an input), so when it refuses them the ordinary plans are built instead.
+  bool in_place = ce->in_place && ce->fused && (serial || mpi) && !ce->compensated &&
+                  ce->solve_accel == SolveExplicit && ce->fused_len >= kInPlaceMinLen;
+  bool fusable = BuildPlanCycle(ce, in_place, serial || mpi);
+  if (in_place && !fusable) {
+    in_place = false;
+    fusable = BuildPlanCycle(ce, false, serial || mpi);
+  }
+  ce->in_place_active = in_place;
   ce->fused_ready = fusable && serial;
   ce->fused_mpi = fusable && mpi;
 }
@@ -386,7 +407,6 @@ int StartMethod(CEodeMemRec* ce) {
   ce->nsteps_h = 0;
   ce->guard_pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
-  BuildPlans(ce);
   ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
                     : ce->vel_dependent ? SolveImplicit
                                         : SolveExplicit;
@@ -394,6 +414,7 @@ int StartMethod(CEodeMemRec* ce) {
   flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
   ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
   if (flag == CE_SUCCESS) flag = ChooseImplicitSolve(ce, func);  // may replace solve_accel
+  if (flag == CE_SUCCESS) BuildPlans(ce);  // in place or not depends on the solve
   if (flag == CE_SUCCESS) ce->started = true;
   return flag;
 }
@@ -465,7 +486,12 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
 // Whole arrays, not the degree's slots: a fixed-length swap compiles to a few vector moves
 // instead of a loop; the slots at and above the degree are spare buffers and D[0] is unused.
 void Commit(CEodeMemRec* ce, sunrealtype t) {
-  std::swap(ce->D, ce->Dnew);
+  if (ce->in_place_active) {  // the other levels were written over their history
+    std::swap(ce->D[2], ce->Dnew[2]);
+    if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
+  } else {
+    std::swap(ce->D, ce->Dnew);
+  }
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;

@@ -35,8 +35,10 @@ struct RunResult {
   std::vector<sunrealtype> v;
 };
 
-RunResult RunChain(const std::string& method, bool fused, bool compensated) {
-  constexpr sunindextype kN = 64;
+// n >= ceode::kInPlaceMinLen: the fused explicit step updates the history in place (unless
+// in_place is false or compensated).
+RunResult RunChain(const std::string& method, bool fused, bool compensated, sunindextype kN = 64,
+                   bool in_place = true) {
   SUNContext ctx = nullptr;
   SUNContext_Create(SUN_COMM_NULL, &ctx);
   N_Vector x = N_VNew_Serial(kN, ctx);
@@ -52,6 +54,7 @@ RunResult RunChain(const std::string& method, bool fused, bool compensated) {
   EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetCompensatedSummation(mem, compensated ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetInPlaceUpdate(mem, in_place ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   sunrealtype t = 0;
   EXPECT_EQ(CEodeEvolve(mem, 5.0, x, v, &t, CE_NORMAL), CE_SUCCESS);
   RunResult r;
@@ -78,12 +81,106 @@ TEST_P(FusedKernel, GivesBitwiseTheNumbersOfTheGenericPath) {
   }
 }
 
+// The in-place plans (n >= kInPlaceMinLen) against the generic path and the fused kernel's own
+// out-of-place plans.
+TEST_P(FusedKernel, GivesBitwiseTheNumbersOfTheGenericPathWhenUpdatingInPlace) {
+  constexpr sunindextype kN = 3 * ceode::kInPlaceMinLen + 5;  // block tails too
+  const RunResult generic = RunChain(GetParam(), false, false, kN);
+  const RunResult in_place = RunChain(GetParam(), true, false, kN, true);
+  const RunResult out_of_place = RunChain(GetParam(), true, false, kN, false);
+  ASSERT_EQ(generic.x.size(), in_place.x.size());
+  long differing = 0;
+  for (size_t i = 0; i < generic.x.size(); ++i) {
+    differing += generic.x[i] != in_place.x[i] || generic.v[i] != in_place.v[i];
+    differing += out_of_place.x[i] != in_place.x[i] || out_of_place.v[i] != in_place.v[i];
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_TRUE(std::isfinite(in_place.x[kN / 2]) && in_place.x[kN / 2] != 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
                          ::testing::Values("G3_CD", "G3_A2", "G4_A34", "G5", "G5_TOP", "G6_O5",
                                            "G6_O6", "G7_O7", "G8_O8"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            return info.param;
                          });
+
+// ---- failures on the in-place path (docs/theory.md, "In-place update") --------------------
+// The chain whose f fails from t = kFailAt on: returning 1 (a recoverable error) or, with
+// status 0, a NaN in one entry.
+constexpr sunrealtype kFailAt = 2.0;
+struct FailingChain {
+  bool nan = false;  // false: return 1
+};
+int FailingChainRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
+  ChainRhs(t, x, v, f, nullptr);
+  if (t < kFailAt) return 0;
+  if (!static_cast<FailingChain*>(data)->nan) return 1;
+  N_VGetArrayPointer(f)[7] = NAN;
+  return 0;
+}
+
+struct FailedRun {
+  int flag = 0;
+  sunrealtype t = 0;
+  RunResult state;
+};
+
+FailedRun RunToFailure(bool in_place, bool nan) {
+  constexpr sunindextype kN = 2 * ceode::kInPlaceMinLen;
+  SUNContext ctx = nullptr;
+  SUNContext_Create(SUN_COMM_NULL, &ctx);
+  N_Vector x = N_VNew_Serial(kN, ctx);
+  N_Vector v = N_VNew_Serial(kN, ctx);
+  for (sunindextype i = 0; i < kN; ++i) {
+    N_VGetArrayPointer(x)[i] = std::sin(0.01 * static_cast<sunrealtype>(i));
+    N_VGetArrayPointer(v)[i] = 0;
+  }
+  FailingChain fc{nan};
+  void* mem = CEodeCreate(ctx);
+  EXPECT_EQ(CEodeInit(mem, FailingChainRhs, 0, x, v), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetUserData(mem, &fc), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetErrFile(mem, nullptr), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem, "G4_A34"), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetInPlaceUpdate(mem, in_place ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  FailedRun r;
+  r.flag = CEodeEvolve(mem, 5.0, x, v, &r.t, CE_NORMAL);
+  r.state.x.assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
+  r.state.v.assign(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
+  CEodeFree(&mem);
+  N_VDestroy(x);
+  N_VDestroy(v);
+  SUNContext_Free(&ctx);
+  return r;
+}
+
+// f fails before the step writes anything: the in-place path returns exactly the last good
+// state of the out-of-place one.
+TEST(InPlaceUpdate, AFailingRhsLeavesExactlyTheLastGoodState) {
+  const FailedRun exact = RunToFailure(false, false);
+  const FailedRun in_place = RunToFailure(true, false);
+  EXPECT_EQ(exact.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(in_place.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(in_place.t, exact.t);
+  EXPECT_GT(exact.t, kFailAt - 0.02);
+  EXPECT_TRUE(in_place.state.x == exact.state.x);
+  EXPECT_TRUE(in_place.state.v == exact.state.v);
+}
+
+// A non-finite acceleration is seen by the check after the update: the position returned is
+// still exactly the last good one; the velocity is the failed step's (non-finite where f was).
+TEST(InPlaceUpdate, ANonFiniteAccelerationKeepsTheLastGoodPositionOnly) {
+  const FailedRun exact = RunToFailure(false, true);
+  const FailedRun in_place = RunToFailure(true, true);
+  EXPECT_EQ(exact.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(in_place.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(in_place.t, exact.t);
+  EXPECT_TRUE(in_place.state.x == exact.state.x);
+  for (sunrealtype vi : exact.state.v) ASSERT_TRUE(std::isfinite(vi));
+  EXPECT_FALSE(std::isfinite(in_place.state.v[7]));
+}
 
 // One unknown: the entry-by-entry kernel, which also runs the high-degree start's Taylor samples
 // and stencil sums (src/ceode_start_high.cpp). The pendulum theta'' = -9.81 cos theta.

@@ -90,6 +90,7 @@ SUNDIALS_EXPORT const char* CEodeGetMethodName(int index);
 SUNDIALS_EXPORT int CEodeSetZeroStart(void* mem, sunbooleantype zero_start);
 SUNDIALS_EXPORT int CEodeSetCompensatedSummation(void* mem, sunbooleantype on);
 SUNDIALS_EXPORT int CEodeSetFusedKernel(void* mem, sunbooleantype on);
+SUNDIALS_EXPORT int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on);
 
 /* Optional inputs (ceode_io.cpp) */
 SUNDIALS_EXPORT int CEodeSetFixedStep(void* mem, sunrealtype h);
