@@ -4,11 +4,13 @@
 #include "ceode_saddle.hpp"
 
 #include <nvector/nvector_serial.h>
+#include <sundials/sundials_dense.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace ceode {
 
@@ -154,6 +156,141 @@ int AssembleSparse(CEodeMemRec* ce, Saddle* s, const char* func) {
   return CE_SUCCESS;
 }
 
+// X (rows x cols, any kind) into column-major dense storage.
+void ToDense(SUNMatrix X, sunindextype rows, sunindextype cols, std::vector<sunrealtype>* out) {
+  out->assign(static_cast<size_t>(rows * cols), 0);
+  ForEachEntry(X,
+               [&](sunindextype r, sunindextype c, sunrealtype v) { (*out)[c * rows + r] += v; });
+}
+
+sunrealtype MaxAbs(const std::vector<sunrealtype>& v) {
+  sunrealtype m = 0;
+  for (sunrealtype x : v) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+// LU in place of the k x k column-major a; false if a pivot is exactly zero.
+bool DenseLU(std::vector<sunrealtype>* a, sunindextype k, std::vector<sunrealtype*>* cols,
+             std::vector<sunindextype>* piv) {
+  cols->resize(static_cast<size_t>(k));
+  piv->resize(static_cast<size_t>(k));
+  for (sunindextype j = 0; j < k; ++j) (*cols)[j] = a->data() + j * k;
+  return SUNDlsMat_denseGETRF(cols->data(), k, k, piv->data()) == 0;
+}
+
+// out (n x nc) = B^{-1} G^T for the column-major nc x n dense g.
+void SolveTransposed(SchurFactor* f, sunindextype n, sunindextype nc,
+                     const std::vector<sunrealtype>& g, std::vector<sunrealtype>* out) {
+  out->resize(static_cast<size_t>(n * nc));
+  for (sunindextype r = 0; r < nc; ++r) {
+    sunrealtype* col = out->data() + r * n;
+    for (sunindextype i = 0; i < n; ++i) col[i] = g[i * nc + r];
+    SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), col);
+  }
+}
+
+// out (nc x nc) = scale X Y for the nc x n column-major X and the n x nc column-major Y.
+void RowTimes(const std::vector<sunrealtype>& X, const std::vector<sunrealtype>& Y, sunindextype n,
+              sunindextype nc, sunrealtype scale, std::vector<sunrealtype>* out) {
+  out->assign(static_cast<size_t>(nc * nc), 0);
+  for (sunindextype c = 0; c < nc; ++c) {
+    for (sunindextype i = 0; i < n; ++i) {
+      const sunrealtype y = scale * Y[c * n + i];
+      if (y == 0) continue;
+      for (sunindextype r = 0; r < nc; ++r) (*out)[c * nc + r] += X[i * nc + r] * y;
+    }
+  }
+}
+
+// B = A + rho G0^T G0, A = M - kappa J, G0 = Gt, with rho = max|A| / max|G0|^2 so that both
+// terms have one size; B is nonsingular where the saddle matrix is, even for a singular M (as
+// long as G0 covers M's null space). Then P = B^{-1} G0^T and C = rho G0 P - I.
+bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc;
+  f->valid = false;
+  if (ce->M != nullptr) {
+    ToDense(ce->M, n, n, &f->B);
+  } else {
+    f->B.assign(static_cast<size_t>(n * n), 0);
+    for (sunindextype i = 0; i < n; ++i) f->B[i * n + i] = 1;
+  }
+  if (J != nullptr && kappa != 0) {
+    ForEachEntry(
+        J, [&](sunindextype r, sunindextype c, sunrealtype v) { f->B[c * n + r] -= kappa * v; });
+  }
+  ToDense(Gt, nc, n, &f->G0);
+  const sunrealtype amax = MaxAbs(f->B), gmax = MaxAbs(f->G0);
+  f->rho = gmax > 0 ? (amax > 0 ? amax : 1) / (gmax * gmax) : 0;
+  for (sunindextype j = 0; j < n; ++j) {
+    for (sunindextype i = 0; i < n; ++i) {
+      sunrealtype sum = 0;
+      for (sunindextype r = 0; r < nc; ++r) sum += f->G0[i * nc + r] * f->G0[j * nc + r];
+      f->B[j * n + i] += f->rho * sum;
+    }
+  }
+  if (!DenseLU(&f->B, n, &f->colsB, &f->pivB)) return false;
+  SolveTransposed(f, n, nc, f->G0, &f->P);
+  RowTimes(f->G0, f->P, n, nc, f->rho, &f->C);
+  for (sunindextype r = 0; r < nc; ++r) f->C[r * nc + r] -= 1;
+  f->valid = true;
+  return true;
+}
+
+// With y = rho G0 delta the saddle system becomes B delta - G0^T y + Gt^T s = top,
+// rho G0 delta - y = 0, H delta = bottom; eliminating delta = B^{-1}(top + G0^T y - Gt^T s)
+// leaves K [y; s] = [-rho G0 t0; bottom - H t0], t0 = B^{-1} top, with
+//   K = [[C, -rho G0 Q], [H P, -H Q]],  Q = B^{-1} Gt^T.
+bool SchurFactorK(Saddle* s, SUNMatrix Gt, SUNMatrix H) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc, k = 2 * s->nc;
+  ToDense(Gt, nc, n, &f->g);
+  SolveTransposed(f, n, nc, f->g, &f->Q);
+  ToDense(H, nc, n, &f->H);
+  std::vector<sunrealtype> hp, hq;
+  RowTimes(f->G0, f->Q, n, nc, f->rho, &f->GQ);
+  RowTimes(f->H, f->P, n, nc, 1, &hp);
+  RowTimes(f->H, f->Q, n, nc, 1, &hq);
+  f->K.assign(static_cast<size_t>(k * k), 0);
+  for (sunindextype c = 0; c < nc; ++c) {
+    for (sunindextype r = 0; r < nc; ++r) {
+      f->K[c * k + r] = f->C[c * nc + r];
+      f->K[(nc + c) * k + r] = -f->GQ[c * nc + r];
+      f->K[c * k + nc + r] = hp[c * nc + r];
+      f->K[(nc + c) * k + nc + r] = -hq[c * nc + r];
+    }
+  }
+  return DenseLU(&f->K, k, &f->colsK, &f->pivK);
+}
+
+// s->sol = [delta; s] of the system SchurFactorK factored, for [top_scale top; bot_scale bottom].
+void SchurSolve(Saddle* s, sunrealtype top_scale, const sunrealtype* td, sunrealtype bot_scale,
+                const sunrealtype* pd) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc;
+  f->t0.resize(static_cast<size_t>(n));
+  for (sunindextype i = 0; i < n; ++i) f->t0[i] = top_scale * td[i];
+  SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), f->t0.data());
+  f->r.assign(static_cast<size_t>(2 * nc), 0);
+  for (sunindextype r = 0; r < nc; ++r) f->r[nc + r] = bot_scale * pd[r];
+  for (sunindextype i = 0; i < n; ++i) {
+    for (sunindextype r = 0; r < nc; ++r) {
+      f->r[r] -= f->rho * f->G0[i * nc + r] * f->t0[i];
+      f->r[nc + r] -= f->H[i * nc + r] * f->t0[i];
+    }
+  }
+  SUNDlsMat_denseGETRS(f->colsK.data(), 2 * nc, f->pivK.data(), f->r.data());
+  sunrealtype* sd = N_VGetArrayPointer(s->sol);
+  for (sunindextype i = 0; i < n; ++i) {
+    sunrealtype d = f->t0[i];
+    for (sunindextype r = 0; r < nc; ++r) {
+      d += f->P[r * n + i] * f->r[r] - f->Q[r * n + i] * f->r[nc + r];
+    }
+    sd[i] = d;
+  }
+  for (sunindextype r = 0; r < nc; ++r) sd[n + r] = f->r[nc + r];
+}
+
 }  // namespace
 
 // With PatternChanged the library's only solver-specific calls (KLU is named here alone).
@@ -174,6 +311,8 @@ int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
   s->n = ce->n;
   s->nc = ce->nc;
   s->N = ce->n + ce->nc;
+  s->schur_fits = s->N <= kSchurMaxSize;
+  s->sc = SchurFactor();
   int flag = ce->LS == nullptr ? CreateDenseSolver(ce, s, func) : AdoptUserSolver(ce, s, func);
   if (flag != CE_SUCCESS) return flag;
   if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_SPARSE &&
@@ -199,7 +338,18 @@ void SaddleFree(Saddle* s) {
 }
 
 int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
-                SUNMatrix H, sunrealtype t, const char* func) {
+                SUNMatrix H, sunrealtype t, const char* func, bool reuse_a, bool* refreshed) {
+  *refreshed = false;
+  s->sc.active = false;
+  if (s->schur_fits && ce->schur) {
+    if (!reuse_a || !s->sc.valid) *refreshed = SchurRefresh(ce, s, kappa, J, Gt);
+    // A singular K means a singular saddle matrix: the full path below reports it.
+    if (s->sc.valid && SchurFactorK(s, Gt, H)) {
+      s->sc.active = true;
+      ++ce->nsetups;
+      return CE_SUCCESS;
+    }
+  }
   CollectEntries(ce, s, kappa, J, Gt, H);
   if (!s->sparse) {
     AssembleDense(s);
@@ -229,7 +379,12 @@ int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
   for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
   for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
   N_VConst(0, s->sol);
-  const int rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
+  int rv = 0;
+  if (s->sc.active) {
+    SchurSolve(s, top_scale, td, bot_scale, pd);
+  } else {
+    rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
+  }
   ++ce->nls_solves;
   if (rv != 0 || !IsFinite(s->sol)) {
     return ProcessError(
