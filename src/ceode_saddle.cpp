@@ -169,13 +169,17 @@ sunrealtype MaxAbs(const std::vector<sunrealtype>& v) {
   return m;
 }
 
-// LU in place of the k x k column-major a; false if a pivot is exactly zero.
-bool DenseLU(std::vector<sunrealtype>* a, sunindextype k, std::vector<sunrealtype*>* cols,
-             std::vector<sunindextype>* piv) {
+// LU in place of the k x k column-major a; false if a pivot is below tiny.
+bool DenseLU(std::vector<sunrealtype>* a, sunindextype k, sunrealtype tiny,
+             std::vector<sunrealtype*>* cols, std::vector<sunindextype>* piv) {
   cols->resize(static_cast<size_t>(k));
   piv->resize(static_cast<size_t>(k));
   for (sunindextype j = 0; j < k; ++j) (*cols)[j] = a->data() + j * k;
-  return SUNDlsMat_denseGETRF(cols->data(), k, k, piv->data()) == 0;
+  if (SUNDlsMat_denseGETRF(cols->data(), k, k, piv->data()) != 0) return false;
+  for (sunindextype j = 0; j < k; ++j) {
+    if (!(std::fabs((*a)[j * k + j]) > tiny)) return false;
+  }
+  return true;
 }
 
 // out (n x nc) = B^{-1} G^T for the column-major nc x n dense g.
@@ -189,39 +193,50 @@ void SolveTransposed(SchurFactor* f, sunindextype n, sunindextype nc,
   }
 }
 
-// out (nc x nc) = scale X Y for the nc x n column-major X and the n x nc column-major Y.
+// K(r0 + r, c0 + c) = scale (X Y)(r, c) for the nc x n column-major X (its zeros skipped: G is
+// sparse) and the n x nc column-major Y; K has leading dimension ld.
 void RowTimes(const std::vector<sunrealtype>& X, const std::vector<sunrealtype>& Y, sunindextype n,
-              sunindextype nc, sunrealtype scale, std::vector<sunrealtype>* out) {
-  out->assign(static_cast<size_t>(nc * nc), 0);
+              sunindextype nc, sunrealtype scale, sunrealtype* K, sunindextype ld) {
   for (sunindextype c = 0; c < nc; ++c) {
+    sunrealtype* kc = K + c * ld;
+    for (sunindextype r = 0; r < nc; ++r) kc[r] = 0;
     for (sunindextype i = 0; i < n; ++i) {
       const sunrealtype y = scale * Y[c * n + i];
-      if (y == 0) continue;
-      for (sunindextype r = 0; r < nc; ++r) (*out)[c * nc + r] += X[i * nc + r] * y;
+      const sunrealtype* xi = X.data() + i * nc;
+      for (sunindextype r = 0; r < nc; ++r) {
+        if (xi[r] != 0) kc[r] += xi[r] * y;
+      }
     }
   }
 }
 
-// B = A + rho G0^T G0, A = M - kappa J, G0 = Gt, with rho = max|A| / max|G0|^2 so that both
-// terms have one size; B is nonsingular where the saddle matrix is, even for a singular M (as
-// long as G0 covers M's null space). Then P = B^{-1} G0^T and C = rho G0 P - I.
+// B = A = M - kappa J when its LU has no pivot below 1e-8 max|A| (rho = 0); else (a singular M)
+// B = A + rho G0^T G0, G0 = Gt, rho = max|A| / max|G0|^2 so that both terms have one size: B is
+// nonsingular when G0 covers A's null space. With rho > 0 also P = B^{-1} G0^T, C = rho G0 P - I.
 bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt) {
   SchurFactor* f = &s->sc;
   const sunindextype n = s->n, nc = s->nc;
   f->valid = false;
+  std::vector<sunrealtype>& A = f->G0;  // A until the regularised B needs G0
   if (ce->M != nullptr) {
-    ToDense(ce->M, n, n, &f->B);
+    ToDense(ce->M, n, n, &A);
   } else {
-    f->B.assign(static_cast<size_t>(n * n), 0);
-    for (sunindextype i = 0; i < n; ++i) f->B[i * n + i] = 1;
+    A.assign(static_cast<size_t>(n * n), 0);
+    for (sunindextype i = 0; i < n; ++i) A[i * n + i] = 1;
   }
   if (J != nullptr && kappa != 0) {
-    ForEachEntry(
-        J, [&](sunindextype r, sunindextype c, sunrealtype v) { f->B[c * n + r] -= kappa * v; });
+    ForEachEntry(J,
+                 [&](sunindextype r, sunindextype c, sunrealtype v) { A[c * n + r] -= kappa * v; });
   }
+  const sunrealtype amax = MaxAbs(A), tiny = 1e-8 * amax;
+  f->B = A;
+  f->rho = 0;
+  if (DenseLU(&f->B, n, tiny, &f->colsB, &f->pivB)) return f->valid = true;
+  f->B = A;
   ToDense(Gt, nc, n, &f->G0);
-  const sunrealtype amax = MaxAbs(f->B), gmax = MaxAbs(f->G0);
-  f->rho = gmax > 0 ? (amax > 0 ? amax : 1) / (gmax * gmax) : 0;
+  const sunrealtype gmax = MaxAbs(f->G0);
+  if (gmax == 0) return false;
+  f->rho = (amax > 0 ? amax : 1) / (gmax * gmax);
   for (sunindextype j = 0; j < n; ++j) {
     for (sunindextype i = 0; i < n; ++i) {
       sunrealtype sum = 0;
@@ -229,66 +244,62 @@ bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix
       f->B[j * n + i] += f->rho * sum;
     }
   }
-  if (!DenseLU(&f->B, n, &f->colsB, &f->pivB)) return false;
+  if (!DenseLU(&f->B, n, 0, &f->colsB, &f->pivB)) return false;
   SolveTransposed(f, n, nc, f->G0, &f->P);
-  RowTimes(f->G0, f->P, n, nc, f->rho, &f->C);
+  f->C.resize(static_cast<size_t>(nc * nc));
+  RowTimes(f->G0, f->P, n, nc, f->rho, f->C.data(), nc);
   for (sunindextype r = 0; r < nc; ++r) f->C[r * nc + r] -= 1;
-  f->valid = true;
-  return true;
+  return f->valid = true;
 }
 
-// With y = rho G0 delta the saddle system becomes B delta - G0^T y + Gt^T s = top,
-// rho G0 delta - y = 0, H delta = bottom; eliminating delta = B^{-1}(top + G0^T y - Gt^T s)
-// leaves K [y; s] = [-rho G0 t0; bottom - H t0], t0 = B^{-1} top, with
-//   K = [[C, -rho G0 Q], [H P, -H Q]],  Q = B^{-1} Gt^T.
+// rho = 0: K = -H Q, Q = B^{-1} Gt^T, the plain Schur complement: K s = bottom - H t0,
+// t0 = B^{-1} top, delta = t0 - Q s. rho > 0, with y = rho G0 delta the saddle system becomes
+// B delta - G0^T y + Gt^T s = top, rho G0 delta - y = 0, H delta = bottom; eliminating
+// delta = B^{-1}(top + G0^T y - Gt^T s) leaves K [y; s] = [-rho G0 t0; bottom - H t0] with
+//   K = [[C, -rho G0 Q], [H P, -H Q]].
 bool SchurFactorK(Saddle* s, SUNMatrix Gt, SUNMatrix H) {
   SchurFactor* f = &s->sc;
-  const sunindextype n = s->n, nc = s->nc, k = 2 * s->nc;
+  const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0, k = na + nc;
   ToDense(Gt, nc, n, &f->g);
   SolveTransposed(f, n, nc, f->g, &f->Q);
   ToDense(H, nc, n, &f->H);
-  std::vector<sunrealtype> hp, hq;
-  RowTimes(f->G0, f->Q, n, nc, f->rho, &f->GQ);
-  RowTimes(f->H, f->P, n, nc, 1, &hp);
-  RowTimes(f->H, f->Q, n, nc, 1, &hq);
-  f->K.assign(static_cast<size_t>(k * k), 0);
-  for (sunindextype c = 0; c < nc; ++c) {
-    for (sunindextype r = 0; r < nc; ++r) {
-      f->K[c * k + r] = f->C[c * nc + r];
-      f->K[(nc + c) * k + r] = -f->GQ[c * nc + r];
-      f->K[c * k + nc + r] = hp[c * nc + r];
-      f->K[(nc + c) * k + nc + r] = -hq[c * nc + r];
-    }
+  f->K.resize(static_cast<size_t>(k * k));
+  sunrealtype* K = f->K.data();
+  RowTimes(f->H, f->Q, n, nc, -1, K + na * k + na, k);
+  if (na > 0) {
+    RowTimes(f->G0, f->Q, n, nc, -f->rho, K + na * k, k);
+    RowTimes(f->H, f->P, n, nc, 1, K + na, k);
+    for (sunindextype c = 0; c < nc; ++c) std::copy_n(&f->C[c * nc], nc, K + c * k);
   }
-  return DenseLU(&f->K, k, &f->colsK, &f->pivK);
+  return DenseLU(&f->K, k, 0, &f->colsK, &f->pivK);
 }
 
 // s->sol = [delta; s] of the system SchurFactorK factored, for [top_scale top; bot_scale bottom].
 void SchurSolve(Saddle* s, sunrealtype top_scale, const sunrealtype* td, sunrealtype bot_scale,
                 const sunrealtype* pd) {
   SchurFactor* f = &s->sc;
-  const sunindextype n = s->n, nc = s->nc;
+  const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0;
   f->t0.resize(static_cast<size_t>(n));
   for (sunindextype i = 0; i < n; ++i) f->t0[i] = top_scale * td[i];
   SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), f->t0.data());
-  f->r.assign(static_cast<size_t>(2 * nc), 0);
-  for (sunindextype r = 0; r < nc; ++r) f->r[nc + r] = bot_scale * pd[r];
+  f->r.assign(static_cast<size_t>(na + nc), 0);
+  sunrealtype* ry = f->r.data();
+  sunrealtype* rs = ry + na;
+  for (sunindextype r = 0; r < nc; ++r) rs[r] = bot_scale * pd[r];
   for (sunindextype i = 0; i < n; ++i) {
-    for (sunindextype r = 0; r < nc; ++r) {
-      f->r[r] -= f->rho * f->G0[i * nc + r] * f->t0[i];
-      f->r[nc + r] -= f->H[i * nc + r] * f->t0[i];
-    }
+    const sunrealtype ti = f->t0[i];
+    for (sunindextype r = 0; r < nc; ++r) rs[r] -= f->H[i * nc + r] * ti;
+    for (sunindextype r = 0; r < na; ++r) ry[r] -= f->rho * f->G0[i * nc + r] * ti;
   }
-  SUNDlsMat_denseGETRS(f->colsK.data(), 2 * nc, f->pivK.data(), f->r.data());
+  SUNDlsMat_denseGETRS(f->colsK.data(), na + nc, f->pivK.data(), ry);
   sunrealtype* sd = N_VGetArrayPointer(s->sol);
-  for (sunindextype i = 0; i < n; ++i) {
-    sunrealtype d = f->t0[i];
-    for (sunindextype r = 0; r < nc; ++r) {
-      d += f->P[r * n + i] * f->r[r] - f->Q[r * n + i] * f->r[nc + r];
-    }
-    sd[i] = d;
+  std::copy_n(f->t0.data(), n, sd);
+  for (sunindextype r = 0; r < nc; ++r) {
+    const sunrealtype* q = &f->Q[r * n];
+    for (sunindextype i = 0; i < n; ++i) sd[i] -= q[i] * rs[r];
+    for (sunindextype i = 0; r < na && i < n; ++i) sd[i] += f->P[r * n + i] * ry[r];
+    sd[n + r] = rs[r];
   }
-  for (sunindextype r = 0; r < nc; ++r) sd[n + r] = f->r[nc + r];
 }
 
 }  // namespace
