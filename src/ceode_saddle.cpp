@@ -163,6 +163,15 @@ void ToDense(SUNMatrix X, sunindextype rows, sunindextype cols, std::vector<sunr
                [&](sunindextype r, sunindextype c, sunrealtype v) { (*out)[c * rows + r] += v; });
 }
 
+// The nonzeros of a constraint Jacobian (nc x n): G's rows touch few coordinates, and every
+// product of the Schur path runs over them alone.
+void Nonzeros(SUNMatrix G, std::vector<SaddleEntry>* nz) {
+  nz->clear();
+  ForEachEntry(G, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    if (v != 0) nz->push_back({r, c, v});
+  });
+}
+
 sunrealtype MaxAbs(const std::vector<sunrealtype>& v) {
   sunrealtype m = 0;
   for (sunrealtype x : v) m = std::max(m, std::fabs(x));
@@ -182,31 +191,37 @@ bool DenseLU(std::vector<sunrealtype>* a, sunindextype k, sunrealtype tiny,
   return true;
 }
 
-// out (n x nc) = B^{-1} G^T for the column-major nc x n dense g.
+// B's LU (with no pivot below tiny) and its explicit inverse: B is applied at every setup and
+// solve, and for the small n of this path a product costs less than two triangular solves.
+bool FactorB(SchurFactor* f, sunindextype n, sunrealtype tiny) {
+  if (!DenseLU(&f->B, n, tiny, &f->colsB, &f->pivB)) return false;
+  f->Binv.assign(static_cast<size_t>(n * n), 0);
+  for (sunindextype j = 0; j < n; ++j) {
+    f->Binv[j * n + j] = 1;
+    SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), f->Binv.data() + j * n);
+  }
+  return true;
+}
+
+// out (n x nc, column-major) = B^{-1} G^T: column r sums B^{-1}'s columns over row r of G.
 void SolveTransposed(SchurFactor* f, sunindextype n, sunindextype nc,
-                     const std::vector<sunrealtype>& g, std::vector<sunrealtype>* out) {
-  out->resize(static_cast<size_t>(n * nc));
-  for (sunindextype r = 0; r < nc; ++r) {
-    sunrealtype* col = out->data() + r * n;
-    for (sunindextype i = 0; i < n; ++i) col[i] = g[i * nc + r];
-    SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), col);
+                     const std::vector<SaddleEntry>& gnz, std::vector<sunrealtype>* out) {
+  out->assign(static_cast<size_t>(n * nc), 0);
+  for (const SaddleEntry& e : gnz) {
+    const sunrealtype* col = f->Binv.data() + e.c * n;
+    sunrealtype* o = out->data() + e.r * n;
+    for (sunindextype i = 0; i < n; ++i) o[i] += e.v * col[i];
   }
 }
 
-// K(r0 + r, c0 + c) = scale (X Y)(r, c) for the nc x n column-major X (its zeros skipped: G is
-// sparse) and the n x nc column-major Y; K has leading dimension ld.
-void RowTimes(const std::vector<sunrealtype>& X, const std::vector<sunrealtype>& Y, sunindextype n,
-              sunindextype nc, sunrealtype scale, sunrealtype* K, sunindextype ld) {
-  for (sunindextype c = 0; c < nc; ++c) {
-    sunrealtype* kc = K + c * ld;
-    for (sunindextype r = 0; r < nc; ++r) kc[r] = 0;
-    for (sunindextype i = 0; i < n; ++i) {
-      const sunrealtype y = scale * Y[c * n + i];
-      const sunrealtype* xi = X.data() + i * nc;
-      for (sunindextype r = 0; r < nc; ++r) {
-        if (xi[r] != 0) kc[r] += xi[r] * y;
-      }
-    }
+// K(r, c) += scale (X Y)(r, c), c < nc, for X given by its nonzeros and the n x nc column-major
+// Y; K has leading dimension ld.
+void AddRowTimes(const std::vector<SaddleEntry>& xnz, const std::vector<sunrealtype>& Y,
+                 sunindextype n, sunindextype nc, sunrealtype scale, sunrealtype* K,
+                 sunindextype ld) {
+  for (const SaddleEntry& e : xnz) {
+    const sunrealtype v = scale * e.v;
+    for (sunindextype c = 0; c < nc; ++c) K[c * ld + e.r] += v * Y[c * n + e.c];
   }
 }
 
@@ -217,7 +232,7 @@ bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix
   SchurFactor* f = &s->sc;
   const sunindextype n = s->n, nc = s->nc;
   f->valid = false;
-  std::vector<sunrealtype>& A = f->G0;  // A until the regularised B needs G0
+  std::vector<sunrealtype>& A = f->Binv;  // A until FactorB
   if (ce->M != nullptr) {
     ToDense(ce->M, n, n, &A);
   } else {
@@ -231,23 +246,22 @@ bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix
   const sunrealtype amax = MaxAbs(A), tiny = 1e-8 * amax;
   f->B = A;
   f->rho = 0;
-  if (DenseLU(&f->B, n, tiny, &f->colsB, &f->pivB)) return f->valid = true;
+  if (FactorB(f, n, tiny)) return f->valid = true;
   f->B = A;
-  ToDense(Gt, nc, n, &f->G0);
-  const sunrealtype gmax = MaxAbs(f->G0);
+  Nonzeros(Gt, &f->g0nz);
+  sunrealtype gmax = 0;
+  for (const SaddleEntry& e : f->g0nz) gmax = std::max(gmax, std::fabs(e.v));
   if (gmax == 0) return false;
   f->rho = (amax > 0 ? amax : 1) / (gmax * gmax);
-  for (sunindextype j = 0; j < n; ++j) {
-    for (sunindextype i = 0; i < n; ++i) {
-      sunrealtype sum = 0;
-      for (sunindextype r = 0; r < nc; ++r) sum += f->G0[i * nc + r] * f->G0[j * nc + r];
-      f->B[j * n + i] += f->rho * sum;
+  for (const SaddleEntry& p : f->g0nz) {
+    for (const SaddleEntry& q : f->g0nz) {
+      if (p.r == q.r) f->B[q.c * n + p.c] += f->rho * p.v * q.v;
     }
   }
-  if (!DenseLU(&f->B, n, 0, &f->colsB, &f->pivB)) return false;
-  SolveTransposed(f, n, nc, f->G0, &f->P);
-  f->C.resize(static_cast<size_t>(nc * nc));
-  RowTimes(f->G0, f->P, n, nc, f->rho, f->C.data(), nc);
+  if (!FactorB(f, n, 0)) return false;
+  SolveTransposed(f, n, nc, f->g0nz, &f->P);
+  f->C.assign(static_cast<size_t>(nc * nc), 0);
+  AddRowTimes(f->g0nz, f->P, n, nc, f->rho, f->C.data(), nc);
   for (sunindextype r = 0; r < nc; ++r) f->C[r * nc + r] -= 1;
   return f->valid = true;
 }
@@ -260,15 +274,15 @@ bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix
 bool SchurFactorK(Saddle* s, SUNMatrix Gt, SUNMatrix H) {
   SchurFactor* f = &s->sc;
   const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0, k = na + nc;
-  ToDense(Gt, nc, n, &f->g);
-  SolveTransposed(f, n, nc, f->g, &f->Q);
-  ToDense(H, nc, n, &f->H);
-  f->K.resize(static_cast<size_t>(k * k));
+  Nonzeros(Gt, &f->gnz);
+  SolveTransposed(f, n, nc, f->gnz, &f->Q);
+  Nonzeros(H, &f->hnz);
+  f->K.assign(static_cast<size_t>(k * k), 0);
   sunrealtype* K = f->K.data();
-  RowTimes(f->H, f->Q, n, nc, -1, K + na * k + na, k);
+  AddRowTimes(f->hnz, f->Q, n, nc, -1, K + na * k + na, k);
   if (na > 0) {
-    RowTimes(f->G0, f->Q, n, nc, -f->rho, K + na * k, k);
-    RowTimes(f->H, f->P, n, nc, 1, K + na, k);
+    AddRowTimes(f->g0nz, f->Q, n, nc, -f->rho, K + na * k, k);
+    AddRowTimes(f->hnz, f->P, n, nc, 1, K + na, k);
     for (sunindextype c = 0; c < nc; ++c) std::copy_n(&f->C[c * nc], nc, K + c * k);
   }
   return DenseLU(&f->K, k, 0, &f->colsK, &f->pivK);
@@ -279,27 +293,31 @@ void SchurSolve(Saddle* s, sunrealtype top_scale, const sunrealtype* td, sunreal
                 const sunrealtype* pd) {
   SchurFactor* f = &s->sc;
   const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0;
-  f->t0.resize(static_cast<size_t>(n));
-  for (sunindextype i = 0; i < n; ++i) f->t0[i] = top_scale * td[i];
-  SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), f->t0.data());
+  sunrealtype* sd = N_VGetArrayPointer(s->sol);
+  std::fill(sd, sd + n, 0);
+  for (sunindextype j = 0; j < n; ++j) {  // delta = t0 = B^{-1} top first
+    const sunrealtype x = top_scale * td[j];
+    const sunrealtype* col = f->Binv.data() + j * n;
+    for (sunindextype i = 0; i < n; ++i) sd[i] += x * col[i];
+  }
   f->r.assign(static_cast<size_t>(na + nc), 0);
   sunrealtype* ry = f->r.data();
   sunrealtype* rs = ry + na;
   for (sunindextype r = 0; r < nc; ++r) rs[r] = bot_scale * pd[r];
-  for (sunindextype i = 0; i < n; ++i) {
-    const sunrealtype ti = f->t0[i];
-    for (sunindextype r = 0; r < nc; ++r) rs[r] -= f->H[i * nc + r] * ti;
-    for (sunindextype r = 0; r < na; ++r) ry[r] -= f->rho * f->G0[i * nc + r] * ti;
+  for (const SaddleEntry& e : f->hnz) rs[e.r] -= e.v * sd[e.c];
+  if (na > 0) {
+    for (const SaddleEntry& e : f->g0nz) ry[e.r] -= f->rho * e.v * sd[e.c];
   }
   SUNDlsMat_denseGETRS(f->colsK.data(), na + nc, f->pivK.data(), ry);
-  sunrealtype* sd = N_VGetArrayPointer(s->sol);
-  std::copy_n(f->t0.data(), n, sd);
   for (sunindextype r = 0; r < nc; ++r) {
     const sunrealtype* q = &f->Q[r * n];
     for (sunindextype i = 0; i < n; ++i) sd[i] -= q[i] * rs[r];
-    for (sunindextype i = 0; r < na && i < n; ++i) sd[i] += f->P[r * n + i] * ry[r];
-    sd[n + r] = rs[r];
   }
+  for (sunindextype r = 0; r < na; ++r) {
+    const sunrealtype* p = &f->P[r * n];
+    for (sunindextype i = 0; i < n; ++i) sd[i] += p[i] * ry[r];
+  }
+  std::copy_n(rs, nc, sd + n);
 }
 
 }  // namespace
@@ -387,13 +405,13 @@ int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
   sunrealtype* bd = N_VGetArrayPointer(s->b);
   const sunrealtype* td = N_VGetArrayPointer(top);
   const sunrealtype* pd = N_VGetArrayPointer(bottom);
-  for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
-  for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
-  N_VConst(0, s->sol);
   int rv = 0;
   if (s->sc.active) {
     SchurSolve(s, top_scale, td, bot_scale, pd);
   } else {
+    for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
+    for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
+    N_VConst(0, s->sol);
     rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
   }
   ++ce->nls_solves;

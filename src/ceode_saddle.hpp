@@ -55,9 +55,9 @@ struct SchurFactor {
   bool valid = false;   // B, P, C hold the factorisation of a refresh
   bool active = false;  // the last SaddleSetup took this path (its solves follow it)
   sunrealtype rho = 0;
-  std::vector<sunrealtype> B, G0, P, C;  // n x n LU, nc x n, B^{-1} G0^T, rho G0 P - I
-  std::vector<sunrealtype> H, Q, GQ, K;  // the setup's H, B^{-1} Gt^T, rho G0 Q, 2nc x 2nc LU
-  std::vector<sunrealtype> g, t0, r;     // dense G, B^{-1} top, the 2nc right-hand side
+  std::vector<sunrealtype> B, Binv, P, C;   // n x n LU, its inverse, B^{-1} G0^T, rho G0 P - I
+  std::vector<SaddleEntry> g0nz, gnz, hnz;  // nonzeros of G0, of the setup's Gt and H
+  std::vector<sunrealtype> Q, K, r;         // B^{-1} Gt^T, 2nc x 2nc LU, its right-hand side
   std::vector<sunindextype> pivB, pivK;
   std::vector<sunrealtype*> colsB, colsK;
 };
