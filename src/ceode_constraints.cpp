@@ -198,7 +198,8 @@ int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
 }
 
 // The Schur complement's block A = M - kappa J serves again while M is fixed, kappa and the J
-// evaluation are the same, for at most msbj steps (its G0 ages with the motion; theory 8.3).
+// evaluation are the same, for at most msbj steps (its G0 ages with the motion; docs/theory.md
+// section 8.3).
 bool ABlockUsable(const CEodeMemRec* ce, const ConWork* w, sunrealtype kappa, SUNMatrix J) {
   const bool mass_fixed = ce->mfn == nullptr || ce->mass_constant;
   return mass_fixed && w->a_valid && w->kappa_a == (J != nullptr ? kappa : 0) &&
