@@ -50,14 +50,15 @@ struct SaddleEntry {
 
 // The Schur-complement form of the same solve (docs/theory.md section 8.3), dense, for
 // n + nc <= kSchurMaxSize: B = A + rho G0^T G0 (A = M - kappa J, G0 the Gt of B's refresh) is
-// factored once and kept while A stays the same; every setup factors only a 2nc x 2nc matrix K.
+// factored once and kept while A stays the same (rho = 0 when A is nonsingular); every setup
+// factors only K, nc x nc (rho = 0) or 2nc x 2nc.
 struct SchurFactor {
   bool valid = false;   // B, P, C hold the factorisation of a refresh
   bool active = false;  // the last SaddleSetup took this path (its solves follow it)
   sunrealtype rho = 0;
   std::vector<sunrealtype> B, Binv, P, C;   // n x n LU, its inverse, B^{-1} G0^T, rho G0 P - I
   std::vector<SaddleEntry> g0nz, gnz, hnz;  // nonzeros of G0, of the setup's Gt and H
-  std::vector<sunrealtype> Q, K, r;         // B^{-1} Gt^T, 2nc x 2nc LU, its right-hand side
+  std::vector<sunrealtype> Q, K, r;         // B^{-1} Gt^T, the LU of K, its right-hand side
   std::vector<sunindextype> pivB, pivK;
   std::vector<sunrealtype*> colsB, colsK;
 };
