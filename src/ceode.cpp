@@ -247,7 +247,7 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   ce->nst_lastsetup = -1;
   ce->guard_warned = false;
   ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
-  ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = 0;
+  ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = ce->nge = 0;
   ce->nfe_guard = ce->nme_guard = ce->nsetups_guard = 0;
   ceode::ImplicitStatsReset(ce);
   ceode::GuardRestart(ce);

@@ -60,6 +60,12 @@ struct ConWork {
   long int nst_fact = -1;
   sunrealtype kappa_jac = 0;  // df/dv in J was evaluated at step nst_jac for this kappa
   long int nst_jac = -1;
+  long int jac_gen = 0;  // evaluations of df/dv into J so far
+  // The block A = M - kappa J the Schur complement factored (Setup): its kappa (0 without J),
+  // the J evaluation and the step of the refresh.
+  bool a_valid = false;
+  sunrealtype kappa_a = 0;
+  long int jac_gen_a = -1, nst_a = -1;
   // x(t+h; a) = xoff[0] x(t) + sum_j xoff[j] D_j(t-h) + mu a: the step's update restricted to
   // the position, affine in the acceleration (AffineWeights).
   sunrealtype xoff[kMaxDegree] = {};
@@ -164,6 +170,7 @@ int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi) {
 int EvalG(CEodeMemRec* ce, sunrealtype t, N_Vector x, SUNMatrix G) {
   SUNMatZero(G);
   const int rv = ce->Gfn(t, x, G, ce->user_data);
+  ++ce->nge;
   if (rv != 0) {
     return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint Jacobian function failed (returned %d) at t = %.17g.", rv,
@@ -190,9 +197,29 @@ int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
   return CE_SUCCESS;
 }
 
-// Assembles and factors the saddle-point matrix; a failure leaves no usable step matrix.
+// The Schur complement's block A = M - kappa J serves again while M is fixed, kappa and the J
+// evaluation are the same, for at most msbj steps (its G0 ages with the motion; docs/theory.md
+// section 8.3).
+bool ABlockUsable(const CEodeMemRec* ce, const ConWork* w, sunrealtype kappa, SUNMatrix J) {
+  const bool mass_fixed = ce->mfn == nullptr || ce->mass_constant;
+  return mass_fixed && w->a_valid && w->kappa_a == (J != nullptr ? kappa : 0) &&
+         (J == nullptr || w->jac_gen_a == w->jac_gen) && ce->nst - w->nst_a < ce->msbj;
+}
+
+// Factors the saddle-point matrix; a failure leaves no usable step matrix. A refresh of the
+// Schur complement's B without df/dv is what nje counts for f independent of v (with df/dv,
+// VelJacobian counts its evaluation).
 int Setup(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, SUNMatrix J, SUNMatrix H, sunrealtype t) {
-  const int flag = SaddleSetup(ce, &w->sad, kappa, J, w->Gt, H, t, kFunc);
+  bool refreshed = false;
+  const int flag = SaddleSetup(ce, &w->sad, kappa, J, w->Gt, H, t, kFunc,
+                               ABlockUsable(ce, w, kappa, J), &refreshed);
+  if (refreshed) {
+    w->a_valid = true;
+    w->kappa_a = J != nullptr ? kappa : 0;
+    w->jac_gen_a = w->jac_gen;
+    w->nst_a = ce->nst;
+    if (J == nullptr) ++ce->nje;
+  }
   if (flag != CE_SUCCESS) w->factored = false;
   return flag;
 }
@@ -311,7 +338,8 @@ bool JacUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
 
 // The Newton matrix at the current iterate: H = G(x_i), df/dv when f depends on v (evaluated
 // anew when fresh_jac or when the last one may not be reused). nje counts the evaluations of
-// the Jacobian that the matrix reuses: df/dv (VelJacobian) or, f independent of v, G.
+// the Jacobian that the matrix reuses: df/dv (VelJacobian) or, f independent of v, the block
+// B of the Schur complement (Setup) or, on the full saddle path, the whole matrix with G.
 int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
   int flag = EvalG(ce, sp.tc, w->xtrial, w->Gh);
   if (flag == CE_SUCCESS && sp.vdep && (fresh_jac || !JacUsable(ce, w, sp))) {
@@ -320,11 +348,12 @@ int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
     if (flag == CE_SUCCESS) {
       w->nst_jac = ce->nst;
       w->kappa_jac = sp.kappa;
+      ++w->jac_gen;
     }
   }
   if (flag == CE_SUCCESS) flag = Setup(ce, w, sp.kappa, sp.vdep ? w->J : nullptr, w->Gh, sp.t);
   if (flag != CE_SUCCESS) return flag;
-  if (!sp.vdep) ++ce->nje;
+  if (!sp.vdep && !w->sad.sc.active) ++ce->nje;  // the full saddle matrix, G in it, is refreshed
   w->factored = true;
   w->kappa_fact = sp.kappa;
   w->mu_fact = sp.mu;
@@ -551,6 +580,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   const sunrealtype t0 = ce->tcur;
   w->factored = false;
   w->nst_jac = -1;
+  w->a_valid = false;  // h, M or the options may have changed at the restart
   w->lam_prev_valid = false;
   AffineWeights(d, ce->co, w->xoff);
   if (ce->zero_start) {
@@ -661,6 +691,14 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
   ce->nc = nc;
   ce->phi_template_checked = false;  // checked against Phi at the next start
   ceode::Restart(ce);
+  return CE_SUCCESS;
+}
+
+int CEodeSetSchurComplement(void* mem, sunbooleantype use) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->schur = use != SUNFALSE;
   return CE_SUCCESS;
 }
 

@@ -206,6 +206,7 @@ struct CEodeMemRec {
   CEodeMassFn mfn = nullptr;
   SUNMatrix M = nullptr;
   bool mass_constant = true;
+  bool schur = true;  // constraints: Schur complement for small saddle systems (SaddleSetup)
   bool mass_evaluated = false;                    // M holds M(x, t) at least once
   bool mass_dirty = true;                         // M changed since A was last factored from it
   ceode::Holds a_holds = ceode::Holds::kNothing;  // what the factored A is
@@ -252,6 +253,7 @@ struct CEodeMemRec {
   long int nfeDQ = 0;
   long int nme = 0;
   long int nce = 0;
+  long int nge = 0;  // constraint Jacobian (CEodeConstrJacFn) evaluations
 
   // Implicit-step mode and velocity-dependence detection (ceode_pc.cpp)
   int implicit_mode = CE_IMPLICIT_AUTO;  // the library chooses (docs/theory.md section 4.3)

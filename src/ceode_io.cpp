@@ -327,6 +327,9 @@ int CEodeGetNumMassEvals(void* mem, long int* n) {
 int CEodeGetNumConstrEvals(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nce);
 }
+int CEodeGetNumConstrJacEvals(void* mem, long int* n) {
+  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nge);
+}
 int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
   return GetCounter<sunrealtype>(mem, __func__, omega_max, &CEodeMemRec::omega_est);
 }
@@ -365,6 +368,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"RHS fn evals for Jac DQ", static_cast<double>(ce->nfeDQ), true},
       {"Mass fn evals", static_cast<double>(ce->nme), true},
       {"Constraint fn evals", static_cast<double>(ce->nce), true},
+      {"Constraint Jac evals", static_cast<double>(ce->nge), true},
       {"Max frequency estimate", static_cast<double>(ce->omega_est), false},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {

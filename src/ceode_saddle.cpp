@@ -4,11 +4,13 @@
 #include "ceode_saddle.hpp"
 
 #include <nvector/nvector_serial.h>
+#include <sundials/sundials_dense.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace ceode {
 
@@ -154,6 +156,170 @@ int AssembleSparse(CEodeMemRec* ce, Saddle* s, const char* func) {
   return CE_SUCCESS;
 }
 
+// X (rows x cols, any kind) into column-major dense storage.
+void ToDense(SUNMatrix X, sunindextype rows, sunindextype cols, std::vector<sunrealtype>* out) {
+  out->assign(static_cast<size_t>(rows * cols), 0);
+  ForEachEntry(X,
+               [&](sunindextype r, sunindextype c, sunrealtype v) { (*out)[c * rows + r] += v; });
+}
+
+// The nonzeros of a constraint Jacobian (nc x n): G's rows touch few coordinates, and every
+// product of the Schur path runs over them alone.
+void Nonzeros(SUNMatrix G, std::vector<SaddleEntry>* nz) {
+  nz->clear();
+  ForEachEntry(G, [&](sunindextype r, sunindextype c, sunrealtype v) {
+    if (v != 0) nz->push_back({r, c, v});
+  });
+}
+
+sunrealtype MaxAbs(const std::vector<sunrealtype>& v) {
+  sunrealtype m = 0;
+  for (sunrealtype x : v) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+// LU in place of the k x k column-major a; false if a pivot is below tiny.
+bool DenseLU(std::vector<sunrealtype>* a, sunindextype k, sunrealtype tiny,
+             std::vector<sunrealtype*>* cols, std::vector<sunindextype>* piv) {
+  cols->resize(static_cast<size_t>(k));
+  piv->resize(static_cast<size_t>(k));
+  for (sunindextype j = 0; j < k; ++j) (*cols)[j] = a->data() + j * k;
+  if (SUNDlsMat_denseGETRF(cols->data(), k, k, piv->data()) != 0) return false;
+  for (sunindextype j = 0; j < k; ++j) {
+    if (!(std::fabs((*a)[j * k + j]) > tiny)) return false;
+  }
+  return true;
+}
+
+// B's LU (with no pivot below tiny) and its explicit inverse: B is applied at every setup and
+// solve, and for the small n of this path a product costs less than two triangular solves.
+bool FactorB(SchurFactor* f, sunindextype n, sunrealtype tiny) {
+  if (!DenseLU(&f->B, n, tiny, &f->colsB, &f->pivB)) return false;
+  f->Binv.assign(static_cast<size_t>(n * n), 0);
+  for (sunindextype j = 0; j < n; ++j) {
+    f->Binv[j * n + j] = 1;
+    SUNDlsMat_denseGETRS(f->colsB.data(), n, f->pivB.data(), f->Binv.data() + j * n);
+  }
+  return true;
+}
+
+// out (n x nc, column-major) = B^{-1} G^T: column r sums B^{-1}'s columns over row r of G.
+void SolveTransposed(SchurFactor* f, sunindextype n, sunindextype nc,
+                     const std::vector<SaddleEntry>& gnz, std::vector<sunrealtype>* out) {
+  out->assign(static_cast<size_t>(n * nc), 0);
+  for (const SaddleEntry& e : gnz) {
+    const sunrealtype* col = f->Binv.data() + e.c * n;
+    sunrealtype* o = out->data() + e.r * n;
+    for (sunindextype i = 0; i < n; ++i) o[i] += e.v * col[i];
+  }
+}
+
+// K(r, c) += scale (X Y)(r, c), c < nc, for X given by its nonzeros and the n x nc column-major
+// Y; K has leading dimension ld.
+void AddRowTimes(const std::vector<SaddleEntry>& xnz, const std::vector<sunrealtype>& Y,
+                 sunindextype n, sunindextype nc, sunrealtype scale, sunrealtype* K,
+                 sunindextype ld) {
+  for (const SaddleEntry& e : xnz) {
+    const sunrealtype v = scale * e.v;
+    for (sunindextype c = 0; c < nc; ++c) K[c * ld + e.r] += v * Y[c * n + e.c];
+  }
+}
+
+// B = A = M - kappa J when its LU has no pivot below 1e-8 max|A| (rho = 0); else (a singular M)
+// B = A + rho G0^T G0, G0 = Gt, rho = max|A| / max|G0|^2 so that both terms have one size: B is
+// nonsingular when G0 covers A's null space. With rho > 0 also P = B^{-1} G0^T, C = rho G0 P - I.
+bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc;
+  f->valid = false;
+  std::vector<sunrealtype>& A = f->Binv;  // A until FactorB
+  if (ce->M != nullptr) {
+    ToDense(ce->M, n, n, &A);
+  } else {
+    A.assign(static_cast<size_t>(n * n), 0);
+    for (sunindextype i = 0; i < n; ++i) A[i * n + i] = 1;
+  }
+  if (J != nullptr && kappa != 0) {
+    ForEachEntry(J,
+                 [&](sunindextype r, sunindextype c, sunrealtype v) { A[c * n + r] -= kappa * v; });
+  }
+  const sunrealtype amax = MaxAbs(A), tiny = 1e-8 * amax;
+  f->B = A;
+  f->rho = 0;
+  if (FactorB(f, n, tiny)) return f->valid = true;
+  f->B = A;
+  Nonzeros(Gt, &f->g0nz);
+  sunrealtype gmax = 0;
+  for (const SaddleEntry& e : f->g0nz) gmax = std::max(gmax, std::fabs(e.v));
+  if (gmax == 0) return false;
+  f->rho = (amax > 0 ? amax : 1) / (gmax * gmax);
+  for (const SaddleEntry& p : f->g0nz) {
+    for (const SaddleEntry& q : f->g0nz) {
+      if (p.r == q.r) f->B[q.c * n + p.c] += f->rho * p.v * q.v;
+    }
+  }
+  if (!FactorB(f, n, 0)) return false;
+  SolveTransposed(f, n, nc, f->g0nz, &f->P);
+  f->C.assign(static_cast<size_t>(nc * nc), 0);
+  AddRowTimes(f->g0nz, f->P, n, nc, f->rho, f->C.data(), nc);
+  for (sunindextype r = 0; r < nc; ++r) f->C[r * nc + r] -= 1;
+  return f->valid = true;
+}
+
+// rho = 0: K = -H Q, Q = B^{-1} Gt^T, the plain Schur complement: K s = bottom - H t0,
+// t0 = B^{-1} top, delta = t0 - Q s. rho > 0, with y = rho G0 delta the saddle system becomes
+// B delta - G0^T y + Gt^T s = top, rho G0 delta - y = 0, H delta = bottom; eliminating
+// delta = B^{-1}(top + G0^T y - Gt^T s) leaves K [y; s] = [-rho G0 t0; bottom - H t0] with
+//   K = [[C, -rho G0 Q], [H P, -H Q]].
+bool SchurFactorK(Saddle* s, SUNMatrix Gt, SUNMatrix H) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0, k = na + nc;
+  Nonzeros(Gt, &f->gnz);
+  SolveTransposed(f, n, nc, f->gnz, &f->Q);
+  Nonzeros(H, &f->hnz);
+  f->K.assign(static_cast<size_t>(k * k), 0);
+  sunrealtype* K = f->K.data();
+  AddRowTimes(f->hnz, f->Q, n, nc, -1, K + na * k + na, k);
+  if (na > 0) {
+    AddRowTimes(f->g0nz, f->Q, n, nc, -f->rho, K + na * k, k);
+    AddRowTimes(f->hnz, f->P, n, nc, 1, K + na, k);
+    for (sunindextype c = 0; c < nc; ++c) std::copy_n(&f->C[c * nc], nc, K + c * k);
+  }
+  return DenseLU(&f->K, k, 0, &f->colsK, &f->pivK);
+}
+
+// s->sol = [delta; s] of the system SchurFactorK factored, for [top_scale top; bot_scale bottom].
+void SchurSolve(Saddle* s, sunrealtype top_scale, const sunrealtype* td, sunrealtype bot_scale,
+                const sunrealtype* pd) {
+  SchurFactor* f = &s->sc;
+  const sunindextype n = s->n, nc = s->nc, na = f->rho > 0 ? nc : 0;
+  sunrealtype* sd = N_VGetArrayPointer(s->sol);
+  std::fill(sd, sd + n, 0);
+  for (sunindextype j = 0; j < n; ++j) {  // delta = t0 = B^{-1} top first
+    const sunrealtype x = top_scale * td[j];
+    const sunrealtype* col = f->Binv.data() + j * n;
+    for (sunindextype i = 0; i < n; ++i) sd[i] += x * col[i];
+  }
+  f->r.assign(static_cast<size_t>(na + nc), 0);
+  sunrealtype* ry = f->r.data();
+  sunrealtype* rs = ry + na;
+  for (sunindextype r = 0; r < nc; ++r) rs[r] = bot_scale * pd[r];
+  for (const SaddleEntry& e : f->hnz) rs[e.r] -= e.v * sd[e.c];
+  if (na > 0) {
+    for (const SaddleEntry& e : f->g0nz) ry[e.r] -= f->rho * e.v * sd[e.c];
+  }
+  SUNDlsMat_denseGETRS(f->colsK.data(), na + nc, f->pivK.data(), ry);
+  for (sunindextype r = 0; r < nc; ++r) {
+    const sunrealtype* q = &f->Q[r * n];
+    for (sunindextype i = 0; i < n; ++i) sd[i] -= q[i] * rs[r];
+  }
+  for (sunindextype r = 0; r < na; ++r) {
+    const sunrealtype* p = &f->P[r * n];
+    for (sunindextype i = 0; i < n; ++i) sd[i] += p[i] * ry[r];
+  }
+  std::copy_n(rs, nc, sd + n);
+}
+
 }  // namespace
 
 // With PatternChanged the library's only solver-specific calls (KLU is named here alone).
@@ -174,6 +340,8 @@ int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
   s->n = ce->n;
   s->nc = ce->nc;
   s->N = ce->n + ce->nc;
+  s->schur_fits = s->N <= kSchurMaxSize;
+  s->sc = SchurFactor();
   int flag = ce->LS == nullptr ? CreateDenseSolver(ce, s, func) : AdoptUserSolver(ce, s, func);
   if (flag != CE_SUCCESS) return flag;
   if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_SPARSE &&
@@ -199,7 +367,18 @@ void SaddleFree(Saddle* s) {
 }
 
 int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
-                SUNMatrix H, sunrealtype t, const char* func) {
+                SUNMatrix H, sunrealtype t, const char* func, bool reuse_a, bool* refreshed) {
+  *refreshed = false;
+  s->sc.active = false;
+  if (s->schur_fits && ce->schur) {
+    if (!reuse_a || !s->sc.valid) *refreshed = SchurRefresh(ce, s, kappa, J, Gt);
+    // A singular K means a singular saddle matrix: the full path below reports it.
+    if (s->sc.valid && SchurFactorK(s, Gt, H)) {
+      s->sc.active = true;
+      ++ce->nsetups;
+      return CE_SUCCESS;
+    }
+  }
   CollectEntries(ce, s, kappa, J, Gt, H);
   if (!s->sparse) {
     AssembleDense(s);
@@ -226,10 +405,15 @@ int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
   sunrealtype* bd = N_VGetArrayPointer(s->b);
   const sunrealtype* td = N_VGetArrayPointer(top);
   const sunrealtype* pd = N_VGetArrayPointer(bottom);
-  for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
-  for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
-  N_VConst(0, s->sol);
-  const int rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
+  int rv = 0;
+  if (s->sc.active) {
+    SchurSolve(s, top_scale, td, bot_scale, pd);
+  } else {
+    for (sunindextype i = 0; i < s->n; ++i) bd[i] = top_scale * td[i];
+    for (sunindextype i = 0; i < s->nc; ++i) bd[s->n + i] = bot_scale * pd[i];
+    N_VConst(0, s->sol);
+    rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
+  }
   ++ce->nls_solves;
   if (rv != 0 || !IsFinite(s->sol)) {
     return ProcessError(

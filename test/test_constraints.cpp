@@ -139,6 +139,7 @@ struct RunResult {
   long iters = 0;
   long setups = 0;
   long jac_evals = 0;
+  long constr_jac_evals = 0;
   std::vector<double> q, v, lambda;  // at the end
   double tension_err = 0;            // max relative error of the rod tension from lambda
 };
@@ -155,6 +156,7 @@ struct RunOptions {
   int maxcor = 0;         // > 0: CEodeSetMaxNonlinIters
   double nls_reltol = 0;  // > 0: CEodeSetNonlinTolerances(reltol, 0)
   long msbj = 0;          // > 0: CEodeSetJacEvalFrequency
+  bool schur = true;      // false: CEodeSetSchurComplement(SUNFALSE), the full saddle solve
   Pendulum* problem = nullptr;
 };
 
@@ -202,6 +204,7 @@ RunResult RunPendulum(const RunOptions& o) {
     EXPECT_EQ(CEodeSetNonlinTolerances(mem.get(), o.nls_reltol, 0), CE_SUCCESS);
   }
   if (o.msbj > 0) EXPECT_EQ(CEodeSetJacEvalFrequency(mem.get(), o.msbj), CE_SUCCESS);
+  if (!o.schur) EXPECT_EQ(CEodeSetSchurComplement(mem.get(), SUNFALSE), CE_SUCCESS);
 
   Vector q = SerialVector(3, ctx);
   Vector v = SerialVector(3, ctx);
@@ -235,6 +238,7 @@ RunResult RunPendulum(const RunOptions& o) {
   CEodeGetNumNonlinSolvIters(mem.get(), &res.iters);
   CEodeGetNumLinSolvSetups(mem.get(), &res.setups);
   CEodeGetNumJacEvals(mem.get(), &res.jac_evals);
+  CEodeGetNumConstrJacEvals(mem.get(), &res.constr_jac_evals);
   res.q.assign(N_VGetArrayPointer(q.get()), N_VGetArrayPointer(q.get()) + 3);
   res.v.assign(N_VGetArrayPointer(v.get()), N_VGetArrayPointer(v.get()) + 3);
   if (CEodeGetMultipliers(mem.get(), lam.get()) == CE_SUCCESS) {
@@ -568,6 +572,162 @@ TEST(Constraints, WithoutALinearSolverCeodeBuildsItsOwnDenseSaddlePointSolver) {
   }
   EXPECT_LE(drift, 1e-14);
   EXPECT_LE(err, 1e-8);
+}
+
+// Issue 10: the Schur complement (theory 8.3) takes the same Newton step as the full saddle
+// solve, so both give the same run; the pendulum's M = diag(m, m, 0) is singular, which B =
+// A + rho G0^T G0 covers. The multipliers agree to their resolution (see the KLU test above).
+TEST(Constraints, TheSchurComplementAndTheFullSaddleSolveGiveTheSameNumbersOnThePendulum) {
+  for (bool vdep : {false, true}) {
+    SCOPED_TRACE(vdep ? "vdep" : "no vdep");
+    Pendulum ps, pf;
+    ps.damping = pf.damping = vdep ? 0.3 : 0;
+    RunOptions o;
+    o.h = 1e-3;
+    o.tend = 2;
+    o.zero_start = false;
+    o.vel_dependent = vdep;
+    o.problem = &ps;
+    const RunResult schur = RunPendulum(o);
+    o.schur = false;
+    o.problem = &pf;
+    const RunResult full = RunPendulum(o);
+    ASSERT_EQ(schur.flag, CE_SUCCESS);
+    ASSERT_EQ(full.flag, CE_SUCCESS);
+    EXPECT_EQ(schur.steps, full.steps);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(schur.q[i], full.q[i], 1e-12 * (1 + std::fabs(full.q[i])));
+      EXPECT_NEAR(schur.v[i], full.v[i], 1e-12 * (1 + std::fabs(full.v[i])));
+    }
+    const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * o.h * o.h);
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(schur.lambda[i], full.lambda[i], lambda_resolution);
+    EXPECT_NEAR(schur.error, full.error, 1e-3 * full.error + 1e-14);
+    EXPECT_LE(schur.drift, 1e-14);
+    // f independent of v: the full path refreshes its matrix (with G) at every step, the Schur
+    // path B only every msbj = 20 steps; G is evaluated at every Newton setup on both. With f
+    // depending on v, nje counts the evaluations of df/dv on both paths (reused msbj = 20 steps).
+    if (!vdep) EXPECT_GE(full.jac_evals, full.steps);
+    EXPECT_LE(10 * schur.jac_evals, schur.steps);
+    EXPECT_GE(schur.constr_jac_evals, 2 * schur.steps);
+  }
+}
+
+// The paper's Table 11 figures of the first test, at default settings: at most one evaluation of
+// the iteration matrix in ten steps.
+TEST(Constraints, AtDefaultSettingsThePendulumEvaluatesTheIterationMatrixAtMostOnceInTenSteps) {
+  const auto table = PaperTable11();
+  ASSERT_EQ(table.count(1e-3), 1u);
+  RunOptions o;
+  o.h = 1e-3;
+  const RunResult r = RunPendulum(o);
+  ASSERT_EQ(r.flag, CE_SUCCESS);
+  const double ref = table.at(1e-3).first;
+  EXPECT_NEAR(r.error, ref, 0.1 * ref);
+  EXPECT_LE(r.drift, 1e-14);
+  EXPECT_LE(10 * r.jac_evals, r.steps);
+}
+
+// The planar chain of N = 8 pendulums (the model of bench/wp_chain_dae.cpp: n = 16, nc = 8,
+// M = I, |p_i - p_{i-1}|^2 = l^2), CEODE's own dense solver, t in [0, 1] s at h = 1e-3.
+constexpr long kLinks = 8;
+constexpr double kLink = 1.0 / kLinks;
+
+int ChainRhs(sunrealtype, N_Vector, N_Vector, N_Vector f, void*) {
+  double* F = N_VGetArrayPointer(f);
+  for (long i = 0; i < kLinks; ++i) F[2 * i] = 0, F[2 * i + 1] = -kG;
+  return 0;
+}
+int ChainPhi(sunrealtype, N_Vector x, N_Vector phi, void*) {
+  const double* X = N_VGetArrayPointer(x);
+  double* P = N_VGetArrayPointer(phi);
+  for (long i = 0; i < kLinks; ++i) {
+    const double dx = X[2 * i] - (i > 0 ? X[2 * i - 2] : 0);
+    const double dy = X[2 * i + 1] - (i > 0 ? X[2 * i - 1] : 0);
+    P[i] = dx * dx + dy * dy - kLink * kLink;
+  }
+  return 0;
+}
+int ChainJac(sunrealtype, N_Vector x, SUNMatrix G, void*) {
+  const double* X = N_VGetArrayPointer(x);
+  for (long i = 0; i < kLinks; ++i) {
+    const double dx = X[2 * i] - (i > 0 ? X[2 * i - 2] : 0);
+    const double dy = X[2 * i + 1] - (i > 0 ? X[2 * i - 1] : 0);
+    if (i > 0) {
+      SM_ELEMENT_D(G, i, 2 * i - 2) = -2 * dx;
+      SM_ELEMENT_D(G, i, 2 * i - 1) = -2 * dy;
+    }
+    SM_ELEMENT_D(G, i, 2 * i) = 2 * dx;
+    SM_ELEMENT_D(G, i, 2 * i + 1) = 2 * dy;
+  }
+  return 0;
+}
+
+struct ChainRun {
+  int flag = 0;
+  double error = 0, drift = 0;  // max |E - E0|, max |Phi_i|
+  long steps = 0, jac_evals = 0;
+  std::vector<double> x;
+};
+
+ChainRun RunChain(bool schur) {
+  constexpr long n = 2 * kLinks;
+  constexpr double h = 1e-3, kAngle0 = 0.5;
+  Context ctx;
+  Vector x0 = SerialVector(n, ctx);
+  Vector v0 = SerialVector(n, ctx);
+  double* X0 = N_VGetArrayPointer(x0.get());
+  double e0 = 0;
+  for (long i = 0; i < kLinks; ++i) {
+    X0[2 * i] = (i + 1) * kLink * std::sin(kAngle0);
+    X0[2 * i + 1] = -(i + 1) * kLink * std::cos(kAngle0);
+    e0 += kG * X0[2 * i + 1];
+  }
+  Mem mem(CEodeCreate(ctx));
+  CEodeSetErrFile(mem.get(), nullptr);
+  EXPECT_EQ(CEodeInit(mem.get(), ChainRhs, 0, x0.get(), v0.get()), CE_SUCCESS);
+  CEodeSetMethodByName(mem.get(), "G5_ONES");
+  CEodeSetFixedStep(mem.get(), h);
+  Vector tmpl = SerialVector(kLinks, ctx);
+  EXPECT_EQ(CEodeSetConstraints(mem.get(), tmpl.get(), ChainPhi, ChainJac), CE_SUCCESS);
+  if (!schur) EXPECT_EQ(CEodeSetSchurComplement(mem.get(), SUNFALSE), CE_SUCCESS);
+  Vector x = SerialVector(n, ctx);
+  Vector v = SerialVector(n, ctx);
+  Vector phi = SerialVector(kLinks, ctx);
+  ChainRun r;
+  double t = 0;
+  for (long k = 0; k < 1000 && r.flag >= 0; ++k) {
+    r.flag = CEodeEvolve(mem.get(), t + h, x.get(), v.get(), &t, CE_ONE_STEP);
+    const double* X = N_VGetArrayPointer(x.get());
+    const double* V = N_VGetArrayPointer(v.get());
+    double e = 0;
+    for (long i = 0; i < n; ++i) e += 0.5 * V[i] * V[i] + (i % 2 == 1 ? kG * X[i] : 0);
+    r.error = std::max(r.error, std::fabs(e - e0));
+    ChainPhi(t, x.get(), phi.get(), nullptr);
+    r.drift = std::max(r.drift, N_VMaxNorm(phi.get()));
+  }
+  CEodeGetNumSteps(mem.get(), &r.steps);
+  CEodeGetNumJacEvals(mem.get(), &r.jac_evals);
+  r.x.assign(N_VGetArrayPointer(x.get()), N_VGetArrayPointer(x.get()) + n);
+  return r;
+}
+
+TEST(Constraints, TheSchurComplementAndTheFullSaddleSolveGiveTheSameNumbersOnTheChain) {
+  const ChainRun schur = RunChain(true);
+  const ChainRun full = RunChain(false);
+  ASSERT_EQ(schur.flag, CE_SUCCESS);
+  ASSERT_EQ(full.flag, CE_SUCCESS);
+  ASSERT_EQ(schur.steps, 1000);
+  for (size_t i = 0; i < full.x.size(); ++i) {
+    EXPECT_NEAR(schur.x[i], full.x[i], 1e-12 * (1 + std::fabs(full.x[i])));
+  }
+  EXPECT_NEAR(schur.error, full.error, 1e-3 * full.error + 1e-14);
+  // bench/wp_chain_dae.cpp's check: drift <= 1e-10 l^2.
+  EXPECT_LE(schur.drift, 1e-10 * kLink * kLink);
+  EXPECT_LE(full.drift, 1e-10 * kLink * kLink);
+  EXPECT_LE(10 * schur.jac_evals, schur.steps);
+  EXPECT_GE(full.jac_evals, full.steps);
+  std::printf("  chain: error %.3e / %.3e, drift %.3e / %.3e, nje %ld / %ld (Schur / full)\n",
+              schur.error, full.error, schur.drift, full.drift, schur.jac_evals, full.jac_evals);
 }
 
 }  // namespace

@@ -118,6 +118,10 @@ SUNDIALS_EXPORT int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac);
 SUNDIALS_EXPORT int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi,
                                         CEodeConstrJacFn G);
 SUNDIALS_EXPORT int CEodeGetMultipliers(void* mem, N_Vector lambda);
+/* SUNTRUE (default): saddle systems with n + nc <= 200 are solved by the Schur complement of
+ * a block factored once and kept across steps (docs/theory.md section 8.3); SUNFALSE: the full
+ * saddle-point matrix is assembled and factored by the linear solver at every setup. */
+SUNDIALS_EXPORT int CEodeSetSchurComplement(void* mem, sunbooleantype use);
 
 /* Optional outputs (ceode_io.cpp) */
 SUNDIALS_EXPORT int CEodeGetAccel(void* mem, N_Vector a);
@@ -135,6 +139,7 @@ SUNDIALS_EXPORT int CEodeGetNumJacEvals(void* mem, long int* njevals);
 SUNDIALS_EXPORT int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* nfevalsLS);
 SUNDIALS_EXPORT int CEodeGetNumMassEvals(void* mem, long int* nmevals);
 SUNDIALS_EXPORT int CEodeGetNumConstrEvals(void* mem, long int* ncevals);
+SUNDIALS_EXPORT int CEodeGetNumConstrJacEvals(void* mem, long int* ngevals);
 SUNDIALS_EXPORT int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max);
 SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
 SUNDIALS_EXPORT int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt);
