@@ -91,6 +91,9 @@ struct FusedTerms {
 };
 struct FusedPlan {
   int n = 0;
+  // 1 + the index of the plan's shape among those with a kernel of their own (ceode_fused.cpp,
+  // kShapes: every term count a compile-time constant), 0 for none.
+  int shape = 0;
   FusedTerms terms[kMaxDegree];
 };
 
