@@ -414,11 +414,22 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs) {
   for (int k = 0; k < plan.n; ++k) RunCombo(plan.combos[k], cs);
 }
 
-sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
-  if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run(fp, n);
-  if (n == 1) return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
-  return n < kSmallSystem ? UpdateSmall(fp, n) : UpdateBlocked(fp, n);
+namespace {
+
+sunrealtype UpdateOne(const FusedPlan& fp, sunindextype /*n*/) {
+  return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
 }
+sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(fp, n); }
+
+}  // namespace
+
+SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
+  if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
+  if (n == 1) return &UpdateOne;
+  return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
+}
+
+sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKernel(fp, n)(fp, n); }
 
 namespace {
 

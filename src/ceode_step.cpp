@@ -450,17 +450,21 @@ sunrealtype FormUpdate(CEodeMemRec* ce) { return Update(ce); }
 
 namespace {
 
-// Whether a finite ||x||_1 has grown explosively.
-inline bool Exploded(const CEodeMemRec* ce, sunrealtype xl1) {
+// The bound on ||x||_1 relative to the start's, and whether a finite ||x||_1 has grown past it
+// (or past an absolute limit): explosively.
+inline sunrealtype GrowthBound(const CEodeMemRec* ce) {
   constexpr sunrealtype kGrowthLimit = 1e15;
+  return kGrowthLimit * (1 + ce->xl1_start);
+}
+inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
   constexpr sunrealtype kAbsoluteLimit = 1e150;
-  return xl1 > kAbsoluteLimit || xl1 > kGrowthLimit * (1 + ce->xl1_start);
+  return xl1 > kAbsoluteLimit || xl1 > bound;
 }
 
 // Explosive growth or a non-finite state: stop long before overflow, while the state is still
 // readable, and say whether f or the step size is to blame.
 int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func) {
-  if (std::isfinite(xl1) && Exploded(ce, xl1)) {
+  if (std::isfinite(xl1) && Exploded(xl1, GrowthBound(ce))) {
     return ProcessError(ce, CE_UNSTABLE, func,
                         "The state grew explosively: ||x||_1 = %g at t = %.17g (step %ld), %g at "
                         "the start. h = %g is most likely beyond the stability limit of %s (h * "
@@ -529,7 +533,7 @@ int TakeStep(CEodeMemRec* ce) {
   int flag = ce->solve_accel(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
   if (flag == CE_SUCCESS) {
     const sunrealtype xl1 = Update(ce);
-    if (!std::isfinite(xl1) || Exploded(ce, xl1)) flag = CheckState(ce, t, xl1, func);
+    if (!std::isfinite(xl1) || Exploded(xl1, GrowthBound(ce))) flag = CheckState(ce, t, xl1, func);
   }
   if (flag != CE_SUCCESS) return flag;
   Commit(ce, t);
@@ -542,6 +546,8 @@ namespace {
 // The vectors f reads and writes in one of the six configurations of the step.
 struct PhaseVectors {
   N_Vector x, v, a;
+  const FusedPlan* plan;
+  SerialKernelFn update;  // UpdateSerial's kernel for the plan, chosen once
 };
 
 // Below this many steps to go the table of the lean loop costs more than it saves (CE_ONE_STEP).
@@ -557,9 +563,12 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
   PhaseVectors pv[kNumPlans];
   int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
   for (int j = 0; j < kNumPlans; ++j) {
-    pv[(ip + j) % kNumPlans] = {ce->xnext, ce->D[1], ce->Dnew[2]};
+    const int i = (ip + j) % kNumPlans;
+    pv[i] = {ce->xnext, ce->D[1], ce->Dnew[2], &ce->fused_plans[i],
+             SerialKernel(ce->fused_plans[i], ce->n)};
     RotateVectors(ce);
   }
+  const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
   long int k = 0;
   int rv = 0;
   sunrealtype t = 0;
@@ -572,8 +581,8 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
     rv = ce->f(t, p.x, p.v, p.a, ce->user_data);
     ++ce->nfe;
     if (rv != 0) break;
-    xl1 = UpdateSerial(ce->fused_plans[ip], ce->n);
-    state_ok = std::isfinite(xl1) && !Exploded(ce, xl1);
+    xl1 = p.update(*p.plan, ce->n);
+    state_ok = std::isfinite(xl1) && !Exploded(xl1, bound);
     if (!state_ok) break;
     ce->tcur = t;
     ++ce->nsteps_h;
