@@ -158,18 +158,18 @@ int EvolveTarget(CEodeMemRec* ce, const char* func, sunrealtype tout, int itask,
 
 // Steps while the target lies beyond the current interval [tcur, tcur + h].
 int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
-  const sunrealtype h = ce->h;
   long int nsteps = 0;
-  while (target - ce->tcur > h * (1 - 1e-8)) {
+  while (StepsRemain(ce, target)) {
     if (nsteps >= ce->mxstep) {
       return ProcessError(ce, CE_TOO_MUCH_WORK, func,
                           "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
                           "the limit with CEodeSetMaxNumSteps or use a larger h.",
                           nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
     }
-    const int flag = TakeStep(ce);
+    long int taken = 0;
+    const int flag = TakeSteps(ce, target, ce->mxstep - nsteps, &taken);
+    nsteps += taken;
     if (flag != CE_SUCCESS) return flag;
-    ++nsteps;
   }
   return CE_SUCCESS;
 }

@@ -203,6 +203,66 @@ inline sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   return sum;
 }
 
+// The term counts of the step's sums for degree d (BuildUpdatePlan, each with its accumulated
+// term appended): z from a and D_2 .. D_{d-1} (d > 3), D_1 and D_3 .. D_{d-2} from the history
+// above them, z and the old value, the position from D_1 .. D_{d-2}, both z and x(t). A blend
+// parameter p_k = 1 zeroes one weight (of D_{d-1}(t - h) in the sum of level k, level 0 the
+// position), and BuildUpdatePlan drops zero weights: bit k of ones says p_k = 1.
+constexpr int StepSums(int d) { return d - 1; }
+constexpr int StepTerms(int d, unsigned ones, int s) {
+  const bool position = s == StepSums(d) - 1;
+  const int level = position ? 0 : (d > 3 ? (s == 0 ? 2 : (s == 1 ? 1 : s + 1)) : 1);
+  const int full = position ? d + 1 : (level == 2 ? d - 1 : d + 1 - level);
+  return full - static_cast<int>((ones >> level) & 1U);
+}
+
+// One entry of sum S of a plan of a known shape: its term count is a constant, so no dispatch.
+template <int D, unsigned Ones, int S>
+inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
+  const FusedTerms& tk = fp.terms[S];
+  const sunrealtype y = TermsAt<StepTerms(D, Ones, S)>(tk, i);  // compensated: increment - comp
+  if (tk.old == nullptr) {
+    tk.out[i] = y;
+  } else {
+    const sunrealtype nw = tk.old[i] + y;
+    tk.out[i] = nw;
+    tk.compnew[i] = (nw - tk.old[i]) - y;
+  }
+}
+
+// UpdateSmall with the sums of one shape unrolled: the same operations in the same order.
+template <int D, unsigned Ones, std::size_t... S>
+inline sunrealtype UpdateShaped(const FusedPlan& fp, sunindextype n,
+                                std::index_sequence<S...> /*sums*/) {
+  const sunrealtype* xout = fp.terms[StepSums(D) - 1].out;
+  sunrealtype sum = 0;
+  for (sunindextype i = 0; i < n; ++i) {
+    (ShapedSum<D, Ones, static_cast<int>(S)>(fp, i), ...);
+    sum += std::fabs(xout[i]);
+  }
+  return sum;
+}
+
+template <int D, unsigned Ones>
+sunrealtype UpdateShape(const FusedPlan& fp, sunindextype n) {
+  constexpr auto kSums = std::make_index_sequence<StepSums(D)>{};
+  return n == 1 ? UpdateShaped<D, Ones>(fp, 1, kSums) : UpdateShaped<D, Ones>(fp, n, kSums);
+}
+
+// The shapes with a kernel of their own: every degree with no p_k = 1, and the named sets that
+// have some (G3_CD: p_0; G5: p_1 .. p_3; G5_ONES: all). Other plans take UpdateSmall.
+struct Shape {
+  int d;
+  unsigned ones;
+  sunrealtype (*run)(const FusedPlan&, sunindextype);
+};
+constexpr Shape kShapes[] = {
+    {3, 0, &UpdateShape<3, 0>}, {3, 1, &UpdateShape<3, 1>},   {4, 0, &UpdateShape<4, 0>},
+    {5, 0, &UpdateShape<5, 0>}, {5, 14, &UpdateShape<5, 14>}, {5, 15, &UpdateShape<5, 15>},
+    {6, 0, &UpdateShape<6, 0>}, {7, 0, &UpdateShape<7, 0>},   {8, 0, &UpdateShape<8, 0>},
+};
+constexpr int kNumShapes = static_cast<int>(sizeof(kShapes) / sizeof(kShapes[0]));
+
 // Four partial sums: the norm is a dependency chain of additions otherwise, slower than the
 // update itself on large vectors. It only feeds the growth check, so its rounding (not that of
 // N_VL1Norm's order) does not reach the state.
@@ -354,10 +414,22 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs) {
   for (int k = 0; k < plan.n; ++k) RunCombo(plan.combos[k], cs);
 }
 
-sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
-  if (n == 1) return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
-  return n < kSmallSystem ? UpdateSmall(fp, n) : UpdateBlocked(fp, n);
+namespace {
+
+sunrealtype UpdateOne(const FusedPlan& fp, sunindextype /*n*/) {
+  return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
 }
+sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(fp, n); }
+
+}  // namespace
+
+SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
+  if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
+  if (n == 1) return &UpdateOne;
+  return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
+}
+
+sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKernel(fp, n)(fp, n); }
 
 namespace {
 
@@ -367,6 +439,21 @@ namespace {
 sunrealtype* DataOf(N_Vector v) {
   if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
   return N_VGetArrayPointer(v);
+}
+
+// 1 + the index in kShapes of the plan's shape (term counts, no in-place sum), 0 for none.
+int ShapeOf(const FusedPlan& fp) {
+  for (int k = 0; k < fp.n; ++k) {
+    if (fp.terms[k].in_place) return 0;
+  }
+  for (int i = 0; i < kNumShapes; ++i) {
+    bool same = StepSums(kShapes[i].d) == fp.n;
+    for (int k = 0; same && k < fp.n; ++k) {
+      same = fp.terms[k].form == StepTerms(kShapes[i].d, kShapes[i].ones, k);
+    }
+    if (same) return i + 1;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -403,6 +490,7 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
+  fp->shape = distinct ? ShapeOf(*fp) : 0;
   return distinct;
 }
 

@@ -28,6 +28,9 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
 // differ from N_VL1Norm by rounding (n * unit round-off relative); the outputs are bitwise
 // those of UpdateReference.
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
+// The kernel UpdateSerial runs on the plan at length n, for a caller that runs it many times.
+using SerialKernelFn = sunrealtype (*)(const FusedPlan&, sunindextype);
+SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
 // The raw-pointer form of a plan (vectors that expose their data). Returns false when some
 // combination writes a vector it also reads, other than its own accumulated quantity without
 // compensation (an in-place plan's, read entry by entry before it is written): the serial

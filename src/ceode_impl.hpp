@@ -91,6 +91,9 @@ struct FusedTerms {
 };
 struct FusedPlan {
   int n = 0;
+  // 1 + the index of the plan's shape among those with a kernel of their own (ceode_fused.cpp,
+  // kShapes: every term count a compile-time constant), 0 for none.
+  int shape = 0;
   FusedTerms terms[kMaxDegree];
 };
 
@@ -302,6 +305,12 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false
 
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);
+// Whether the step interval [tcur, tcur + h] ends before target (CEodeEvolve steps while it does).
+inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
+  return target - ce->tcur > ce->h * (1 - 1e-8);
+}
+// Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
+int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
 // The step's update from the acceleration in Dnew[2]: z and the new derivatives
 // into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
 sunrealtype FormUpdate(CEodeMemRec* ce);

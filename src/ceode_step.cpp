@@ -173,16 +173,21 @@ void FreeVectors(CEodeMemRec* ce) {
   ce->initialized = false;
 }
 
+namespace {
+
+int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func) {
+  return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                      "The right-hand side function failed (returned %d) at t = %.17g. A fixed "
+                      "step cannot retry with a smaller h: fix f or reduce h.",
+                      rv, static_cast<double>(t));
+}
+
+}  // namespace
+
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
   const int rv = ce->f(t, x, v, f, ce->user_data);
   ++ce->nfe;
-  if (rv != 0) {
-    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                        "The right-hand side function failed (returned %d) at t = %.17g. A fixed "
-                        "step cannot retry with a smaller h: fix f or reduce h.",
-                        rv, static_cast<double>(t));
-  }
-  return CE_SUCCESS;
+  return rv == 0 ? CE_SUCCESS : RhsFailed(ce, rv, t, func);
 }
 
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
@@ -445,12 +450,21 @@ sunrealtype FormUpdate(CEodeMemRec* ce) { return Update(ce); }
 
 namespace {
 
+// The bound on ||x||_1 relative to the start's, and whether a finite ||x||_1 has grown past it
+// (or past an absolute limit): explosively.
+inline sunrealtype GrowthBound(const CEodeMemRec* ce) {
+  constexpr sunrealtype kGrowthLimit = 1e15;
+  return kGrowthLimit * (1 + ce->xl1_start);
+}
+inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
+  constexpr sunrealtype kAbsoluteLimit = 1e150;
+  return xl1 > kAbsoluteLimit || xl1 > bound;
+}
+
 // Explosive growth or a non-finite state: stop long before overflow, while the state is still
 // readable, and say whether f or the step size is to blame.
 int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func) {
-  constexpr sunrealtype kGrowthLimit = 1e15;
-  constexpr sunrealtype kAbsoluteLimit = 1e150;
-  if (std::isfinite(xl1) && (xl1 > kAbsoluteLimit || xl1 > kGrowthLimit * (1 + ce->xl1_start))) {
+  if (std::isfinite(xl1) && Exploded(xl1, GrowthBound(ce))) {
     return ProcessError(ce, CE_UNSTABLE, func,
                         "The state grew explosively: ||x||_1 = %g at t = %.17g (step %ld), %g at "
                         "the start. h = %g is most likely beyond the stability limit of %s (h * "
@@ -485,7 +499,8 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
 // The new derivatives become the history; the three positions rotate.
 // Whole arrays, not the degree's slots: a fixed-length swap compiles to a few vector moves
 // instead of a loop; the slots at and above the degree are spare buffers and D[0] is unused.
-void Commit(CEodeMemRec* ce, sunrealtype t) {
+// Six rotations are the identity (kNumPlans).
+inline void RotateVectors(CEodeMemRec* ce) {
   if (ce->in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
@@ -497,6 +512,10 @@ void Commit(CEodeMemRec* ce, sunrealtype t) {
   ce->xnext = ce->xnew;
   ce->xnew = old;
   if (ce->compensated) std::swap(ce->comp, ce->compnew);
+}
+
+void Commit(CEodeMemRec* ce, sunrealtype t) {
+  RotateVectors(ce);
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
@@ -512,11 +531,85 @@ int TakeStep(CEodeMemRec* ce) {
   const sunrealtype t = StepTime(ce, 1);
   const sunrealtype tnext = StepTime(ce, 2);
   int flag = ce->solve_accel(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
-  if (flag == CE_SUCCESS) flag = CheckState(ce, t, Update(ce), func);
+  if (flag == CE_SUCCESS) {
+    const sunrealtype xl1 = Update(ce);
+    if (!std::isfinite(xl1) || Exploded(xl1, GrowthBound(ce))) flag = CheckState(ce, t, xl1, func);
+  }
   if (flag != CE_SUCCESS) return flag;
   Commit(ce, t);
   if (ce->guard_every > 0 && ce->nst % ce->guard_every == 0) return GuardCheck(ce, func);
   return CE_SUCCESS;
+}
+
+namespace {
+
+// The vectors f reads and writes in one of the six configurations of the step.
+struct PhaseVectors {
+  N_Vector x, v, a;
+  const FusedPlan* plan;
+  SerialKernelFn update;  // UpdateSerial's kernel for the plan, chosen once
+};
+
+// Below this many steps to go the table of the lean loop costs more than it saves (CE_ONE_STEP).
+constexpr long int kLeanMinSteps = 8;
+
+// TakeStep's explicit step on serial vectors without a mass matrix, many in a row: f's vectors
+// come from a table of the six configurations and the vectors rotate once at the end, so that a
+// step at n = 1 is f, the update and a few tests (bench_step, docs/results.md). Every exit
+// first brings the vectors to the state TakeStep would have left, then reports as it does.
+__attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype target,
+                                                long int max_steps, long int* taken) {
+  static const char* func = "CEodeEvolve";
+  PhaseVectors pv[kNumPlans];
+  int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
+  for (int j = 0; j < kNumPlans; ++j) {
+    const int i = (ip + j) % kNumPlans;
+    pv[i] = {ce->xnext, ce->D[1], ce->Dnew[2], &ce->fused_plans[i],
+             SerialKernel(ce->fused_plans[i], ce->n)};
+    RotateVectors(ce);
+  }
+  const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
+  long int k = 0;
+  int rv = 0;
+  sunrealtype t = 0;
+  sunrealtype xl1 = 0;
+  bool state_ok = true;
+  bool guard_due = false;
+  while (k < max_steps && StepsRemain(ce, target)) {
+    t = StepTime(ce, 1);
+    const PhaseVectors& p = pv[ip];
+    rv = ce->f(t, p.x, p.v, p.a, ce->user_data);
+    ++ce->nfe;
+    if (rv != 0) break;
+    xl1 = p.update(*p.plan, ce->n);
+    state_ok = std::isfinite(xl1) && !Exploded(xl1, bound);
+    if (!state_ok) break;
+    ce->tcur = t;
+    ++ce->nsteps_h;
+    ++ce->nst;
+    ++k;
+    ip = ip == kNumPlans - 1 ? 0 : ip + 1;
+    guard_due = ce->guard_every > 0 && ce->nst % ce->guard_every == 0;
+    if (guard_due) break;
+  }
+  for (long int j = 0; j < k % kNumPlans; ++j) RotateVectors(ce);
+  *taken = k;
+  if (rv != 0) return RhsFailed(ce, rv, t, func);
+  if (!state_ok) return CheckState(ce, t, xl1, func);
+  return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
+}
+
+}  // namespace
+
+int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
+  // The distance first: a CE_ONE_STEP call decides on it alone.
+  const bool lean = target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps &&
+                    ce->fused && ce->fused_ready && ce->solve_accel == SolveExplicit &&
+                    ce->mfn == nullptr && ce->M == nullptr;
+  if (lean) return LeanExplicitSteps(ce, target, max_steps, taken);
+  const int flag = TakeStep(ce);
+  *taken = flag == CE_SUCCESS ? 1 : 0;
+  return flag;
 }
 
 namespace {
