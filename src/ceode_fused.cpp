@@ -182,6 +182,18 @@ inline sunrealtype SumAtForm(const FusedTerms& tk, sunindextype i) {
 }
 static_assert(kMaxTerms == 11, "SumAtForm lists every term count");
 
+// Entry i of one sum, y its compensated increment (increment - comp): a plain value, or added to
+// the old one with the new compensation.
+inline void StoreSum(const FusedTerms& tk, sunindextype i, sunrealtype y) {
+  if (tk.old == nullptr) {
+    tk.out[i] = y;
+  } else {
+    const sunrealtype nw = tk.old[i] + y;
+    tk.out[i] = nw;
+    tk.compnew[i] = (nw - tk.old[i]) - y;
+  }
+}
+
 // Small systems: entry by entry, every sum of the plan on it, no loop set-up per sum.
 inline sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
@@ -189,14 +201,7 @@ inline sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   for (sunindextype i = 0; i < n; ++i) {
     for (int k = 0; k < fp.n; ++k) {
       const FusedTerms& tk = fp.terms[k];
-      const sunrealtype y = SumAtForm(tk, i);  // compensated: increment - comp
-      if (tk.old == nullptr) {
-        tk.out[i] = y;
-      } else {
-        const sunrealtype nw = tk.old[i] + y;
-        tk.out[i] = nw;
-        tk.compnew[i] = (nw - tk.old[i]) - y;
-      }
+      StoreSum(tk, i, SumAtForm(tk, i));
     }
     sum += std::fabs(xout[i]);
   }
@@ -220,14 +225,7 @@ constexpr int StepTerms(int d, unsigned ones, int s) {
 template <int D, unsigned Ones, int S>
 inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
   const FusedTerms& tk = fp.terms[S];
-  const sunrealtype y = TermsAt<StepTerms(D, Ones, S)>(tk, i);  // compensated: increment - comp
-  if (tk.old == nullptr) {
-    tk.out[i] = y;
-  } else {
-    const sunrealtype nw = tk.old[i] + y;
-    tk.out[i] = nw;
-    tk.compnew[i] = (nw - tk.old[i]) - y;
-  }
+  StoreSum(tk, i, TermsAt<StepTerms(D, Ones, S)>(tk, i));
 }
 
 // UpdateSmall with the sums of one shape unrolled: the same operations in the same order.
