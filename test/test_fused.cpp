@@ -123,10 +123,14 @@ int FailingChainRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* dat
 struct FailedRun {
   int flag = 0;
   sunrealtype t = 0;
+  long steps = 0;
   RunResult state;
 };
 
-FailedRun RunToFailure(bool in_place, bool nan) {
+// fused = false takes the generic step, one TakeStep at a time; fused without a mass matrix takes
+// the lean loop of many explicit steps (src/ceode_step.cpp). guard_every > 0 checks the stability
+// guard every so many steps (an early exit of that loop).
+FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_every = 0) {
   constexpr sunindextype kN = 2 * ceode::kInPlaceMinLen;
   SUNContext ctx = nullptr;
   SUNContext_Create(SUN_COMM_NULL, &ctx);
@@ -143,10 +147,14 @@ FailedRun RunToFailure(bool in_place, bool nan) {
   EXPECT_EQ(CEodeSetErrFile(mem, nullptr), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem, "G4_A34"), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
+  EXPECT_EQ(
+      CEodeSetStabilityGuard(mem, guard_every > 0 ? CE_GUARD_WARN : CE_GUARD_OFF, guard_every),
+      CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetInPlaceUpdate(mem, in_place ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   FailedRun r;
   r.flag = CEodeEvolve(mem, 5.0, x, v, &r.t, CE_NORMAL);
+  EXPECT_EQ(CEodeGetNumSteps(mem, &r.steps), CE_SUCCESS);
   r.state.x.assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
   r.state.v.assign(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
   CEodeFree(&mem);
@@ -180,6 +188,26 @@ TEST(InPlaceUpdate, ANonFiniteAccelerationKeepsTheLastGoodPositionOnly) {
   EXPECT_TRUE(in_place.state.x == exact.state.x);
   for (sunrealtype vi : exact.state.v) ASSERT_TRUE(std::isfinite(vi));
   EXPECT_FALSE(std::isfinite(in_place.state.v[7]));
+}
+
+// The lean loop leaves on f's failure, on a non-finite update and for the guard's check; each
+// time the state, the time and the step count are those of the generic step-by-step path.
+TEST(LeanExplicitLoop, LeavesTheStateOfTheStepByStepPathOnEveryEarlyExit) {
+  for (bool nan : {false, true}) {
+    for (long guard_every : {0L, 7L}) {
+      SCOPED_TRACE(std::string(nan ? "non-finite f" : "failing f") + " guard every " +
+                   std::to_string(guard_every));
+      const FailedRun generic = RunToFailure(false, nan, false, guard_every);
+      const FailedRun lean = RunToFailure(false, nan, true, guard_every);
+      EXPECT_EQ(generic.flag, CE_RHSFUNC_FAIL);
+      EXPECT_EQ(lean.flag, generic.flag);
+      EXPECT_EQ(lean.t, generic.t);
+      EXPECT_EQ(lean.steps, generic.steps);
+      EXPECT_GT(generic.steps, 150);
+      EXPECT_TRUE(lean.state.x == generic.state.x);
+      EXPECT_TRUE(lean.state.v == generic.state.v);
+    }
+  }
 }
 
 // One unknown: the entry-by-entry kernel, which also runs the high-degree start's Taylor samples
