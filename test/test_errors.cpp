@@ -109,6 +109,8 @@ TEST(NullMemory, IsRejectedByEveryKindOfCallWithAHintToCreateIt) {
   EXPECT_EQ(CEodeSetMethodByName(nullptr, "G5"), CE_MEM_NULL);
   EXPECT_EQ(CEodeEvolve(nullptr, 1, x.get(), x.get(), &t, CE_NORMAL), CE_MEM_NULL);
   EXPECT_EQ(CEodeGetNumSteps(nullptr, &n), CE_MEM_NULL);
+  EXPECT_EQ(CEodeGetNumConstrJacEvals(nullptr, &n), CE_MEM_NULL);
+  EXPECT_EQ(CEodeSetSchurComplement(nullptr, SUNFALSE), CE_MEM_NULL);
   EXPECT_EQ(CEodePrintAllStats(nullptr, stdout, SUN_OUTPUTFORMAT_TABLE), CE_MEM_NULL);
   EXPECT_EQ(CEodeCreate(nullptr), nullptr);
   void* none = nullptr;
@@ -119,6 +121,12 @@ TEST(NullMemory, IsRejectedByEveryKindOfCallWithAHintToCreateIt) {
   EXPECT_TRUE(Contains(err, "CE_MEM_NULL"));
   EXPECT_TRUE(Contains(err, "CEodeCreate"));
   EXPECT_TRUE(Contains(err, "SUNContext_Create"));
+}
+
+TEST_F(BadInput, TheConstraintJacobianCounterRefusesANullOutputPointer) {
+  ASSERT_EQ(Init(), CE_SUCCESS);
+  EXPECT_EQ(CEodeGetNumConstrJacEvals(mem(), nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(LastMessage("CEodeGetNumConstrJacEvals"), "output pointer is NULL"));
 }
 
 TEST_F(BadInput, InitRejectsInitialVectorsOfDifferentLengths) {
