@@ -452,22 +452,36 @@ TEST(Constraints, AFailingConstraintCallbackGivesConstrFailAndTheMemoryStaysUsab
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(N_VGetArrayPointer(q.get())[i], ref.q[i], 1e-12);
 }
 
+// Two runs of the pendulum (damped when vdep) from a consistent start over [0, 2] at h = kTwoWaysH,
+// each on a fresh problem: once as configured, once after `change` has altered the options.
+constexpr double kTwoWaysH = 1e-3;
+struct TwoRuns {
+  RunResult first, second;
+};
+TwoRuns RunPendulumTwoWays(bool vdep, bool user_jac, void (*change)(RunOptions*)) {
+  Pendulum p1, p2;
+  p1.damping = p2.damping = vdep ? 0.3 : 0;
+  RunOptions o;
+  o.h = kTwoWaysH;
+  o.tend = 2;
+  o.zero_start = false;
+  o.vel_dependent = vdep;
+  o.user_jac = user_jac;
+  o.problem = &p1;
+  TwoRuns r;
+  r.first = RunPendulum(o);
+  change(&o);
+  o.problem = &p2;
+  r.second = RunPendulum(o);
+  return r;
+}
+
 TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
   for (bool vdep : {false, true}) {
     SCOPED_TRACE(vdep ? "vdep" : "no vdep");
-    Pendulum pd, ps;
-    pd.damping = ps.damping = vdep ? 0.3 : 0;
-    RunOptions o;
-    o.h = 1e-3;
-    o.tend = 2;
-    o.zero_start = false;
-    o.vel_dependent = vdep;
-    o.user_jac = vdep;
-    o.problem = &pd;
-    const RunResult dense = RunPendulum(o);
-    o.sparse = true;
-    o.problem = &ps;
-    const RunResult sparse = RunPendulum(o);
+    const TwoRuns r = RunPendulumTwoWays(vdep, vdep, [](RunOptions* o) { o->sparse = true; });
+    const RunResult& dense = r.first;
+    const RunResult& sparse = r.second;
     ASSERT_EQ(dense.flag, CE_SUCCESS);
     ASSERT_EQ(sparse.flag, CE_SUCCESS);
     for (int i = 0; i < 3; ++i) {
@@ -478,7 +492,7 @@ TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
     // round-off, so each run's a and lambda are resolved to about eps |x| m / mu (1.8e-10 at
     // h = 1e-3 for G5_ONES, mu = 1.25 h^2), whatever the linear solver. Two runs whose roundings
     // differ can therefore differ by twice that. Positions and velocities agree to 1e-12.
-    const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * o.h * o.h);
+    const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * kTwoWaysH * kTwoWaysH);
     for (int i = 0; i < 2; ++i) {
       EXPECT_NEAR(dense.lambda[i], sparse.lambda[i], lambda_resolution);
     }
@@ -580,18 +594,9 @@ TEST(Constraints, WithoutALinearSolverCeodeBuildsItsOwnDenseSaddlePointSolver) {
 TEST(Constraints, TheSchurComplementAndTheFullSaddleSolveGiveTheSameNumbersOnThePendulum) {
   for (bool vdep : {false, true}) {
     SCOPED_TRACE(vdep ? "vdep" : "no vdep");
-    Pendulum ps, pf;
-    ps.damping = pf.damping = vdep ? 0.3 : 0;
-    RunOptions o;
-    o.h = 1e-3;
-    o.tend = 2;
-    o.zero_start = false;
-    o.vel_dependent = vdep;
-    o.problem = &ps;
-    const RunResult schur = RunPendulum(o);
-    o.schur = false;
-    o.problem = &pf;
-    const RunResult full = RunPendulum(o);
+    const TwoRuns r = RunPendulumTwoWays(vdep, false, [](RunOptions* o) { o->schur = false; });
+    const RunResult& schur = r.first;
+    const RunResult& full = r.second;
     ASSERT_EQ(schur.flag, CE_SUCCESS);
     ASSERT_EQ(full.flag, CE_SUCCESS);
     EXPECT_EQ(schur.steps, full.steps);
@@ -599,7 +604,7 @@ TEST(Constraints, TheSchurComplementAndTheFullSaddleSolveGiveTheSameNumbersOnThe
       EXPECT_NEAR(schur.q[i], full.q[i], 1e-12 * (1 + std::fabs(full.q[i])));
       EXPECT_NEAR(schur.v[i], full.v[i], 1e-12 * (1 + std::fabs(full.v[i])));
     }
-    const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * o.h * o.h);
+    const double lambda_resolution = 2 * 2.2e-16 * kL * kM / (1.25 * kTwoWaysH * kTwoWaysH);
     for (int i = 0; i < 2; ++i) EXPECT_NEAR(schur.lambda[i], full.lambda[i], lambda_resolution);
     EXPECT_NEAR(schur.error, full.error, 1e-3 * full.error + 1e-14);
     EXPECT_LE(schur.drift, 1e-14);
