@@ -90,13 +90,13 @@ struct Stepper {
   N_Vector Fv[kMaxForcing] = {};
   long int nrestarts = 0;
   // What the next restart can reuse (docs/porting.md, "What a restart costs"): at t_end, the
-  // end of the last inner run, the fast acceleration g and, for degree 4, the g part of the
-  // jerk along the old x' and r_x(t_end). Valid while the state has not been changed since.
+  // end of the last inner run, the g parts g_end[k] = D_k - (r_v + r_x')^(k-2) of the history's
+  // derivatives D_2 .. D_{d-1} (the old x' in them) and r_x(t_end). Valid while the state has
+  // not been changed since.
   bool end_valid = false;
   int end_degree = 0;
   sunrealtype t_end = 0;
-  N_Vector g_end = nullptr;
-  N_Vector j_end = nullptr;
+  N_Vector g_end[kMaxDegree] = {};
   N_Vector rx_end = nullptr;
   N_Vector ytmp = nullptr;  // for the comparison of a reset state with the owned one
 };
@@ -118,8 +118,10 @@ void DestroyStepper(Stepper* st) {
   FreeSlot(&st->io_view);
   FreeSlot(&st->io2_view);
   for (ViewSlot& s : st->forcing_view) FreeSlot(&s);
-  for (N_Vector w :
-       {st->y_own, st->u, st->rx, st->vg, st->g_end, st->j_end, st->rx_end, st->ytmp}) {
+  for (N_Vector w : {st->y_own, st->u, st->rx, st->vg, st->rx_end, st->ytmp}) {
+    if (w != nullptr) N_VDestroy(w);
+  }
+  for (N_Vector w : st->g_end) {
     if (w != nullptr) N_VDestroy(w);
   }
   delete st;
@@ -251,13 +253,10 @@ int Allocate(Stepper* st, N_Vector y, const char* func) {
   st->u = N_VClone(ce->xcur);
   st->rx = N_VClone(ce->xcur);
   st->vg = N_VClone(ce->xcur);
-  st->g_end = N_VClone(ce->xcur);
-  st->j_end = N_VClone(ce->xcur);
   st->rx_end = N_VClone(ce->xcur);
   st->ytmp = N_VClone(y);
   if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr ||
-      st->g_end == nullptr || st->j_end == nullptr || st->rx_end == nullptr ||
-      st->ytmp == nullptr) {
+      st->rx_end == nullptr || st->ytmp == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   return CE_SUCCESS;
@@ -371,26 +370,26 @@ void StepperSetStopTime(Stepper* st, sunrealtype tstop) {
 #endif
 
 // The cheap restart needs the history to be the explicit path's (D_2 = G at the end point,
-// exactly) and a degree whose top derivative can be carried over (3: none, 4: the jerk).
+// exactly; with declared velocity dependence D_2 comes from the implicit solve and g_v would
+// enter the jerk) and a consistent one (not the zero start).
 bool CanReuse(const Stepper* st) {
   const CEodeMemRec* ce = st->ce;
-  return !ce->vel_dependent && !ce->zero_start && (ce->degree == 3 || ce->degree == 4);
+  return !ce->vel_dependent && !ce->zero_start;
 }
 
-// After an inner run that ended on a step: strip the old forcing from the history at t_end.
-// g(t, x) = D_2 - r_v - r_x' and the g part of the jerk, D_3 - r_v' - r_x''.
+// After an inner run that ended on a step: strip the old forcing from the history at t_end,
+// g_end[k] = D_k - r_v^(k-2) - r_x^(k-1), k = 2 .. d-1 (for k = 2: g(t, x) itself).
 void CaptureEnd(Stepper* st) {
   CEodeMemRec* ce = st->ce;
   st->end_valid = false;
   if (!CanReuse(st) || !ce->started) return;
   const sunrealtype t = ce->tcur;
-  ForcingAccel(st, t, 0, st->vg);
-  N_VLinearSum(1, ce->D[2], -1, st->vg, st->g_end);
-  if (ce->degree == 4) {
-    ForcingAccel(st, t, 1, st->vg);
-    N_VLinearSum(1, ce->D[3], -1, st->vg, st->j_end);
-    ForcingX(st, t, st->rx_end);
+  for (int k = 2; k < ce->degree; ++k) {
+    if (st->g_end[k] == nullptr && (st->g_end[k] = N_VClone(ce->xcur)) == nullptr) return;
+    ForcingAccel(st, t, k - 2, st->vg);
+    N_VLinearSum(1, ce->D[k], -1, st->vg, st->g_end[k]);
   }
+  ForcingX(st, t, st->rx_end);
   st->t_end = t;
   st->end_degree = ce->degree;
   st->end_valid = true;
@@ -399,14 +398,17 @@ void CaptureEnd(Stepper* st) {
 // The start's derivatives at t0 from the last run's end and the new forcing (its derivatives
 // are known exactly). x and v are continuous, so g(t0, x0) is unchanged: D_2 costs nothing.
 // x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so the g part of the jerk,
-// g_t + g_x x', gains g_x delta: one forward difference, none when delta = 0.
+// g_t + g_x x', gains g_x delta: one forward difference, none when delta = 0. Degrees 3 and 4
+// are then exact. From D_4 on, the g parts also change with the jump (g_x times the jump of
+// D_2, g_xx terms in delta): carried as they are, these errors are proportional to the change
+// of the forcing, and a step sees them scaled by h^k (docs/porting.md, "What a restart costs").
 int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
   CEodeMemRec* ce = st->ce;
-  ForcingAccel(st, t0, 0, st->vg);
-  N_VLinearSum(1, st->g_end, 1, st->vg, ce->D[2]);
-  if (ce->degree == 4) {
-    ForcingAccel(st, t0, 1, st->vg);
-    N_VLinearSum(1, st->j_end, 1, st->vg, ce->D[3]);
+  for (int k = 2; k < ce->degree; ++k) {
+    ForcingAccel(st, t0, k - 2, st->vg);
+    N_VLinearSum(1, st->g_end[k], 1, st->vg, ce->D[k]);
+  }
+  if (ce->degree >= 4) {
     ForcingX(st, t0, st->rx);
     N_VLinearSum(1, st->rx, -1, st->rx_end, st->rx);
     const sunrealtype dn = N_VMaxNorm(st->rx);
@@ -422,7 +424,7 @@ int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func
                             "The right-hand side failed (returned %d) at t = %.17g.", rv,
                             static_cast<double>(t0));
       }
-      N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end, ce->atmp);
+      N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end[2], ce->atmp);
       N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
     }
   }
