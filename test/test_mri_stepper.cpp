@@ -159,36 +159,40 @@ TEST(MriInnerStepper, AccumulatesCountersOverRestartsAndEstimatesOmegaOnce) {
 }
 
 // The restart after a stage that ended on the state the next one starts from reuses the end
-// point's g and carries the jerk over (docs/porting.md, "What a restart costs"): G3 sets
-// evaluate nothing, G4 sets one directional difference for the jump of x' (problem A's
-// forcing moves s, so r_x jumps at every stage). Only the first start is a full one.
-TEST(MriInnerStepper, RestartsCostOneEvaluationForG4AndNoneForG3AfterTheFirstStart) {
-  Context ctx;
-  const OrderRun g4 = RunProblemA(ctx, 40, "G4_A34");
-  ASSERT_GT(g4.err, 0);
-  ASSERT_EQ(g4.nrestarts, 120);
-  EXPECT_EQ(g4.nfe_start, 3 + (g4.nrestarts - 1));
-  const OrderRun g3 = RunProblemA(ctx, 40, "G3_CD");
-  ASSERT_GT(g3.err, 0);
-  ASSERT_EQ(g3.nrestarts, 120);
-  EXPECT_EQ(g3.nfe_start, 1);
+// point's g and carries the history over (docs/porting.md, "What a restart costs"): G3 sets
+// evaluate nothing, every set of degree 4 and up one directional difference for the jump of x'
+// (problem A's forcing moves s, so r_x jumps at every stage). Only the first start is a full
+// one: 1, 3, 5 evaluations for degrees 3, 4, 5 and 33 for G8_O8 (a_0 and the high-degree
+// start's 4 sweeps of 8). From degree 5 on the carried history is no longer exact (the g parts
+// of D_4 .. D_{d-1} change with the jump of the forcing); CheapRestart checks its errors.
+struct RestartCost {
+  const char* set;
+  long full_start;   // evaluations of the first, full start
+  long per_restart;  // evaluations of each later restart
+};
+
+void PrintTo(const RestartCost& c, std::ostream* os) {
+  *os << c.set << " (full start " << c.full_start << ", restart " << c.per_restart << ")";
 }
 
-// From degree 5 on the carried history is no longer exact (the g parts of D_4 .. D_{d-1} change
-// with the jump of the forcing), but the restart costs the same one difference: 5 + 119 for
-// G5_TOP (whose full start takes 5) and 33 + 119 for G8_O8 (a_0 and the high-degree start's 4
-// sweeps of 8).
-TEST(MriInnerStepper, RestartsCostOneEvaluationForDegreesFiveToEightAfterTheFirstStart) {
+class RestartCostOf : public ::testing::TestWithParam<RestartCost> {};
+
+TEST_P(RestartCostOf, IsItsFullStartOnceAndThenItsCarriedHistory) {
   Context ctx;
-  const OrderRun g5 = RunProblemA(ctx, 40, "G5_TOP");
-  ASSERT_GT(g5.err, 0);
-  ASSERT_EQ(g5.nrestarts, 120);
-  EXPECT_EQ(g5.nfe_start, 5 + (g5.nrestarts - 1));
-  const OrderRun g8 = RunProblemA(ctx, 40, "G8_O8");
-  ASSERT_GT(g8.err, 0);
-  ASSERT_EQ(g8.nrestarts, 120);
-  EXPECT_EQ(g8.nfe_start, 33 + (g8.nrestarts - 1));
+  const RestartCost& c = GetParam();
+  const OrderRun r = RunProblemA(ctx, 40, c.set);
+  ASSERT_GT(r.err, 0);
+  ASSERT_EQ(r.nrestarts, 120);
+  EXPECT_EQ(r.nfe_start, c.full_start + c.per_restart * (r.nrestarts - 1));
 }
+
+INSTANTIATE_TEST_SUITE_P(Sets, RestartCostOf,
+                         ::testing::Values(RestartCost{"G3_CD", 1, 0}, RestartCost{"G4_A34", 3, 1},
+                                           RestartCost{"G5_TOP", 5, 1},
+                                           RestartCost{"G8_O8", 33, 1}),
+                         [](const ::testing::TestParamInfo<RestartCost>& p) {
+                           return std::string(p.param.set);
+                         });
 
 // A reset to another state (here MRIStepReset halfway with v moved by 1e-6) cannot reuse the
 // end of the last inner integration: that one restart is a full one (3 evaluations for G4_A34),
