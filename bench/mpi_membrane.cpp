@@ -170,6 +170,45 @@ Timing Integrate(N_Vector x, N_Vector v, membrane::Strip* s, const Options& o, d
   return tm;
 }
 
+// The practical limit on the same partition, for the scaling: a hand-written central-differences
+// loop (velocity form, G3_CD's arithmetic up to the order of its sums) on the strip's own arrays:
+// f as its own pass (the same halo-exchanging Accel), then one update pass, x and v in place, no
+// norm, no check. The state at steps * h ends in *x (this strip's entries).
+Timing HandIntegrate(membrane::Strip* s, const Options& o, double h, MPI_Comm timing_comm,
+                     std::vector<double>* x) {
+  Timing tm;
+  const long n = membrane::LocalLength(*s);
+  x->assign(static_cast<size_t>(n), 0.0);
+  std::vector<double> v(x->size()), a(x->size()), an(x->size());
+  double* xp = x->data();
+  membrane::InitialState(*s, xp, v.data());
+  int rv = membrane::Accel(s, xp, a.data());
+  const double hb = 0.5 * h;
+  const double h2 = 0.5 * h * h;
+  for (long i = 0; i < n; ++i) xp[i] += h * v[i] + h2 * a[i];  // x(h)
+  const auto step = [&] {  // at t: a(t) = f(x(t)), v(t), x(t + h)
+    rv |= membrane::Accel(s, xp, an.data());
+    for (long i = 0; i < n; ++i) {
+      v[i] += hb * (a[i] + an[i]);
+      xp[i] += h * v[i] + h2 * an[i];
+    }
+    a.swap(an);
+  };
+  for (long k = 1; k < kWarmSteps; ++k) step();
+  MPI_Barrier(timing_comm);
+  const double t0 = MPI_Wtime();
+  const double c0 = CpuSeconds();
+  for (long k = kWarmSteps; k < o.steps; ++k) step();
+  double dt[2] = {MPI_Wtime() - t0, CpuSeconds() - c0};
+  MPI_Allreduce(MPI_IN_PLACE, dt, 2, MPI_DOUBLE, MPI_MAX, timing_comm);
+  MPI_Allreduce(MPI_IN_PLACE, &rv, 1, MPI_INT, MPI_BOR, timing_comm);
+  tm.flag = rv == 0 ? CE_SUCCESS : CE_RHSFUNC_FAIL;
+  tm.seconds = dt[0];
+  tm.cpu = dt[1];
+  tm.timed_steps = o.steps - kWarmSteps;
+  return tm;
+}
+
 // The step: h_factor times the set's stability limit Omega_max / omega_max (exact omega_max).
 double StepSize(const Options& o, const membrane::Strip& s) {
   int degree = 0;
@@ -273,6 +312,8 @@ struct Problem {
   SUNContext ctx_self = nullptr;
   SUNContext ctx_world = nullptr;
   N_Vector xs = nullptr, vs = nullptr, x1 = nullptr, v1 = nullptr, xp = nullptr, vp = nullptr;
+  std::vector<double> hand1;  // the hand loop's state on 1 rank (rank 0) and on this rank's strip
+  std::vector<double> handp;
 };
 
 void Setup(Problem* p, int nx, int ny, int rank, int size) {
@@ -306,35 +347,47 @@ void Teardown(Problem* p) {
 }
 
 // The repetitions, interleaved so that a change of machine load hits every configuration.
+// cfg: serial, parallel 1 rank, parallel P ranks, hand 1 rank, hand P ranks (the last two: the
+// same partition without CEODE, G3_CD only; P-rank entries only when size > 1).
+enum { kSerial, kOne, kMany, kHandOne, kHandMany, kNumConfigs };
+
 std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, int size) {
-  std::vector<Config> cfg(size > 1 ? 3 : 2);
-  cfg[0].name = "serial";
-  cfg[1].name = "parallel";
-  if (size > 1) {
-    cfg[2].name = "parallel";
-    cfg[2].ranks = size;
+  std::vector<Config> cfg(kNumConfigs);
+  const char* names[kNumConfigs] = {"serial", "parallel", "parallel", "hand", "hand"};
+  for (int c = 0; c < kNumConfigs; ++c) {
+    cfg[c].name = names[c];
+    cfg[c].ranks = c == kMany || c == kHandMany ? size : 1;
   }
   const auto run = [&o](const char* name) { return o.only.empty() || o.only == name; };
+  const bool hand = o.method == "G3_CD" && o.only.empty();
   for (int r = 0; r < o.reps; ++r) {
     if (rank == 0 && run("serial")) {
-      Record(&cfg[0], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
+      Record(&cfg[kSerial], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
     }
     SleepyBarrier(MPI_COMM_WORLD);
     if (rank == 0 && run("one")) {
-      Record(&cfg[1], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
+      Record(&cfg[kOne], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
     }
     SleepyBarrier(MPI_COMM_WORLD);
     if (size > 1 && run("many")) {
-      Record(&cfg[2], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+      Record(&cfg[kMany], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+    }
+    if (rank == 0 && hand) {
+      Record(&cfg[kHandOne], HandIntegrate(&p->self, o, h, MPI_COMM_SELF, &p->hand1));
+    }
+    SleepyBarrier(MPI_COMM_WORLD);
+    if (size > 1 && hand) {
+      Record(&cfg[kHandMany], HandIntegrate(&p->world, o, h, MPI_COMM_WORLD, &p->handp));
     }
   }
   return cfg;
 }
 
-// The P-rank state on rank 0, in global order (the strips are contiguous blocks).
-std::vector<double> Gather(const Problem& p, int rank, int size) {
+// A P-rank state (this rank's strip at local) on rank 0, in global order (the strips are
+// contiguous blocks).
+std::vector<double> Gather(const Problem& p, const double* local, int rank, int size) {
   std::vector<double> all;
-  if (size == 1) return all;
+  if (size == 1 || local == nullptr) return all;
   std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
   for (int r = 0; r < size; ++r) {
     int row0 = 0, nrows = 0;
@@ -343,8 +396,8 @@ std::vector<double> Gather(const Problem& p, int rank, int size) {
     displs[r] = row0 * p.world.nx;
   }
   if (rank == 0) all.resize(static_cast<size_t>(p.world.nx) * p.world.ny);
-  MPI_Gatherv(N_VGetArrayPointer(p.xp), static_cast<int>(membrane::LocalLength(p.world)),
-              MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  MPI_Gatherv(local, static_cast<int>(membrane::LocalLength(p.world)), MPI_DOUBLE, all.data(),
+              counts.data(), displs.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
   return all;
 }
 
@@ -354,20 +407,35 @@ namespace {
 
 struct Verdict {
   bool ok = true;
-  Compare one;   // 1 rank against serial
-  Compare many;  // P ranks against serial
+  Compare one;        // 1 rank against serial
+  Compare many;       // P ranks against serial
+  Compare hand;       // the hand loop on 1 rank against CEODE serial (rounding apart)
+  Compare hand_many;  // the hand loop on P ranks against on 1 rank (bitwise)
   double error = 0;
   bool discrete = false;
 };
 
+// The hand loop sums in its own order: it must agree with CEODE to rounding, and on P ranks
+// bitwise with itself on one.
+constexpr double kHandTol = 1e-12;
+
 // Rank 0: bitwise equality of the parallel states with the serial one, and the accuracy check.
-Verdict Check(const Problem& p, const std::vector<double>& gathered, const Options& o, double h,
+Verdict Check(const Problem& p, const std::vector<double>& gathered,
+              const std::vector<double>& hand_gathered, const Options& o, double h,
               const std::vector<Config>& cfg) {
   Verdict v;
   const long n = static_cast<long>(p.whole.nx) * p.whole.ny;
   const double* xs = N_VGetArrayPointer(p.xs);
   v.one = Diff(xs, N_VGetArrayPointer(p.x1), n);
   if (!gathered.empty()) v.many = Diff(xs, gathered.data(), n);
+  if (!p.hand1.empty()) {
+    v.hand = Diff(xs, p.hand1.data(), n);
+    v.ok = v.hand.maxdiff <= kHandTol;
+  }
+  if (!hand_gathered.empty()) {
+    v.hand_many = Diff(p.hand1.data(), hand_gathered.data(), n);
+    v.ok = v.ok && v.hand_many.ndiff == 0;
+  }
   v.discrete = o.method == "G3_CD";
   v.error = SolutionError(p.whole, xs, o.steps, h, v.discrete);
   const double tol = v.discrete ? 1e-9 : 1e-3;
@@ -380,6 +448,7 @@ void Table(const std::vector<Config>& cfg, long n, int size) {
   std::printf("%-10s %5s %10s %14s %12s  %s\n", "vector", "ranks", "ms/step", "ns/(DOF step)",
               "CPU ms/step", "repetitions (wall ms/step)");
   for (const Config& c : cfg) {
+    if (c.per_step.empty()) continue;
     std::string reps;
     for (double s : c.per_step) reps += " " + std::to_string(s * 1e3).substr(0, 7);
     std::printf("%-10s %5d %10.4f %14.3f %12.4f %s\n", c.name.c_str(), c.ranks, c.Best() * 1e3,
@@ -390,12 +459,19 @@ void Table(const std::vector<Config>& cfg, long n, int size) {
       "communication per step on %d ranks: %.3g MPI_Allreduce (CEODE's norms), %.3g "
       "halo exchanges (f); before the timed steps (CEODE's start, the guard's check, %ld "
       "steps): %ld MPI_Allreduce, %ld halo exchanges\n",
-      size, cfg[2].allreduces_per_step, cfg[2].exchanges_per_step, kWarmSteps,
-      cfg[2].start_allreduces, cfg[2].start_exchanges);
+      size, cfg[kMany].allreduces_per_step, cfg[kMany].exchanges_per_step, kWarmSteps,
+      cfg[kMany].start_allreduces, cfg[kMany].start_exchanges);
   std::printf(
       "speedup 1 -> %d ranks (NVECTOR_PARALLEL): %.3f wall, %.3f CPU time of the slowest "
       "rank (target >= 1.6 wall at N = 10^6 on 2 ranks; a timing, not a check)\n",
-      size, cfg[1].Best() / cfg[2].Best(), cfg[1].BestCpu() / cfg[2].BestCpu());
+      size, cfg[kOne].Best() / cfg[kMany].Best(), cfg[kOne].BestCpu() / cfg[kMany].BestCpu());
+  if (cfg[kHandOne].per_step.empty() || cfg[kHandMany].per_step.empty()) return;
+  std::printf(
+      "speedup 1 -> %d ranks of the hand loop (the machine's limit for this f and update): "
+      "%.3f wall, %.3f CPU; CEODE / hand per step: %.3f on 1 rank, %.3f on %d\n",
+      size, cfg[kHandOne].Best() / cfg[kHandMany].Best(),
+      cfg[kHandOne].BestCpu() / cfg[kHandMany].BestCpu(), cfg[kOne].Best() / cfg[kHandOne].Best(),
+      cfg[kMany].Best() / cfg[kHandMany].Best(), size);
 }
 
 void Report(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg,
@@ -412,6 +488,13 @@ void Report(const Options& o, const Problem& p, double h, const std::vector<Conf
   if (size > 1) {
     std::printf("; %d ranks vs serial: %ld differ (max |diff| %.3g)", size, v.many.ndiff,
                 v.many.maxdiff);
+  }
+  if (!p.hand1.empty()) {
+    std::printf("\nhand loop: 1 rank vs CEODE serial max |diff| %.3g (tolerance %g)",
+                v.hand.maxdiff, kHandTol);
+    if (size > 1) {
+      std::printf("; %d ranks vs 1 rank: %ld of %ld entries differ", size, v.hand_many.ndiff, n);
+    }
   }
   std::printf(
       "\naccuracy: max |x - exact| / amplitude = %.3e against the exact %s solution "
@@ -474,11 +557,14 @@ int main(int argc, char** argv) {
   int bad = h > 0 ? 0 : 1;
   if (bad == 0) {
     const std::vector<Config> cfg = Measure(&p, o, h, rank, size);
-    const std::vector<double> gathered = Gather(p, rank, size);
+    const std::vector<double> gathered =
+        Gather(p, p.xp != nullptr ? N_VGetArrayPointer(p.xp) : nullptr, rank, size);
+    const std::vector<double> hand_gathered =
+        Gather(p, p.handp.empty() ? nullptr : p.handp.data(), rank, size);
     if (rank == 0 && !o.only.empty()) {
       ReportOnly(cfg);
     } else if (rank == 0) {
-      const Verdict v = Check(p, gathered, o, h, cfg);
+      const Verdict v = Check(p, gathered, hand_gathered, o, h, cfg);
       Report(o, p, h, cfg, v, load0, size);
       if (!o.csv.empty()) WriteCsv(o, p, h, cfg);
       bad = v.ok ? 0 : 1;
