@@ -279,33 +279,54 @@ int SlowB(sunrealtype t, N_Vector y, N_Vector ydot, void* /*data*/) {
   return 0;
 }
 
+// Problems B and C run on one unknown, x0 = 1, v0 = 0, both halves forced by SlowB over [0, 1]
+// with 20 slow steps, once with CEODE inside (h = kInnerH; its start evaluations and restarts
+// in *starts) and once with an ARKStep ERK inside at the same fixed step. Returns 0 when both MRI
+// runs succeeded.
+constexpr double kInnerH = 1e-4;
+
+int RunCeodeAndRk4Inside(SUNContext ctx, CEodeRhsFn g, ARKRhsFn g_first_order, bool velocity,
+                         N_Vector yc, N_Vector yr, OrderRun* starts) {
+  Vector x0 = SerialVector(1, ctx, 1.0), v0 = SerialVector(1, ctx, 0.0);
+  NV_Ith_S(yc, 0) = NV_Ith_S(yr, 0) = 1.0;
+  NV_Ith_S(yc, 1) = NV_Ith_S(yr, 1) = 0.0;
+  Mem ce = FastMemory(ctx, g, x0.get(), v0.get(), kInnerH);
+  MRIStepInnerStepper raw = nullptr;
+  if (!ce || (velocity && CEodeSetVelocityDependence(ce.get(), SUNTRUE) != CE_SUCCESS) ||
+      CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) {
+    return -1;
+  }
+  Inner inner(raw);
+  if (RunMri(ctx, SlowB, raw, yc, 1.0, 20) != 0) return -2;
+  CEodeGetNumStartRhsEvals(ce.get(), &starts->nfe_start);
+  CEodeGetNumInnerRestarts(ce.get(), &starts->nrestarts);
+  std::unique_ptr<void, ArkDeleter> ark(ARKStepCreate(g_first_order, nullptr, 0, yr, ctx));
+  MRIStepInnerStepper rk = nullptr;
+  if (!ark || ARKStepSetTableNum(ark.get(), ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4) != 0 ||
+      ARKStepSetFixedStep(ark.get(), kInnerH) != 0 ||
+      ARKStepSetMaxNumSteps(ark.get(), 1000000) != 0 ||
+      ARKStepCreateMRIStepInnerStepper(ark.get(), &rk) != 0) {
+    return -3;
+  }
+  const int flag = RunMri(ctx, SlowB, rk, yr, 1.0, 20);
+  MRIStepInnerStepper_Free(&rk);
+  return flag == 0 ? 0 : -4;
+}
+
+// Both solve the same forced inner problems; the gap is the inner errors (h = 1e-4).
+void ExpectTheSameState(N_Vector yc, N_Vector yr) {
+  EXPECT_NEAR(NV_Ith_S(yc, 0), NV_Ith_S(yr, 0), 1e-9);
+  EXPECT_NEAR(NV_Ith_S(yc, 1), NV_Ith_S(yr, 1), 1e-8);
+  EXPECT_GT(std::fabs(NV_Ith_S(yc, 0) - 1.0), 1e-3);  // the state did move
+}
+
 TEST(MriInnerStepper, MatchesAnRk4InnerStepperWhenBothHalvesAreForcedAndFDependsOnV) {
   Context ctx;
-  constexpr double kH = 1e-4;
-  Vector x0 = SerialVector(1, ctx, 1.0), v0 = SerialVector(1, ctx, 0.0);
   Vector yc = SerialVector(2, ctx), yr = SerialVector(2, ctx);
-  NV_Ith_S(yc.get(), 0) = NV_Ith_S(yr.get(), 0) = 1.0;
-  Mem ce = FastMemory(ctx, FastB, x0.get(), v0.get(), kH);
-  ASSERT_TRUE(ce);
-  ASSERT_EQ(CEodeSetVelocityDependence(ce.get(), SUNTRUE), CE_SUCCESS);
-  MRIStepInnerStepper raw = nullptr;
-  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
-  Inner inner(raw);
-  ASSERT_EQ(RunMri(ctx, SlowB, raw, yc.get(), 1.0, 20), 0);
-
-  std::unique_ptr<void, ArkDeleter> ark(ARKStepCreate(FastBFirstOrder, nullptr, 0, yr.get(), ctx));
-  ASSERT_TRUE(ark);
-  ASSERT_EQ(ARKStepSetTableNum(ark.get(), ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4), 0);
-  ASSERT_EQ(ARKStepSetFixedStep(ark.get(), kH), 0);
-  ASSERT_EQ(ARKStepSetMaxNumSteps(ark.get(), 1000000), 0);
-  MRIStepInnerStepper rk = nullptr;
-  ASSERT_EQ(ARKStepCreateMRIStepInnerStepper(ark.get(), &rk), 0);
-  ASSERT_EQ(RunMri(ctx, SlowB, rk, yr.get(), 1.0, 20), 0);
-  MRIStepInnerStepper_Free(&rk);
-  // Both solve the same forced inner problems; the gap is the inner errors (h = 1e-4).
-  EXPECT_NEAR(NV_Ith_S(yc.get(), 0), NV_Ith_S(yr.get(), 0), 1e-9);
-  EXPECT_NEAR(NV_Ith_S(yc.get(), 1), NV_Ith_S(yr.get(), 1), 1e-8);
-  EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move
+  OrderRun starts{};
+  ASSERT_EQ(RunCeodeAndRk4Inside(ctx, FastB, FastBFirstOrder, true, yc.get(), yr.get(), &starts),
+            0);
+  ExpectTheSameState(yc.get(), yr.get());
 }
 
 // Problem C: a nonlinear, time-dependent fast part without velocity dependence (the cheap
@@ -324,33 +345,12 @@ int FastCFirstOrder(sunrealtype t, N_Vector y, N_Vector ydot, void* /*data*/) {
 
 TEST(MriInnerStepper, CheapRestartsMatchAnRk4InnerStepperOnANonlinearTimeDependentFastPart) {
   Context ctx;
-  constexpr double kH = 1e-4;
-  Vector x0 = SerialVector(1, ctx, 1.0), v0 = SerialVector(1, ctx, 0.0);
   Vector yc = SerialVector(2, ctx), yr = SerialVector(2, ctx);
-  NV_Ith_S(yc.get(), 0) = NV_Ith_S(yr.get(), 0) = 1.0;
-  Mem ce = FastMemory(ctx, FastC, x0.get(), v0.get(), kH);
-  ASSERT_TRUE(ce);
-  MRIStepInnerStepper raw = nullptr;
-  ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
-  Inner inner(raw);
-  ASSERT_EQ(RunMri(ctx, SlowB, raw, yc.get(), 1.0, 20), 0);
-  long nfe_start = 0, nrestarts = 0;
-  CEodeGetNumStartRhsEvals(ce.get(), &nfe_start);
-  CEodeGetNumInnerRestarts(ce.get(), &nrestarts);
-  EXPECT_EQ(nfe_start, 3 + (nrestarts - 1));
-
-  std::unique_ptr<void, ArkDeleter> ark(ARKStepCreate(FastCFirstOrder, nullptr, 0, yr.get(), ctx));
-  ASSERT_TRUE(ark);
-  ASSERT_EQ(ARKStepSetTableNum(ark.get(), ARKODE_DIRK_NONE, ARKODE_ZONNEVELD_5_3_4), 0);
-  ASSERT_EQ(ARKStepSetFixedStep(ark.get(), kH), 0);
-  ASSERT_EQ(ARKStepSetMaxNumSteps(ark.get(), 1000000), 0);
-  MRIStepInnerStepper rk = nullptr;
-  ASSERT_EQ(ARKStepCreateMRIStepInnerStepper(ark.get(), &rk), 0);
-  ASSERT_EQ(RunMri(ctx, SlowB, rk, yr.get(), 1.0, 20), 0);
-  MRIStepInnerStepper_Free(&rk);
-  EXPECT_NEAR(NV_Ith_S(yc.get(), 0), NV_Ith_S(yr.get(), 0), 1e-9);
-  EXPECT_NEAR(NV_Ith_S(yc.get(), 1), NV_Ith_S(yr.get(), 1), 1e-8);
-  EXPECT_GT(std::fabs(NV_Ith_S(yc.get(), 0) - 1.0), 1e-3);  // the state did move
+  OrderRun starts{};
+  ASSERT_EQ(RunCeodeAndRk4Inside(ctx, FastC, FastCFirstOrder, false, yc.get(), yr.get(), &starts),
+            0);
+  EXPECT_EQ(starts.nfe_start, 3 + (starts.nrestarts - 1));
+  ExpectTheSameState(yc.get(), yr.get());
 }
 
 // ---------------------------------------------------------------------------
