@@ -140,6 +140,7 @@ struct CEodeMemRec {
   bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place
   bool fused_ready = false;      // serial vectors: fused_plans valid, raw arrays of length n
   bool fused_mpi = false;        // NVECTOR_PARALLEL: fused_plans valid on the local part
+  bool reduce_failed = false;    // the last update's global norm (an MPI reduction) failed
   sunindextype fused_len = 0;    // entries the fused update runs over (local on NVECTOR_PARALLEL)
   std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
   std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;

@@ -437,7 +437,10 @@ inline sunrealtype Update(CEodeMemRec* ce) {
   if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
   if (ce->fused && ce->fused_mpi) {  // the same kernel on the local part, one allreduce
     sunrealtype l1 = UpdateSerial(ce->fused_plans[ip], ce->fused_len);
-    if (N_VDotProdMultiAllReduce(1, ce->xnew, &l1) != 0) return std::nan("");
+    if (N_VDotProdMultiAllReduce(1, ce->xnew, &l1) != 0) {
+      ce->reduce_failed = true;  // CheckState names the communication, not the state
+      return std::nan("");
+    }
     return l1;
   }
   UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
@@ -464,6 +467,15 @@ inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
 // Explosive growth or a non-finite state: stop long before overflow, while the state is still
 // readable, and say whether f or the step size is to blame.
 int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func) {
+  if (ce->reduce_failed) {
+    ce->reduce_failed = false;
+    return ProcessError(ce, CE_VECTOROP_ERR, func,
+                        "The global reduction of the step's growth check failed at t = %.17g (step "
+                        "%ld): N_VDotProdMultiAllReduce (an MPI_Allreduce on NVECTOR_PARALLEL) "
+                        "returned an error, so the vector's communicator failed; the state is "
+                        "that of the last completed step (docs/theory.md, \"In-place update\").",
+                        static_cast<double>(t), ce->nst + 1);
+  }
   if (std::isfinite(xl1) && Exploded(xl1, GrowthBound(ce))) {
     return ProcessError(ce, CE_UNSTABLE, func,
                         "The state grew explosively: ||x||_1 = %g at t = %.17g (step %ld), %g at "

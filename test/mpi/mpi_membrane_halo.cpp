@@ -14,6 +14,7 @@
 #include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -89,8 +90,13 @@ struct ParallelResult {
   long exchanges = 0;     // halo exchanges summed over the ranks
 };
 
+// A global reduction that fails, as N_VDotProdMultiAllReduce does when MPI_Allreduce does.
+int FailingReduction(int /*nvec*/, N_Vector /*x*/, sunrealtype* /*sum*/) { return -1; }
+
 // Every rank: its strip on NVECTOR_PARALLEL over MPI_COMM_WORLD; the state gathered on rank 0.
-ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid) {
+// failing_reduction: the vector (and so every clone CEODE makes of it) gets FailingReduction.
+ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid,
+                           bool failing_reduction = false) {
   MPI_Comm comm = MPI_COMM_WORLD;
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
@@ -100,6 +106,7 @@ ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid) {
   membrane::Strip s = membrane::MakeStrip(comm, g.nx, g.ny);
   s.exchange = exchange;
   N_Vector x = N_VNew_Parallel(comm, membrane::LocalLength(s), g.Size(), ctx);
+  if (failing_reduction) x->ops->nvdotprodmultiallreduce = FailingReduction;
   ParallelResult r;
   r.flag = Integrate(x, &s, c, true);
   MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
@@ -189,6 +196,17 @@ TEST(MembraneOnRanksEdgeCase, WithMoreRanksThanRowsGivesTheSerialNumbers) {
 
 // Negative control: with the halo rows never exchanged (stale zeros), the strips' edge rows see
 // a fixed edge that is not there, and the comparison must notice.
+// The growth check's norm is CEODE's one reduction per step; when it fails, the step reports the
+// vector operation (not a non-finite state or an unstable step size) on every rank, and the state
+// it returns is finite.
+TEST(MembraneOnRanksControl, AFailedGlobalReductionIsReportedAsAVectorOperationError) {
+  const ParallelResult r = ParallelRun(Case{"G3_CD", false}, true, kGrid, true);
+  EXPECT_EQ(r.flag, CE_VECTOROP_ERR);
+  bool finite = true;
+  for (double v : r.x) finite = finite && std::isfinite(v);
+  EXPECT_TRUE(finite);
+}
+
 TEST(MembraneOnRanksControl, WithoutTheHaloExchangeDiffersFromSerial) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
