@@ -487,11 +487,26 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   return flag;
 }
 
-// The method's limit, computed once per method: -1 when unstable for every step.
+// The named set the memory runs, if its parameters are exactly that set's.
+const MethodSet* NamedSetOf(const CEodeMemRec* ce) {
+  const MethodSet* m = FindMethodSet(ce->method_name.c_str());
+  if (m == nullptr || m->degree != ce->degree) return nullptr;
+  for (int i = 0; i < ce->degree - 1; ++i) {
+    if (m->params[i] != ce->params[i]) return nullptr;
+  }
+  return m;
+}
+
+// The method's limit, once per method: a named set's from the table, other parameters
+// computed: -1 when unstable for every step.
 sunrealtype Limit(CEodeMemRec* ce) {
   if (ce->omega_limit == 0) {
     sunrealtype lim = 0;
-    if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) return 0;
+    if (const MethodSet* m = NamedSetOf(ce)) {
+      lim = m->omega_max;
+    } else if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) {
+      return 0;
+    }
     ce->omega_limit = lim > 0 ? lim : -1;
   }
   return ce->omega_limit;
@@ -502,9 +517,7 @@ std::string StableSets(sunrealtype Omega) {
   std::string out;
   for (int i = 0; i < NumMethodSets(); ++i) {
     const MethodSet& m = MethodSetAt(i);
-    sunrealtype lim = 0;
-    if (MethodStabilityLimit(m.degree, m.params.data(), &lim) != CE_SUCCESS) continue;
-    if (kRecommendSafety * lim < Omega) continue;
+    if (kRecommendSafety * m.omega_max < Omega) continue;
     out += out.empty() ? "" : ", ";
     out += m.name;
   }

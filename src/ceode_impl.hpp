@@ -22,6 +22,10 @@ struct MethodSet {
   const char* name;
   int degree;
   std::array<sunrealtype, kMaxDegree - 1> params;
+  // CEodeStabilityLimit(degree, params, 0) as this library computes it (0: unstable for every
+  // step), so that the guard and its advice look it up instead of scanning the spectrum
+  // (1 to 18 ms a set); test_stability recomputes every entry.
+  sunrealtype omega_max;
 };
 const MethodSet* FindMethodSet(const char* name);
 int NumMethodSets();

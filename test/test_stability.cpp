@@ -217,6 +217,27 @@ class GuardRun : public ::testing::Test {
   Captured captured_;
 };
 
+// The guard looks the named sets' limits up in the library's table instead of scanning their
+// spectrum at every start: the step it gives (omega_max = 1 given, safety 1) must be the limit
+// CEodeStabilityLimit computes, to the last bits a recomputation on another build may move.
+class NamedSetGuard : public GuardRun, public ::testing::WithParamInterface<int> {};
+
+TEST_P(NamedSetGuard, GivesTheStepOfTheComputedStabilityLimit) {
+  const char* name = CEodeGetMethodName(GetParam());
+  ASSERT_NE(name, nullptr);
+  ASSERT_EQ(CEodeSetMethodByName(mem_, name), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMaxFrequency(mem_, 1.0), CE_SUCCESS);
+  sunrealtype hmax = -1;
+  ASSERT_EQ(CEodeGetStableStep(mem_, 1, &hmax), CE_SUCCESS);
+  const sunrealtype computed = Limit(name);
+  EXPECT_NEAR(hmax, computed, 1e-12 * computed) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryNamedSet, NamedSetGuard, ::testing::Range(0, CEodeGetNumMethods()),
+                         [](const ::testing::TestParamInfo<int>& p) {
+                           return std::string(CEodeGetMethodName(p.param));
+                         });
+
 TEST_F(GuardRun, PastTheLimitWithTheGuardOffEndsUnstableWithFiniteOutput) {
   ASSERT_EQ(CEodeSetMethodByName(mem_, "G3_CD"), CE_SUCCESS);
   ASSERT_EQ(CEodeSetFixedStep(mem_, 2.1), CE_SUCCESS);
