@@ -12,6 +12,7 @@
 #endif
 
 #include <cstring>
+#include <iterator>
 
 #include "../examples/mri_two_scale_model.h"
 #include "test_util.hpp"
