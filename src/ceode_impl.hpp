@@ -316,9 +316,6 @@ inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
-// The step's update from the acceleration in Dnew[2]: z and the new derivatives
-// into Dnew, x(t + h) into xnew (nothing committed); returns ||xnew||_1.
-sunrealtype FormUpdate(CEodeMemRec* ce);
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
 // w[i] = s^i / i!, i = 0 .. m-1, by the recurrence w[i] = w[i-1] * (s / i).
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w);

@@ -436,7 +436,8 @@ sunrealtype StepTime(const CEodeMemRec* ce, int k) {
   return ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + k) * ce->h;
 }
 
-// FormUpdate's body, inlined into TakeStep (a call less per step).
+// The step's update after the solve (inlined into TakeStep: a call less per step); returns
+// ||x(t + h)||_1 for the growth check, NaN when its global reduction failed.
 inline sunrealtype Update(CEodeMemRec* ce) {
   const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
   if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
@@ -451,12 +452,6 @@ inline sunrealtype Update(CEodeMemRec* ce) {
   UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
   return N_VL1Norm(ce->xnew);
 }
-
-}  // namespace
-
-sunrealtype FormUpdate(CEodeMemRec* ce) { return Update(ce); }
-
-namespace {
 
 // The bound on ||x||_1 relative to the start's, and whether a finite ||x||_1 has grown past it
 // (or past an absolute limit): explosively.
