@@ -487,22 +487,12 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   return flag;
 }
 
-// The named set the memory runs, if its parameters are exactly that set's.
-const MethodSet* NamedSetOf(const CEodeMemRec* ce) {
-  const MethodSet* m = FindMethodSet(ce->method_name.c_str());
-  if (m == nullptr || m->degree != ce->degree) return nullptr;
-  for (int i = 0; i < ce->degree - 1; ++i) {
-    if (m->params[i] != ce->params[i]) return nullptr;
-  }
-  return m;
-}
-
 // The method's limit, once per method: a named set's from the table, other parameters
 // computed: -1 when unstable for every step.
 sunrealtype Limit(CEodeMemRec* ce) {
   if (ce->omega_limit == 0) {
     sunrealtype lim = 0;
-    if (const MethodSet* m = NamedSetOf(ce)) {
+    if (const MethodSet* m = NamedSetWithParams(ce->degree, ce->params)) {
       lim = m->omega_max;
     } else if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) {
       return 0;

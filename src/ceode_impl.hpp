@@ -26,8 +26,14 @@ struct MethodSet {
   // step), so that the guard and its advice look it up instead of scanning the spectrum
   // (1 to 18 ms a set); test_stability recomputes every entry.
   sunrealtype omega_max;
+  // DefaultPCCorrections' rule from the set's orders (CEodeMethodOrder), so that setting a
+  // method does not solve its order conditions (about 25 000 instructions); test_pc checks
+  // every entry against the rule.
+  int pc_corrections;
 };
 const MethodSet* FindMethodSet(const char* name);
+// The named set with exactly these parameters, or nullptr (custom parameters).
+const MethodSet* NamedSetWithParams(int degree, const sunrealtype* params);
 int NumMethodSets();
 const MethodSet& MethodSetAt(int index);
 

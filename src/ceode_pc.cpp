@@ -226,6 +226,7 @@ void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_V
 // keeps the order but its velocity error is up to 12 times Newton's (test_pc): two.
 int DefaultPCCorrections(int degree, const sunrealtype* params) {
   if (degree > 4) return 2;
+  if (const MethodSet* m = NamedSetWithParams(degree, params)) return m->pc_corrections;
   int ox = degree, ov = degree;  // two corrections, should the conditions not be computed
   try {
     MethodOrders(degree, params, &ox, &ov, nullptr, nullptr);

@@ -13,39 +13,44 @@ namespace ceode {
 namespace {
 
 // Named parameter sets (docs/theory.md section 5): alpha, beta, gamma, zeta, then the stability
-// limit Omega_max. Measured properties (orders, stability limits) are in docs/stability.md and
-// the tests.
+// limit Omega_max and the default number of PC corrections (both derived by the library's own
+// routines and checked against them by the tests). Measured properties (orders, stability
+// limits) are in docs/stability.md and the tests.
 const MethodSet kMethodSets[] = {
-    {"G3_CD", 3, {1.0, 0.5}, 2.0},
-    {"G3_A43", 3, {4.0 / 3.0, 0.5}, 1.5491933384830241},
-    {"G3_A2", 3, {2.0, 0.5}, 1.1547005383792901},
-    {"G4_A54", 4, {5.0 / 4.0, 1.0 / 3.0, 0.5}, 0.0},
-    {"G4_A14", 4, {1.0 / 4.0, 1.0 / 3.0, 0.5}, 1.2649110640675025},
-    {"G4_A34", 4, {3.0 / 4.0, 1.0 / 3.0, 0.5}, 1.7320508139458268},
-    {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}, 0.0},
-    {"G5_TOP", 5, {1.62, 1.03522, 1.0291293, 1.016}, 0.068165690514902844},
-    {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}, 0.0},
+    {"G3_CD", 3, {1.0, 0.5}, 2.0, 1},
+    {"G3_A43", 3, {4.0 / 3.0, 0.5}, 1.5491933384830241, 1},
+    {"G3_A2", 3, {2.0, 0.5}, 1.1547005383792901, 1},
+    {"G4_A54", 4, {5.0 / 4.0, 1.0 / 3.0, 0.5}, 0.0, 2},
+    {"G4_A14", 4, {1.0 / 4.0, 1.0 / 3.0, 0.5}, 1.2649110640675025, 1},
+    {"G4_A34", 4, {3.0 / 4.0, 1.0 / 3.0, 0.5}, 1.7320508139458268, 1},
+    {"G5", 5, {4.0 / 5.0, 1.0, 1.0, 1.0}, 0.0, 2},
+    {"G5_TOP", 5, {1.62, 1.03522, 1.0291293, 1.016}, 0.068165690514902844, 2},
+    {"G5_ONES", 5, {1.0, 1.0, 1.0, 1.0}, 0.0, 2},
     // High-degree sets found by `ceode-stability find` (command in docs/stability.md).
     {"G6_O5",
      6,
      {7.8581049690442608, 3.2003060015391878, 2.306472520152492, 1.445972372099134,
       0.78920709629572905},
-     0.80495242331772077},
+     0.80495242331772077,
+     2},
     {"G6_O6",
      6,
      {2.438146987413893, 1.260773492352264, 1.0359340008566345, 0.84442784269433835,
       0.57681936136099354},
-     0.066156247720114997},
+     0.066156247720114997,
+     2},
     {"G7_O7",
      7,
      {19.362993681325158, 15.310841926671563, 8.7099568711498723, 3.9685609709725753,
       2.3539640770647496, 0.90130820250696653},
-     1.0320137727279115},
+     1.0320137727279115,
+     2},
     {"G8_O8",
      8,
      {399.99982239054896, 278.28678067794129, 134.15990720943549, 51.039413540261052,
       20.827940678986256, 6.8588048481939303, 2.805527440772015},
-     0.98912640770612792},
+     0.98912640770612792,
+     2},
 };
 
 sunrealtype Factorial(int n) {
@@ -95,6 +100,13 @@ const MethodSet* FindMethodSet(const char* name) {
   if (name == nullptr) return nullptr;
   for (const MethodSet& m : kMethodSets) {
     if (std::strcmp(m.name, name) == 0) return &m;
+  }
+  return nullptr;
+}
+
+const MethodSet* NamedSetWithParams(int degree, const sunrealtype* params) {
+  for (const MethodSet& m : kMethodSets) {
+    if (m.degree == degree && std::equal(params, params + degree - 1, m.params.begin())) return &m;
   }
   return nullptr;
 }

@@ -2,11 +2,13 @@
 // choice between it and Newton (CE_IMPLICIT_AUTO), the Newton matrix's reuse on the ODE path and
 // the start's check for an undeclared velocity dependence (docs/theory.md section 4.3).
 // Reference: the closed-form solution of the damped forced oscillator (test_util.hpp).
+#include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunnonlinsol/sunnonlinsol_newton.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -201,6 +203,45 @@ TEST(PredictorCorrectorWithOneCorrection, GivesG4AlphaFiveQuartersItsClaimedThir
   EXPECT_NEAR(f.x, 3, kOrderTol);      // measured 3.061
   EXPECT_NEAR(f.v, 3, 2 * kOrderTol);  // measured 3.123: a fourth-order term still shows
 }
+
+// Each named set's default number of corrections is a column of the library's table of sets
+// (so that setting a method does not solve its order conditions). It must be the rule of
+// section 4.3 applied to the set's orders from CEodeMethodOrder: two when the degree is above
+// 4 or the set has order d in x and x', else one. Seen through the f count of a PC run: the
+// default run evaluates f as often as the run with that k given, and k = 1 and 2 differ.
+class DefaultCorrections : public ::testing::TestWithParam<int> {};
+
+long PcRhsEvals(const char* method, int corrections) {
+  Config c;
+  c.method = method;
+  c.mode = CE_IMPLICIT_PC;
+  c.corrections = corrections;
+  c.tend = 1;
+  DampedForced prob;
+  const Outcome r = Integrate(prob, c);
+  EXPECT_EQ(r.flag, CE_SUCCESS) << method << ", k = " << corrections;
+  return r.nfe;
+}
+
+TEST_P(DefaultCorrections, FollowTheRuleFromTheSetsOrders) {
+  const char* name = CEodeGetMethodName(GetParam());
+  ASSERT_NE(name, nullptr);
+  int degree = 0, ox = 0, ov = 0;
+  sunrealtype p[8];
+  ASSERT_EQ(CEodeGetMethodParams(name, &degree, p, 8), CE_SUCCESS);
+  ASSERT_EQ(CEodeMethodOrder(degree, p, &ox, &ov), CE_SUCCESS);
+  const int rule = degree > 4 || std::min(ox, ov) >= degree ? 2 : 1;
+  const long one = PcRhsEvals(name, 1);
+  const long two = PcRhsEvals(name, 2);
+  ASSERT_NE(one, two);
+  EXPECT_EQ(PcRhsEvals(name, 0), rule == 1 ? one : two) << name << ": rule k = " << rule;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryNamedSet, DefaultCorrections,
+                         ::testing::Range(0, CEodeGetNumMethods()),
+                         [](const ::testing::TestParamInfo<int>& p) {
+                           return std::string(CEodeGetMethodName(p.param));
+                         });
 
 // M x'' = 3 f(t, x, x') with M = 3: the same motion, with the mass solve inside every correction.
 struct ScaledMass {
