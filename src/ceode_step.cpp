@@ -1,6 +1,8 @@
 // The degree-generic conditionally explicit step (docs/theory.md section 2), its
 // coefficients, the start of the method and the dense output. One code path
 // serves every degree: the parameter sets are data in kMethodSets.
+#include <nvector/nvector_serial.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -640,28 +642,26 @@ namespace {
 
 // The one-step output copies: memcpy on serial vectors (N_VScale(1, ...) is a multiply loop,
 // unoptimised in Debian's -O0 SUNDIALS build), N_VScale elsewhere. Same values either way.
+// Once both IDs say serial, the content is read directly (NV_DATA_S, NV_LENGTH_S): every
+// getter is two calls through SUNDIALS, and these copies run twice per CE_ONE_STEP call.
 void CopyVector(N_Vector from, N_Vector to) {
   if (N_VGetVectorID(from) == SUNDIALS_NVEC_SERIAL && N_VGetVectorID(to) == SUNDIALS_NVEC_SERIAL) {
-    const sunrealtype* src = N_VGetArrayPointer(from);
-    sunrealtype* dst = N_VGetArrayPointer(to);
+    const sunrealtype* src = NV_DATA_S(from);
+    sunrealtype* dst = NV_DATA_S(to);
     if (src != nullptr && dst != nullptr) {
-      if (src != dst) std::memcpy(dst, src, sizeof(sunrealtype) * N_VGetLength(from));
+      if (src != dst) std::memcpy(dst, src, sizeof(sunrealtype) * NV_LENGTH_S(from));
       return;
     }
   }
   N_VScale(1, from, to);
 }
 
-}  // namespace
-
-void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
+// p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h). Apart from
+// Interpolate so that the copy at s = 0 (every CE_ONE_STEP output) does not set up its frame.
+__attribute__((noinline)) void InterpolatePolynomial(CEodeMemRec* ce, sunrealtype s, int k,
+                                                     N_Vector out) {
   const int d = ce->degree;
   const sunrealtype h = ce->h;
-  if (s == 0 && k < d) {  // exactly the method's own values at tcur
-    CopyVector(k == 0 ? ce->xcur : ce->D[k], out);
-    return;
-  }
-  // p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h).
   const sunrealtype e = Factorial(d) / Factorial(d - k) * std::pow(s, d - k) / std::pow(h, d);
   sunrealtype ts[kMaxDegree + 1];
   sunrealtype th[kMaxDegree + 1];
@@ -682,6 +682,16 @@ void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
     X[m++] = ce->xcur;
   }
   Combine(m, c, X, out);
+}
+
+}  // namespace
+
+void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
+  if (s == 0 && k < ce->degree) {  // exactly the method's own values at tcur
+    CopyVector(k == 0 ? ce->xcur : ce->D[k], out);
+    return;
+  }
+  InterpolatePolynomial(ce, s, k, out);
 }
 
 }  // namespace ceode
