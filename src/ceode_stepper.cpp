@@ -180,15 +180,35 @@ void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealt
   }
 }
 
-// out = r_x(t).
-void ForcingX(const Stepper* st, sunrealtype t, N_Vector out) {
-  if (st->nforcing == 0) {  // N_VLinearCombination needs at least one vector
+// out = a * base + s * sum_k w[k] F[k] in one pass (base may be out or null; zero weights are
+// skipped, since a forced vector at large n costs one pass per term).
+void Combine(sunrealtype a, N_Vector base, sunrealtype s, int nw, const sunrealtype* w,
+             N_Vector const* F, N_Vector out) {
+  sunrealtype c[2 * kMaxForcing + 1];
+  N_Vector X[2 * kMaxForcing + 1];
+  int m = 0;
+  if (base != nullptr) {
+    c[m] = a;
+    X[m++] = base;
+  }
+  for (int k = 0; k < nw; ++k) {
+    if (w[k] == 0) continue;
+    c[m] = s * w[k];
+    X[m++] = F[k];
+  }
+  if (m == 0) {  // N_VLinearCombination needs at least one vector
     N_VConst(0, out);
     return;
   }
+  N_VLinearCombination(m, c, X, out);
+}
+
+// out = a * base + s * r_x(t) (base may be null).
+void WithForcingX(const Stepper* st, sunrealtype t, sunrealtype a, N_Vector base, sunrealtype s,
+                  N_Vector out) {
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
-  N_VLinearCombination(st->nforcing, val, const_cast<N_Vector*>(st->Fx), out);
+  Combine(a, base, s, st->nforcing, val, st->Fx, out);
 }
 
 // Weights of the m-th time derivative of r(t) at t.
@@ -202,12 +222,10 @@ void ForcingDerivWeights(const Stepper* st, sunrealtype t, int m, sunrealtype* w
   }
 }
 
-// out = r_v^(m)(t) + r_x^(m+1)(t): the forcing's part of the m-th derivative of x'' = G.
-void ForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector out) {
-  if (st->nforcing == 0) {
-    N_VConst(0, out);
-    return;
-  }
+// out = base + s * (r_v^(m)(t) + r_x^(m+1)(t)): the forcing's part of the m-th derivative of
+// x'' = G added to base.
+void WithForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector base, sunrealtype s,
+                      N_Vector out) {
   sunrealtype c[2 * kMaxForcing];
   N_Vector X[2 * kMaxForcing];
   ForcingDerivWeights(st, t, m, c);
@@ -216,7 +234,7 @@ void ForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector out) {
     X[k] = st->Fv[k];
     X[st->nforcing + k] = st->Fx[k];
   }
-  N_VLinearCombination(2 * st->nforcing, c, X, out);
+  Combine(1, base, s, 2 * st->nforcing, c, X, out);
 }
 
 // CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
@@ -225,24 +243,18 @@ int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
   if (st->nforcing == 0) return st->g(t, x, u, f, st->g_data);
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
-  N_VLinearCombination(st->nforcing, val, st->Fx, st->vg);
-  N_VLinearSum(1, u, -1, st->vg, st->vg);
+  Combine(1, u, -1, st->nforcing, val, st->Fx, st->vg);
   const int rv = st->g(t, x, st->vg, f, st->g_data);
   if (rv != 0) return rv;
-  sunrealtype c[2 * kMaxForcing + 1];
-  N_Vector X[2 * kMaxForcing + 1];
-  int m = 0;
-  c[m] = 1;
-  X[m++] = f;
+  sunrealtype c[2 * kMaxForcing];
+  N_Vector X[2 * kMaxForcing];
   for (int k = 0; k < st->nforcing; ++k) {
-    c[m] = val[k];
-    X[m++] = st->Fv[k];
-    if (der[k] != 0) {
-      c[m] = der[k];
-      X[m++] = st->Fx[k];
-    }
+    c[k] = val[k];
+    X[k] = st->Fv[k];
+    c[st->nforcing + k] = der[k];
+    X[st->nforcing + k] = st->Fx[k];
   }
-  N_VLinearCombination(m, c, X, f);
+  Combine(1, f, 1, 2 * st->nforcing, c, X, f);
   return 0;
 }
 
@@ -386,10 +398,9 @@ void CaptureEnd(Stepper* st) {
   const sunrealtype t = ce->tcur;
   for (int k = 2; k < ce->degree; ++k) {
     if (st->g_end[k] == nullptr && (st->g_end[k] = N_VClone(ce->xcur)) == nullptr) return;
-    ForcingAccel(st, t, k - 2, st->vg);
-    N_VLinearSum(1, ce->D[k], -1, st->vg, st->g_end[k]);
+    WithForcingAccel(st, t, k - 2, ce->D[k], -1, st->g_end[k]);
   }
-  ForcingX(st, t, st->rx_end);
+  WithForcingX(st, t, 0, nullptr, 1, st->rx_end);
   st->t_end = t;
   st->end_degree = ce->degree;
   st->end_valid = true;
@@ -405,12 +416,10 @@ void CaptureEnd(Stepper* st) {
 int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
   CEodeMemRec* ce = st->ce;
   for (int k = 2; k < ce->degree; ++k) {
-    ForcingAccel(st, t0, k - 2, st->vg);
-    N_VLinearSum(1, st->g_end[k], 1, st->vg, ce->D[k]);
+    WithForcingAccel(st, t0, k - 2, st->g_end[k], 1, ce->D[k]);
   }
   if (ce->degree >= 4) {
-    ForcingX(st, t0, st->rx);
-    N_VLinearSum(1, st->rx, -1, st->rx_end, st->rx);
+    WithForcingX(st, t0, -1, st->rx_end, 1, st->rx);
     const sunrealtype dn = N_VMaxNorm(st->rx);
     if (dn > 0) {
       const sunrealtype eps =
@@ -441,11 +450,7 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
   int flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
   if (flag != CE_SUCCESS) return flag;
-  N_VScale(1, own.v, st->u);
-  if (st->nforcing > 0) {
-    ForcingX(st, t0, st->rx);
-    N_VLinearSum(1, st->u, 1, st->rx, st->u);
-  }
+  WithForcingX(st, t0, 1, own.v, 1, st->u);
   const Counters saved = SaveCounters(ce);
   const bool warned = ce->guard_warned;
   flag = CEodeReInit(ce, t0, own.x, st->u);
@@ -518,12 +523,7 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
       ce->guard_pending = false;
       st->omega_fixed = true;
     }
-    if (st->nforcing > 0) {
-      ForcingX(st, tout, st->rx);
-      N_VLinearSum(1, st->u, -1, st->rx, own.v);
-    } else {
-      N_VScale(1, st->u, own.v);
-    }
+    WithForcingX(st, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
   N_VScale(1, st->y_own, y);
