@@ -403,6 +403,105 @@ sunrealtype UpdateBlocked(const FusedPlan& fp, sunindextype n) {
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+// Entries i, i + 1 of a sum of M terms: the same multiplications and additions in the same order
+// as SumBlock.
+template <int M>
+inline __m128d PairAt(const sunrealtype* const* x, const __m128d* c, sunindextype i) {
+  __m128d acc = _mm_mul_pd(c[0], _mm_loadu_pd(x[0] + i));
+  for (int j = 1; j < M; ++j) acc = _mm_add_pd(acc, _mm_mul_pd(c[j], _mm_loadu_pd(x[j] + i)));
+  return acc;
+}
+
+// Pointers and weights of a plan of a known shape, held where the loop keeps them in registers.
+template <int D>
+struct PairPlan {
+  static constexpr int kS = StepSums(D);
+  const sunrealtype* x[kS][kMaxTerms];
+  __m128d c[kS][kMaxTerms];
+  sunrealtype* out[kS];
+  explicit PairPlan(const FusedPlan& fp) {
+    for (int k = 0; k < kS; ++k) {
+      for (int j = 0; j < fp.terms[k].m; ++j) {
+        x[k][j] = fp.terms[k].X[j];
+        c[k][j] = _mm_set1_pd(fp.terms[k].c[j]);
+      }
+      out[k] = fp.terms[k].out;
+    }
+  }
+};
+
+// Sums S .. of entries i, i + 1, in the plan's order; returns the last (the new position).
+template <int D, unsigned Ones, bool Stream, int S>
+inline __m128d PairSums(const PairPlan<D>& pp, sunindextype i) {
+  const __m128d r = PairAt<StepTerms(D, Ones, S)>(pp.x[S], pp.c[S], i);
+  if constexpr (S + 1 < StepSums(D)) {
+    _mm_storeu_pd(pp.out[S] + i, r);
+    return PairSums<D, Ones, Stream, S + 1>(pp, i);
+  } else {
+    if constexpr (Stream) {
+      _mm_stream_pd(pp.out[S] + i, r);
+    } else {
+      _mm_storeu_pd(pp.out[S] + i, r);
+    }
+    return r;
+  }
+}
+
+template <int D, unsigned Ones, std::size_t... S>
+inline void ShapedEntry(const FusedPlan& fp, sunindextype i, std::index_sequence<S...> /*sums*/) {
+  (ShapedSum<D, Ones, static_cast<int>(S)>(fp, i), ...);
+}
+
+// Large systems of a known shape without compensation, as a hand loop runs them: two entries at
+// a time through every sum of the plan, the position's |x| summed from the register. No block
+// buffer, so an in-place sum writes its output directly: it reads that entry first, and no later
+// sum reads the old value. Entry by entry the operations and their order are SumBlock's, so the
+// state is bit for bit that of UpdateBlocked (and of the N_Vector reference).
+template <int D, unsigned Ones, bool Stream>
+sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
+  const PairPlan<D> pp(fp);
+  const __m128d sign = _mm_set1_pd(-0.0);
+  __m128d s01 = _mm_setzero_pd();
+  __m128d s23 = _mm_setzero_pd();
+  sunindextype i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, PairSums<D, Ones, Stream, 0>(pp, i)));
+    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, PairSums<D, Ones, Stream, 0>(pp, i + 2)));
+  }
+  if constexpr (Stream) StreamFence();  // visible before f reads x(t + h)
+  sunrealtype s[4];
+  _mm_storeu_pd(s, s01);
+  _mm_storeu_pd(s + 2, s23);
+  for (; i < n; ++i) {
+    ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
+    s[0] += std::fabs(pp.out[StepSums(D) - 1][i]);
+  }
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+template <int D, unsigned Ones>
+sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
+  const bool stream = n >= kStreamSystem &&
+                      reinterpret_cast<std::uintptr_t>(fp.terms[StepSums(D) - 1].out) % 16 == 0;
+  return stream ? UpdatePairs<D, Ones, true>(fp, n) : UpdatePairs<D, Ones, false>(fp, n);
+}
+constexpr bool kHavePairs = true;
+#else
+template <int D, unsigned Ones>
+sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
+  return UpdateBlocked(fp, n);
+}
+constexpr bool kHavePairs = false;
+#endif
+
+template <std::size_t... I>
+constexpr std::array<SerialKernelFn, kNumShapes> PairTable(std::index_sequence<I...> /*shapes*/) {
+  return {&UpdatePairsAuto<kShapes[I].d, kShapes[I].ones>...};
+}
+constexpr std::array<SerialKernelFn, kNumShapes> kPairs =
+    PairTable(std::make_index_sequence<kNumShapes>{});
+
 // Systems smaller than this take the entry-by-entry kernel.
 constexpr sunindextype kSmallSystem = 16;
 
@@ -423,6 +522,7 @@ sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(
 
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
   if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
+  if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1];
   if (n == 1) return &UpdateOne;
   return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
 }
@@ -439,11 +539,8 @@ sunrealtype* DataOf(N_Vector v) {
   return N_VGetArrayPointer(v);
 }
 
-// 1 + the index in kShapes of the plan's shape (term counts, no in-place sum), 0 for none.
+// 1 + the index in kShapes of the plan's shape (term counts), 0 for none.
 int ShapeOf(const FusedPlan& fp) {
-  for (int k = 0; k < fp.n; ++k) {
-    if (fp.terms[k].in_place) return 0;
-  }
   for (int i = 0; i < kNumShapes; ++i) {
     bool same = StepSums(kShapes[i].d) == fp.n;
     for (int k = 0; same && k < fp.n; ++k) {
@@ -488,6 +585,7 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
+  fp->compensated = cs.on;
   fp->shape = distinct ? ShapeOf(*fp) : 0;
   return distinct;
 }

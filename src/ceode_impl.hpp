@@ -104,6 +104,7 @@ struct FusedPlan {
   // 1 + the index of the plan's shape among those with a kernel of their own (ceode_fused.cpp,
   // kShapes: every term count a compile-time constant), 0 for none.
   int shape = 0;
+  bool compensated = false;  // the sums carry Kahan compensations (FusedTerms::old)
   FusedTerms terms[kMaxDegree];
 };
 

@@ -418,4 +418,92 @@ std::vector<KernelCase> Cases() {
 INSTANTIATE_TEST_SUITE_P(TinyAndBlockTails, FusedKernelAgainstReference,
                          ::testing::ValuesIn(Cases()), CaseName);
 
+// The step's own plans (BuildUpdatePlan) of every named set, out of place and in place, at the
+// sizes of each serial kernel: entry by entry (5), the pair loop with its tail (3077) and with
+// streamed stores (2^19 + 5). Each must give the reference's outputs bit for bit; the reference
+// runs the out-of-place plan (its combinations must not write an input), and an in-place plan's
+// outputs are the same values in the history's vectors.
+class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
+ protected:
+  static constexpr int kVectors = 2 * ceode::kMaxDegree + 2;  // D, Dnew, x(t), x(t + h)
+  void SetUp() override {
+    ASSERT_EQ(SUNContext_Create(SUN_COMM_NULL, &ctx_), 0);
+    for (N_Vector& v : pool_) v = N_VNew_Serial(GetParam(), ctx_);
+  }
+  void TearDown() override {
+    for (N_Vector v : pool_) N_VDestroy(v);
+    SUNContext_Free(&ctx_);
+  }
+  void Fill() {
+    static constexpr sunrealtype kScale[] = {0.01, 0.1, 1, 10, 100};  // roundings differ by order
+    std::uint64_t seed = 7;
+    for (N_Vector v : pool_) {
+      sunrealtype* d = N_VGetArrayPointer(v);
+      for (sunindextype i = 0; i < GetParam(); ++i) {
+        seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+        d[i] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * kScale[seed % 5];
+      }
+    }
+  }
+  std::vector<sunrealtype> Entries(int v) const {
+    const sunrealtype* d = N_VGetArrayPointer(pool_[v]);
+    return {d, d + GetParam()};
+  }
+  // The new derivative k of the plan (in place: the history's vector).
+  static int NewSlot(int d, int k, bool in_place) {
+    return in_place && ceode::InPlaceLevel(d, k) ? k : ceode::kMaxDegree + k;
+  }
+  ceode::UpdatePlan Plan(int d, const ceode::StepCoeffs& co, bool in_place) {
+    N_Vector D[ceode::kMaxDegree] = {};
+    N_Vector Dn[ceode::kMaxDegree] = {};
+    for (int k = 1; k < d; ++k) {
+      D[k] = pool_[k];
+      Dn[k] = pool_[NewSlot(d, k, in_place)];
+    }
+    ceode::UpdatePlan plan;
+    ceode::BuildUpdatePlan(d, co, D, Dn, pool_[0], pool_[kVectors - 1], &plan);
+    return plan;
+  }
+
+  SUNContext ctx_ = nullptr;
+  N_Vector pool_[kVectors] = {};
+};
+
+TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNamedSet) {
+  int shaped = 0;
+  for (int s = 0; s < ceode::NumMethodSets(); ++s) {
+    const ceode::MethodSet& set = ceode::MethodSetAt(s);
+    const int d = set.degree;
+    ceode::StepCoeffs co;
+    ceode::ComputeStepCoeffs(d, set.params.data(), 0.01, &co);
+    Fill();
+    ceode::UpdateReference(Plan(d, co, false), {});
+    std::vector<std::vector<sunrealtype>> ref;  // the outputs: x(t + h), then level 1 .. d - 1
+    ref.push_back(Entries(kVectors - 1));
+    for (int k = 1; k < d; ++k) ref.push_back(Entries(NewSlot(d, k, false)));
+    for (bool in_place : {false, true}) {
+      ceode::FusedPlan fp;
+      ASSERT_TRUE(ceode::BuildFusedPlan(Plan(d, co, in_place), {}, &fp)) << set.name;
+      shaped += fp.shape > 0 ? 1 : 0;
+      Fill();
+      ceode::UpdateSerial(fp, GetParam());
+      long differing = 0;
+      for (int k = 0; k < d; ++k) {
+        const std::vector<sunrealtype> got =
+            Entries(k == 0 ? kVectors - 1 : NewSlot(d, k, in_place));
+        for (size_t i = 0; i < got.size(); ++i) differing += got[i] != ref[k][i] ? 1 : 0;
+      }
+      EXPECT_EQ(differing, 0) << set.name << (in_place ? ", in place" : ", out of place");
+    }
+  }
+  EXPECT_GE(shaped, 2 * 9) << "plans with a kernel of their own";
+}
+
+INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
+                         ::testing::Values(sunindextype{5}, 3 * ceode::kInPlaceMinLen + 5,
+                                           kStreamed),
+                         [](const ::testing::TestParamInfo<sunindextype>& info) {
+                           return "Size" + std::to_string(info.param);
+                         });
+
 }  // namespace kernel
