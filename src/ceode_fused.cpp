@@ -417,9 +417,10 @@ inline __m128d PairAt(const sunrealtype* const* x, const __m128d* c, sunindextyp
 template <int D>
 struct PairPlan {
   static constexpr int kS = StepSums(D);
-  const sunrealtype* x[kS][kMaxTerms];
-  __m128d c[kS][kMaxTerms];
-  sunrealtype* out[kS];
+  // Zeroed: the shape fixes how many terms each sum reads (== FusedTerms::m, ShapeOf).
+  const sunrealtype* x[kS][kMaxTerms] = {};
+  __m128d c[kS][kMaxTerms] = {};
+  sunrealtype* out[kS] = {};
   explicit PairPlan(const FusedPlan& fp) {
     for (int k = 0; k < kS; ++k) {
       for (int j = 0; j < fp.terms[k].m; ++j) {
