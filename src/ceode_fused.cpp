@@ -1,6 +1,7 @@
 // The step's update kernel: the reference on generic N_Vectors and the fused serial backend
-// (the whole update in one sweep through memory, block by block, with the growth check's norm
-// folded in; docs/results/bench_step.txt). Both perform the same floating-point operations in
+// (the whole update in one sweep through memory with the growth check's norm folded in: for the
+// named sets' shapes two entries at a time through every sum, otherwise block by block;
+// docs/results.md, "Per-step cost"). Both perform the same floating-point operations in
 // the same order, so the state they produce is bit for bit the same.
 #include "ceode_fused.hpp"
 

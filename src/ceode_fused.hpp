@@ -1,6 +1,6 @@
 // The step's update kernel (ceode_fused.cpp), private: an UpdatePlan of linear combinations run
-// by the generic N_Vector reference, or on serial vectors by the fused backend (one blocked
-// sweep through memory), with the same operations in the same order, so bit for bit equal.
+// by the generic N_Vector reference, or on serial vectors by the fused backend (one sweep
+// through memory), with the same operations in the same order, so bit for bit equal.
 #ifndef CEODE_SRC_CEODE_FUSED_HPP_
 #define CEODE_SRC_CEODE_FUSED_HPP_
 

@@ -259,8 +259,8 @@ TEST_P(FusedKernel, GivesBitwiseTheNumbersOfTheGenericPathOnOneUnknown) {
 // The kernel itself, without an integrator: the serial backend against the generic reference on
 // plans of every shape the step builds (0, 1, 2 and more terms; the two-term shortcuts of
 // N_VLinearSum; accumulated terms with and without compensation), on sizes that exercise the
-// entry-by-entry branch (n < 16), the block tails (the block is 256 entries) and the streamed
-// stores of large systems.
+// entry-by-entry branch (n < 16), the block tails of plans without a shape of their own (the block
+// is 256 entries) and the streamed stores of large systems.
 namespace kernel {
 
 constexpr sunindextype kBlock = 256;
