@@ -64,10 +64,14 @@
 
 #include "../examples/mri_two_scale_model.h"
 
-static double OMEGA = 10.0; /* argv[4] or the equal-error list */
-static double AMP = 0.0;    /* the fast oscillation's amplitude A (--amp) */
-static int NSLOW0 = 10;     /* slow steps of the largest H (--nslow0) */
-static int QUIET = 0; /* equal-error: no guard warnings (the search starts beyond the limit) */
+/* One case: omega, the fast amplitude A and the slow steps of the largest H (equal-error's
+ * argument "omega[:A[:N0]]", or argv[4..6]); quiet: no guard warnings (the equal-error search
+ * starts beyond the limit). */
+typedef struct {
+  double omega, amp;
+  int nslow0;
+  int quiet;
+} Config;
 #define TEND 2.0
 #define NRUNS 5
 
@@ -80,8 +84,9 @@ static int QUIET = 0; /* equal-error: no guard warnings (the search starts beyon
 /* The inner stepper of the chosen kind; *mem is its integrator memory. */
 static int is_ceode(const char* kind) { return strncmp(kind, "ceode", 5) == 0; }
 
-static int make_inner(SUNContext ctx, const char* kind, double hin, const char* method, N_Vector y,
-                      TwoScale* m, void** mem, MRIStepInnerStepper* inner) {
+static int make_inner(SUNContext ctx, const Config* cf, const char* kind, double hin,
+                      const char* method, N_Vector y, TwoScale* m, void** mem,
+                      MRIStepInnerStepper* inner) {
   if (is_ceode(kind)) {
     N_Vector x0 = N_VNew_Serial(2, ctx), v0 = N_VNew_Serial(2, ctx);
     NV_Ith_S(x0, 0) = NV_Ith_S(y, 0);
@@ -91,10 +96,10 @@ static int make_inner(SUNContext ctx, const char* kind, double hin, const char* 
     *mem = CEodeCreate(ctx);
     int flag = CEodeInit(*mem, two_scale_fast_accel, 0, x0, v0);
     if (!flag) flag = CEodeSetUserData(*mem, m);
-    if (!flag && QUIET) flag = CEodeSetErrFile(*mem, NULL);
+    if (!flag && cf->quiet) flag = CEodeSetErrFile(*mem, NULL);
     if (!flag) flag = CEodeSetMethodByName(*mem, method);
     if (!flag) flag = CEodeSetFixedStep(*mem, hin);
-    if (!flag && strcmp(kind, "ceode-w") == 0) flag = CEodeSetMaxFrequency(*mem, OMEGA);
+    if (!flag && strcmp(kind, "ceode-w") == 0) flag = CEodeSetMaxFrequency(*mem, cf->omega);
     if (!flag) flag = CEodeCreateMRIStepInnerStepper(*mem, inner);
     N_VDestroy(x0);
     N_VDestroy(v0);
@@ -123,15 +128,16 @@ typedef struct {
   double omega_est;
 } RunOut;
 
-static RunOut run(SUNContext ctx, const char* kind, double hin, const char* method, int nslow) {
+static RunOut run(SUNContext ctx, const Config* cf, const char* kind, double hin,
+                  const char* method, int nslow) {
   RunOut r = {-1, 0, 0, 0};
-  TwoScale m = {OMEGA, AMP, 0};
+  TwoScale m = {cf->omega, cf->amp, 0};
   sunrealtype t = 0;
   N_Vector y = N_VNew_Serial(4, ctx);
   two_scale_state(&m, 0, y);
   void* imem = NULL;
   MRIStepInnerStepper inner = NULL;
-  if (make_inner(ctx, kind, hin, method, y, &m, &imem, &inner) == 0) {
+  if (make_inner(ctx, cf, kind, hin, method, y, &m, &imem, &inner) == 0) {
     void* mri = MRIStepCreate(two_scale_slow_rhs, NULL, 0, y, inner, ctx);
     MRIStepCoupling C = MRIStepCoupling_LoadTable(ARKODE_MRI_GARK_ERK33a);
     int flag = MRIStepSetCoupling(mri, C);
@@ -172,12 +178,13 @@ typedef struct {
   RunOut out;
 } Cell;
 
-static Cell cheapest(SUNContext ctx, const char* kind, const char* method, int nslow, double ref) {
+static Cell cheapest(SUNContext ctx, const Config* cf, const char* kind, const char* method,
+                     int nslow, double ref) {
   static const int nsub[] = {1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 24, 32, 48, 64};
   Cell best = {0, {-1, -1, 0, 0}};
   for (size_t j = 0; j < sizeof(nsub) / sizeof(nsub[0]); ++j) {
     const double h = TEND / nslow / 3 / nsub[j] * (1 + 1e-6);
-    const RunOut r = run(ctx, kind, h, method, nslow);
+    const RunOut r = run(ctx, cf, kind, h, method, nslow);
     if (r.err > 0 && fabs(r.err - ref) <= 0.1 * ref &&
         (best.out.nfast < 0 || r.nfast < best.out.nfast)) {
       best.n = nsub[j];
@@ -198,36 +205,36 @@ static double loglog_slope(const double* x, const double* y, int n) {
   return n > 1 ? sxy / sxx : 0;
 }
 
-static int fail(const char* what, double H) {
-  printf("FAILED (omega %g, H %g): %s\n", OMEGA, H, what);
+static int fail(const Config* cf, const char* what, double H) {
+  printf("FAILED (omega %g, H %g): %s\n", cf->omega, H, what);
   return 1;
 }
 
 /* The checks of one H (see the header): RK4 and at least one CEODE set reached the target (a
  * second-order set cannot when the fast mode is excited: it is reported, not failed), and where a
  * set reached it, the guard changed nothing but its own evaluations and found omega cheaply. */
-static int check_cells(const Cell* c, double H) {
+static int check_cells(const Config* cf, const Cell* c, double H) {
   int bad = 0, reached = 0;
   for (int k = 0; k < NSETS; ++k) reached |= c[k].out.nfast > 0;
   if (c[NKINDS - 1].out.nfast < 0 || !reached)
-    bad |= fail("RK4 or every CEODE set reached the target at no n <= 64", H);
+    bad |= fail(cf, "RK4 or every CEODE set reached the target at no n <= 64", H);
   for (int k = 0; k < NSETS && !bad; ++k) {
     const Cell* g = &c[k];
     const Cell* w = &c[k + NSETS];
     if (g->out.nfast < 0 && w->out.nfast < 0) continue;
     if (g->n != w->n || g->out.err != w->out.err || g->out.nfast - w->out.nfast != g->out.nguard)
-      bad |= fail("the guard changed the integration (guard estimating vs omega given)", H);
-    if (g->out.nguard > 3 || !(fabs(g->out.omega_est - OMEGA) <= 1e-6 * OMEGA))
-      bad |= fail("the guard's estimate is not omega within 1e-6 in <= 3 evaluations", H);
+      bad |= fail(cf, "the guard changed the integration (guard estimating vs omega given)", H);
+    if (g->out.nguard > 3 || !(fabs(g->out.omega_est - cf->omega) <= 1e-6 * cf->omega))
+      bad |= fail(cf, "the guard's estimate is not omega within 1e-6 in <= 3 evaluations", H);
   }
   return bad;
 }
 
-static void csv_rows(FILE* csv, double H, double ref, const Cell* c) {
+static void csv_rows(FILE* csv, const Config* cf, double H, double ref, const Cell* c) {
   if (csv == NULL) return;
   for (int k = 0; k < NKINDS; ++k) {
     const int is_rk = k == NKINDS - 1;
-    fprintf(csv, "%g,%g,%.6g,%.6e,%s,%s,%s,%d,%.6e,%ld,%ld,%.4f\n", OMEGA, AMP, H, ref,
+    fprintf(csv, "%g,%g,%.6g,%.6e,%s,%s,%s,%d,%.6e,%ld,%ld,%.4f\n", cf->omega, cf->amp, H, ref,
             is_rk ? "erk4" : "ceode", KINDS[k][1], is_rk ? "" : (k >= NSETS ? "yes" : "no"), c[k].n,
             c[k].out.err, c[k].out.nfast, c[k].out.nguard,
             (double)c[k].out.nfast / (double)c[NKINDS - 1].out.nfast);
@@ -249,39 +256,37 @@ static void best_ratios(const Cell* c, double* r) {
  * is linear and its slow part does not read q, so the free oscillation A cos(omega t) solves the
  * inner problem exactly and drops out of that error: it is computed at A = 0, where RK4 need not
  * resolve the fast mode (h = 5e-5; 5e-6 when A > 0, to be safe at the finest H). */
-static double reference_error(SUNContext ctx, int nslow) {
-  const double amp = AMP;
-  AMP = 0;
-  const double ref = run(ctx, "erk4", amp > 0 ? 5e-6 : 5e-5, "", nslow).err;
-  AMP = amp;
-  return ref;
+static double reference_error(SUNContext ctx, const Config* cf, int nslow) {
+  Config free_mode = *cf;
+  free_mode.amp = 0;
+  return run(ctx, &free_mode, "erk4", cf->amp > 0 ? 5e-6 : 5e-5, "", nslow).err;
 }
 
-static void equal_error_header(void) {
+static void equal_error_header(const Config* cf) {
   printf(
       "# omega %g, A %g; cheapest inner steps per stage n with MRI error within 10%% of the "
       "exact-inner error\n# -w: omega given to CEODE (CEodeSetMaxFrequency), no guard "
       "evaluations\n# H ref_error",
-      OMEGA, AMP);
+      cf->omega, cf->amp);
   for (int k = 0; k < NKINDS; ++k)
     printf(" | %s%s", KINDS[k][1], k >= NSETS && k < 2 * NSETS ? "-w" : "");
   printf(" (each: n err fast_f) | best CEODE/RK4 | best CEODE-w/RK4\n");
 }
 
-static int equal_error(SUNContext ctx, int nh, FILE* csv) {
+static int equal_error(SUNContext ctx, const Config* cf, int nh, FILE* csv) {
   int met = 0, met_w = 0, bad = 0;
   double hs[MAXH], refs[MAXH], hw_max = 0;
-  equal_error_header();
+  equal_error_header(cf);
   for (int i = 0; i < nh; ++i) {
-    const int nslow = NSLOW0 << i;
+    const int nslow = cf->nslow0 << i;
     const double H = TEND / nslow;
-    const double ref = reference_error(ctx, nslow);
+    const double ref = reference_error(ctx, cf, nslow);
     Cell c[NKINDS];
     double r[2];
-    hs[i] = H, refs[i] = ref, hw_max = fmax(hw_max, H * OMEGA);
+    hs[i] = H, refs[i] = ref, hw_max = fmax(hw_max, H * cf->omega);
     printf("%.5f %.4e", H, ref);
     for (int k = 0; k < NKINDS; ++k) {
-      c[k] = cheapest(ctx, KINDS[k][0], KINDS[k][1], nslow, ref);
+      c[k] = cheapest(ctx, cf, KINDS[k][0], KINDS[k][1], nslow, ref);
       printf(" | %d %.3e %ld", c[k].n, c[k].out.err, c[k].out.nfast);
     }
     best_ratios(c, r);
@@ -297,27 +302,20 @@ static int equal_error(SUNContext ctx, int nh, FILE* csv) {
              c[k].out.omega_est, c[k].out.nguard);
       break;
     }
-    csv_rows(csv, H, ref, c);
-    bad |= check_cells(c, H);
+    csv_rows(csv, cf, H, ref, c);
+    bad |= check_cells(cf, c, H);
   }
   const double order = loglog_slope(hs, refs, nh);
   printf("# reference MRI error: order %.3f from a log-log fit over %d H (max H omega = %g)\n",
          order, nh, hw_max);
   if (hw_max <= 2 && nh >= 3 && !(order >= 2.8 && order <= 3.4))
-    bad |= fail("the reference error's order is outside 2.8 .. 3.4", 0);
+    bad |= fail(cf, "the reference error's order is outside 2.8 .. 3.4", 0);
   printf(
       "# omega %g, A %g: best CEODE <= RK4/3 at %d of %d H (guard estimating), %d of %d (omega "
       "given)\n",
-      OMEGA, AMP, met, nh, met_w, nh);
+      cf->omega, cf->amp, met, nh, met_w, nh);
   return bad;
 }
-
-/* One equal-error configuration: omega, the fast amplitude A and the slow steps of the largest H
- * (argument "omega[:A[:N0]]"). */
-typedef struct {
-  double omega, amp;
-  int nslow0;
-} Config;
 
 /* equal-error [omega[:A[:N0]] ...] [--csv FILE] and --quick [--csv FILE]. Default: the model on
  * its slow manifold at omega = 10 and 100 (H = 0.2 .. 0.0125), and at omega = 100 with the fast
@@ -331,26 +329,22 @@ static int equal_error_main(int argc, char** argv, int quick) {
       csv = fopen(argv[++i], "w");
       if (csv == NULL) return fprintf(stderr, "cannot write %s\n", argv[i]), 1;
     } else if (nc < 8 && atof(argv[i]) > 0) {
-      Config c = {0, 0, 10};
+      Config c = {0, 0, 10, 1};
       sscanf(argv[i], "%lf:%lf:%d", &c.omega, &c.amp, &c.nslow0);
       cf[nc++] = c;
     }
   }
   if (nc == 0) {
-    cf[nc++] = (Config){10, 0, 10};
-    cf[nc++] = (Config){100, 0, 10};
-    cf[nc++] = (Config){100, 0.1, 160};
+    cf[nc++] = (Config){10, 0, 10, 1};
+    cf[nc++] = (Config){100, 0, 10, 1};
+    cf[nc++] = (Config){100, 0.1, 160, 1};
   }
   if (csv != NULL)
     fprintf(csv,
             "omega,amp,H,ref_error,inner,set,omega_given,n,error,fast_f,guard_f,ratio_to_rk4\n");
   SUNContext ctx = NULL;
   if (SUNContext_Create(CTX_COMM, &ctx) != 0) return 1;
-  QUIET = 1;
-  for (int i = 0; i < nc; ++i) {
-    OMEGA = cf[i].omega, AMP = cf[i].amp, NSLOW0 = cf[i].nslow0;
-    bad |= equal_error(ctx, quick ? 3 : MAXH, csv);
-  }
+  for (int i = 0; i < nc; ++i) bad |= equal_error(ctx, &cf[i], quick ? 3 : MAXH, csv);
   SUNContext_Free(&ctx);
   if (csv != NULL) fclose(csv);
   printf("%s\n", bad ? "FAILED" : "PASSED");
@@ -363,18 +357,19 @@ int main(int argc, char** argv) {
     return equal_error_main(argc, argv, strcmp(kind, "--quick") == 0);
   const double hin = argc > 2 ? atof(argv[2]) : 0.01;
   const char* method = argc > 3 ? argv[3] : "G4_A34";
-  if (argc > 4) OMEGA = atof(argv[4]);
-  if (argc > 5) AMP = atof(argv[5]);
-  if (argc > 6) NSLOW0 = atoi(argv[6]);
+  Config cf = {10, 0, 10, 0};
+  if (argc > 4) cf.omega = atof(argv[4]);
+  if (argc > 5) cf.amp = atof(argv[5]);
+  if (argc > 6) cf.nslow0 = atoi(argv[6]);
   SUNContext ctx = NULL;
   if (SUNContext_Create(CTX_COMM, &ctx) != 0) return 1;
-  printf("# omega %g, inner %s (%s %g)\n# H max_error fast_f\n", OMEGA, kind,
+  printf("# omega %g, inner %s (%s %g)\n# H max_error fast_f\n", cf.omega, kind,
          is_ceode(kind) ? method : "RK4", hin);
   double hs[NRUNS], errs[NRUNS];
   int n = 0;
   for (int i = 0; i < NRUNS; ++i) {
-    const int nslow = NSLOW0 << i;
-    const RunOut r = run(ctx, kind, hin, method, nslow);
+    const int nslow = cf.nslow0 << i;
+    const RunOut r = run(ctx, &cf, kind, hin, method, nslow);
     printf("%.5f %.6e %ld\n", TEND / nslow, r.err, r.nfast);
     if (r.err > 0) hs[n] = TEND / nslow, errs[n++] = r.err;
   }
