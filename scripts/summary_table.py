@@ -40,7 +40,8 @@ def main():
     ap.add_argument("ratios")
     ap.add_argument("--out")
     args = ap.parse_args()
-    rows = list(csv.DictReader(open(args.ratios)))
+    with open(args.ratios, newline="") as f:
+        rows = list(csv.DictReader(f))
     debian = {(r["scene"], r["error_level"]): r for r in rows if r["sundials_build"] != O3}
     keys = [(r["scene"], r["error_level"]) for r in rows if r["sundials_build"] == O3]
     keys += [k for k in debian if k not in keys]
