@@ -182,8 +182,8 @@ void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealt
 
 // out = a * base + s * sum_k w[k] F[k] in one pass (base may be out or null; zero weights are
 // skipped, since a forced vector at large n costs one pass per term).
-void Combine(sunrealtype a, N_Vector base, sunrealtype s, int nw, const sunrealtype* w,
-             N_Vector const* F, N_Vector out) {
+void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const sunrealtype* w,
+                    N_Vector const* F, N_Vector out) {
   sunrealtype c[2 * kMaxForcing + 1];
   N_Vector X[2 * kMaxForcing + 1];
   int m = 0;
@@ -208,7 +208,7 @@ void WithForcingX(const Stepper* st, sunrealtype t, sunrealtype a, N_Vector base
                   N_Vector out) {
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
-  Combine(a, base, s, st->nforcing, val, st->Fx, out);
+  CombineForcing(a, base, s, st->nforcing, val, st->Fx, out);
 }
 
 // Weights of the m-th time derivative of r(t) at t.
@@ -234,7 +234,7 @@ void WithForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector base, su
     X[k] = st->Fv[k];
     X[st->nforcing + k] = st->Fx[k];
   }
-  Combine(1, base, s, 2 * st->nforcing, c, X, out);
+  CombineForcing(1, base, s, 2 * st->nforcing, c, X, out);
 }
 
 // CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
@@ -243,7 +243,7 @@ int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
   if (st->nforcing == 0) return st->g(t, x, u, f, st->g_data);
   sunrealtype val[kMaxForcing], der[kMaxForcing];
   ForcingWeights(st, t, val, der);
-  Combine(1, u, -1, st->nforcing, val, st->Fx, st->vg);
+  CombineForcing(1, u, -1, st->nforcing, val, st->Fx, st->vg);
   const int rv = st->g(t, x, st->vg, f, st->g_data);
   if (rv != 0) return rv;
   sunrealtype c[2 * kMaxForcing];
@@ -254,7 +254,7 @@ int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
     c[st->nforcing + k] = der[k];
     X[st->nforcing + k] = st->Fx[k];
   }
-  Combine(1, f, 1, 2 * st->nforcing, c, X, f);
+  CombineForcing(1, f, 1, 2 * st->nforcing, c, X, f);
   return 0;
 }
 
