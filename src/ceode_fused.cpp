@@ -484,8 +484,11 @@ sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
 
 template <int D, unsigned Ones>
 sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
-  const bool stream = n >= kStreamSystem &&
-                      reinterpret_cast<std::uintptr_t>(fp.terms[StepSums(D) - 1].out) % 16 == 0;
+  // A position written over its last value stays in cache until written back, as in a hand loop:
+  // streaming it (and the history beside it) measured slower at 10^6 entries (docs/results.md).
+  const FusedTerms& last = fp.terms[StepSums(D) - 1];
+  const bool stream =
+      n >= kStreamSystem && !last.in_place && reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
   return stream ? UpdatePairs<D, Ones, true>(fp, n) : UpdatePairs<D, Ones, false>(fp, n);
 }
 constexpr bool kHavePairs = true;

@@ -153,8 +153,16 @@ struct CEodeMemRec {
   bool fused_mpi = false;        // NVECTOR_PARALLEL: fused_plans valid on the local part
   bool reduce_failed = false;    // the last update's global norm (an MPI reduction) failed
   sunindextype fused_len = 0;    // entries the fused update runs over (local on NVECTOR_PARALLEL)
-  std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by nsteps_h % 6
+  std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by plan_ix
   std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;
+  // The same plans writing x(t + 2h) over x(t + h) (docs/theory.md, "In-place update"): the lean
+  // loop's steps before its last one, when xin_ready.
+  std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans_xin;
+  bool xin_ready = false;
+  // The configuration of the vectors: the history's phase (period 2) is plan_ix % 2 and the
+  // positions' (period 3) plan_ix % 3. A step advances both (+1); an in-place-position step
+  // only the history's (+3).
+  int plan_ix = 0;
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep
   ceode::StepCoeffs co;
 
@@ -349,7 +357,7 @@ int StartDerivativesHigh(
 // stability analysis's step map are built by this one routine.
 void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
                      N_Vector xnew, UpdatePlan* plan);
-// The step's update plans for the current vectors (plan (nsteps_h + i) % kNumPlans is the
+// The step's update plans for the current vectors (plan (plan_ix + i) % kNumPlans is the
 // configuration i steps ahead), after every (re)start and every change of the update options.
 void BuildPlans(CEodeMemRec* ce);
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,

@@ -282,8 +282,9 @@ void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_V
 // whose update runs once per step after f, uncompensated (docs/theory.md, "In-place update").
 namespace {
 
-// The six plans from the current vectors; returns whether the fused backend can run them.
-bool BuildPlanCycle(CEodeMemRec* ce, bool in_place, bool fusable) {
+// The six plans from the current vectors; returns whether the fused backend can run them. With
+// in_place, also the plans that write the position over its last value; *xin: all were built.
+bool BuildPlanCycle(CEodeMemRec* ce, bool in_place, bool fusable, bool* xin) {
   const int d = ce->degree;
   N_Vector D[kMaxDegree];
   N_Vector Dn[kMaxDegree];
@@ -298,12 +299,19 @@ bool BuildPlanCycle(CEodeMemRec* ce, bool in_place, bool fusable) {
   N_Vector xcur = ce->xcur;
   N_Vector xnext = ce->xnext;
   N_Vector xnew = ce->xnew;
+  *xin = in_place && fusable;
   for (int i = 0; i < kNumPlans; ++i) {
-    const int ip = static_cast<int>((ce->nsteps_h + i) % kNumPlans);
+    const int ip = (ce->plan_ix + i) % kNumPlans;
     BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &ce->plans[ip]);
     if (fusable) {
       fusable = BuildFusedPlan(ce->plans[ip], {ce->compensated, comp, compnew, nullptr},
                                &ce->fused_plans[ip]);
+    }
+    if (*xin && fusable) {
+      UpdatePlan over = ce->plans[ip];
+      Combo& position = over.combos[over.n - 1];
+      position.out = position.old;
+      *xin = BuildFusedPlan(over, {false, comp, compnew, nullptr}, &ce->fused_plans_xin[ip]);
     }
     for (int k = 1; k < d; ++k) std::swap(D[k], Dn[k]);
     for (int k = 0; k <= d - 2; ++k) std::swap(comp[k], compnew[k]);
@@ -325,12 +333,16 @@ void BuildPlans(CEodeMemRec* ce) {
   // not write an input), so when it refuses them the ordinary plans are built instead.
   bool in_place = ce->in_place && ce->fused && (serial || mpi) && !ce->compensated &&
                   ce->solve_accel == SolveExplicit && ce->fused_len >= kInPlaceMinLen;
-  bool fusable = BuildPlanCycle(ce, in_place, serial || mpi);
+  bool xin = false;
+  bool fusable = BuildPlanCycle(ce, in_place, serial || mpi, &xin);
   if (in_place && !fusable) {
     in_place = false;
-    fusable = BuildPlanCycle(ce, false, serial || mpi);
+    fusable = BuildPlanCycle(ce, false, serial || mpi, &xin);
   }
   ce->in_place_active = in_place;
+  // The position over its last value loses x(tcur); after a failing f the lean loop rebuilds it
+  // from x(tcur + h) and the history, which for d = 3 needs the old z (f's buffer) to be unused.
+  ce->xin_ready = xin && fusable && serial && (ce->degree > 3 || ce->co.wz_old == 0);
   ce->fused_ready = fusable && serial;
   ce->fused_mpi = fusable && mpi;
 }
@@ -429,6 +441,7 @@ int StartMethod(CEodeMemRec* ce) {
   ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
+  ce->plan_ix = 0;
   ce->guard_pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
   ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
@@ -453,7 +466,7 @@ sunrealtype StepTime(const CEodeMemRec* ce, int k) {
 // The step's update after the solve (inlined into TakeStep: a call less per step); returns
 // ||x(t + h)||_1 for the growth check, NaN when its global reduction failed.
 inline sunrealtype Update(CEodeMemRec* ce) {
-  const int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
+  const int ip = ce->plan_ix;
   if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
   if (ce->fused && ce->fused_mpi) {  // the same kernel on the local part, one allreduce
     sunrealtype l1 = UpdateSerial(ce->fused_plans[ip], ce->fused_len);
@@ -478,9 +491,27 @@ inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
   return xl1 > kAbsoluteLimit || xl1 > bound;
 }
 
+// A non-finite update after the lean loop wrote the position over x(t): the acceleration tells
+// f from the step size (x(t) was finite when it passed the last step's check).
+int PositionLostFailure(CEodeMemRec* ce, sunrealtype t, const char* func) {
+  if (!IsFinite(ce->Dnew[2])) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The acceleration became NaN or Inf at t = %.17g (step %ld) from a finite "
+                        "state: f returned non-finite values.",
+                        static_cast<double>(t), ce->nst + 1);
+  }
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The state stopped being finite at t = %.17g (step %ld) with a finite "
+                      "acceleration: h = %g is most likely beyond the stability limit of %s (h * "
+                      "omega_max must stay below Omega_max); reduce h.",
+                      static_cast<double>(t), ce->nst + 1, static_cast<double>(ce->h),
+                      ce->method_name.c_str());
+}
+
 // Explosive growth or a non-finite state: stop long before overflow, while the state is still
-// readable, and say whether f or the step size is to blame.
-int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func) {
+// readable, and say whether f or the step size is to blame. x_kept: x(t) is still in xnext.
+int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func,
+               bool x_kept = true) {
   if (ce->reduce_failed) {
     ce->reduce_failed = false;
     return ProcessError(ce, CE_VECTOROP_ERR, func,
@@ -500,6 +531,7 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
                         ce->method_name.c_str());
   }
   if (std::isfinite(xl1)) return CE_SUCCESS;
+  if (!x_kept) return PositionLostFailure(ce, t, func);
   const sunrealtype xn = MaxNormOrNaN(ce->xnext);  // NaN-blind N_VMaxNorm would say 0
   if (!std::isfinite(xn)) {  // x(t) passed the last step's check: a callback overwrote it
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -525,19 +557,26 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
 // The new derivatives become the history; the three positions rotate.
 // Whole arrays, not the degree's slots: a fixed-length swap compiles to a few vector moves
 // instead of a loop; the slots at and above the degree are spare buffers and D[0] is unused.
-// Six rotations are the identity (kNumPlans).
-inline void RotateVectors(CEodeMemRec* ce) {
+// Two rotations of the history and three of the positions are the identity.
+inline void RotateHistory(CEodeMemRec* ce) {
   if (ce->in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
   } else {
     std::swap(ce->D, ce->Dnew);
   }
+  if (ce->compensated) std::swap(ce->comp, ce->compnew);
+}
+inline void RotatePositions(CEodeMemRec* ce) {
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
   ce->xnew = old;
-  if (ce->compensated) std::swap(ce->comp, ce->compnew);
+}
+inline void RotateVectors(CEodeMemRec* ce) {
+  RotateHistory(ce);
+  RotatePositions(ce);
+  ce->plan_ix = ce->plan_ix == kNumPlans - 1 ? 0 : ce->plan_ix + 1;
 }
 
 void Commit(CEodeMemRec* ce, sunrealtype t) {
@@ -573,56 +612,133 @@ namespace {
 struct PhaseVectors {
   N_Vector x, v, a;
   const FusedPlan* plan;
-  SerialKernelFn update;  // UpdateSerial's kernel for the plan, chosen once
+  SerialKernelFn update;       // UpdateSerial's kernel for the plan, chosen once
+  const FusedPlan* plan_over;  // the plan writing the position over x(t + h); nullptr: none
+  SerialKernelFn update_over;
 };
 
 // Below this many steps to go the table of the lean loop costs more than it saves (CE_ONE_STEP).
 constexpr long int kLeanMinSteps = 8;
 
+// The steps the lean loop takes unless one fails: at most max_steps, none past the guard's next
+// check, and as many as StepsRemain admits on the very times the loop will set (StepTime), so
+// that the loop knows its last step in advance.
+long int LeanStepCount(const CEodeMemRec* ce, sunrealtype target, long int max_steps) {
+  long int cap = max_steps;
+  if (ce->guard_every > 0) cap = std::min(cap, ce->guard_every - ce->nst % ce->guard_every);
+  const auto remains = [&](long int j) {
+    const sunrealtype tj =
+        j == 0 ? ce->tcur : ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + j) * ce->h;
+    return target - tj > ce->h * (1 - 1e-8);
+  };
+  const sunrealtype guess = std::floor((target - ce->tcur) / ce->h);
+  long int j =
+      guess > 0 ? static_cast<long int>(std::min(guess, static_cast<sunrealtype>(cap))) : 0;
+  while (j > 0 && !remains(j - 1)) --j;
+  while (j < cap && remains(j)) ++j;
+  return j;
+}
+
+// x(tcur) from x(tcur + h) less the last step's position increment (BuildUpdatePlan's last sum),
+// after the lean loop wrote the position over it: equal to rounding, not bit for bit.
+void RebuildPosition(CEodeMemRec* ce) {
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  int m = 0;
+  c[m] = 1;
+  X[m++] = ce->xnext;
+  for (int i = 1; i <= d - 2; ++i) {
+    c[m] = -co.w[i];
+    X[m++] = ce->D[i];
+  }
+  if (co.wz_old != 0) {  // z(tcur - h); d = 3 (f's buffer) is excluded by xin_ready
+    c[m] = -co.wz_old;
+    X[m++] = ce->Dnew[d - 1];
+  }
+  c[m] = -co.wz_new;
+  X[m++] = ce->D[d - 1];
+  N_VLinearCombination(m, c, X, ce->xcur);
+}
+
+// How the lean loop ended, for LeanExit.
+struct LeanEnd {
+  long int steps = 0;        // completed
+  long int moved = 0;        // of them, those that rotated the positions
+  bool over = false;         // the last completed step wrote the position over x(tcur)
+  bool failed_over = false;  // the failing update wrote over x(tcur + h)
+  int rv = 0;
+  bool state_ok = true;
+  sunrealtype t = 0, xl1 = 0;
+};
+
+// Brings the vectors to the state TakeStep would have left (the position to rounding, or the
+// failed step's, where it was written over), then reports as TakeStep does.
+int LeanExit(CEodeMemRec* ce, int ip, const LeanEnd& e, long int* taken) {
+  static const char* func = "CEodeEvolve";
+  if (e.steps % 2 != 0) RotateHistory(ce);
+  for (long int j = 0; j < e.moved % 3; ++j) RotatePositions(ce);
+  ce->plan_ix = ip;
+  *taken = e.steps;
+  if (e.rv != 0) {
+    if (e.over) RebuildPosition(ce);
+    return RhsFailed(ce, e.rv, e.t, func);
+  }
+  if (!e.state_ok) {
+    if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
+    return CheckState(ce, e.t, e.xl1, func, !e.failed_over);
+  }
+  const bool guard_due = e.steps > 0 && ce->guard_every > 0 && ce->nst % ce->guard_every == 0;
+  return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
+}
+
 // TakeStep's explicit step on serial vectors without a mass matrix, many in a row: f's vectors
 // come from a table of the six configurations and the vectors rotate once at the end, so that a
-// step at n = 1 is f, the update and a few tests (bench_step, docs/results.md). Every exit
-// first brings the vectors to the state TakeStep would have left, then reports as it does.
+// step at n = 1 is f, the update and a few tests (bench_step, docs/results.md). With in-place
+// plans every step but the last writes x(t + 2h) over x(t + h), as a hand loop does
+// (docs/theory.md, "In-place update").
 __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype target,
                                                 long int max_steps, long int* taken) {
-  static const char* func = "CEodeEvolve";
   PhaseVectors pv[kNumPlans];
-  int ip = static_cast<int>(ce->nsteps_h % kNumPlans);
+  int ip = ce->plan_ix;
   for (int j = 0; j < kNumPlans; ++j) {
     const int i = (ip + j) % kNumPlans;
-    pv[i] = {ce->xnext, ce->D[1], ce->Dnew[2], &ce->fused_plans[i],
-             SerialKernel(ce->fused_plans[i], ce->n)};
+    const FusedPlan* over = ce->xin_ready ? &ce->fused_plans_xin[i] : nullptr;
+    pv[i] = {ce->xnext,
+             ce->D[1],
+             ce->Dnew[2],
+             &ce->fused_plans[i],
+             SerialKernel(ce->fused_plans[i], ce->n),
+             over,
+             over != nullptr ? SerialKernel(*over, ce->n) : nullptr};
     RotateVectors(ce);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
-  long int k = 0;
-  int rv = 0;
-  sunrealtype t = 0;
-  sunrealtype xl1 = 0;
-  bool state_ok = true;
-  bool guard_due = false;
-  while (k < max_steps && StepsRemain(ce, target)) {
-    t = StepTime(ce, 1);
+  const long int count = LeanStepCount(ce, target, max_steps);
+  LeanEnd e;
+  while (e.steps < count) {
+    e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    rv = ce->f(t, p.x, p.v, p.a, ce->user_data);
+    e.rv = ce->f(e.t, p.x, p.v, p.a, ce->user_data);
     ++ce->nfe;
-    if (rv != 0) break;
-    xl1 = p.update(*p.plan, ce->n);
-    state_ok = std::isfinite(xl1) && !Exploded(xl1, bound);
-    if (!state_ok) break;
-    ce->tcur = t;
+    if (e.rv != 0) break;
+    const bool over = p.plan_over != nullptr && e.steps + 1 < count;
+    e.xl1 = over ? p.update_over(*p.plan_over, ce->n) : p.update(*p.plan, ce->n);
+    e.state_ok = std::isfinite(e.xl1) && !Exploded(e.xl1, bound);
+    if (!e.state_ok) {
+      e.failed_over = over;
+      break;
+    }
+    ce->tcur = e.t;
     ++ce->nsteps_h;
     ++ce->nst;
-    ++k;
-    ip = ip == kNumPlans - 1 ? 0 : ip + 1;
-    guard_due = ce->guard_every > 0 && ce->nst % ce->guard_every == 0;
-    if (guard_due) break;
+    ++e.steps;
+    e.over = over;
+    e.moved += over ? 0 : 1;
+    ip = (ip + (over ? 3 : 1)) % kNumPlans;  // over: the positions keep their buffers
   }
-  for (long int j = 0; j < k % kNumPlans; ++j) RotateVectors(ce);
-  *taken = k;
-  if (rv != 0) return RhsFailed(ce, rv, t, func);
-  if (!state_ok) return CheckState(ce, t, xl1, func);
-  return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
+  return LeanExit(ce, ip, e, taken);
 }
 
 }  // namespace

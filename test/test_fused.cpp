@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 #include <nvector/nvector_serial.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <initializer_list>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,9 +39,11 @@ struct RunResult {
 };
 
 // n >= ceode::kInPlaceMinLen: the fused explicit step updates the history in place (unless
-// in_place is false or compensated).
+// in_place is false or compensated). The state at each of touts, one after the other;
+// guard_every > 0 checks the stability guard every so many steps (an early exit of the lean loop).
 RunResult RunChain(const std::string& method, bool fused, bool compensated, sunindextype kN = 64,
-                   bool in_place = true) {
+                   bool in_place = true, const std::vector<sunrealtype>& touts = {5.0},
+                   long guard_every = 0) {
   SUNContext ctx = nullptr;
   SUNContext_Create(SUN_COMM_NULL, &ctx);
   N_Vector x = N_VNew_Serial(kN, ctx);
@@ -51,15 +56,19 @@ RunResult RunChain(const std::string& method, bool fused, bool compensated, suni
   EXPECT_EQ(CEodeInit(mem, ChainRhs, 0, x, v), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem, method.c_str()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
+  EXPECT_EQ(
+      CEodeSetStabilityGuard(mem, guard_every > 0 ? CE_GUARD_WARN : CE_GUARD_OFF, guard_every),
+      CE_SUCCESS);
   EXPECT_EQ(CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetCompensatedSummation(mem, compensated ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetInPlaceUpdate(mem, in_place ? SUNTRUE : SUNFALSE), CE_SUCCESS);
-  sunrealtype t = 0;
-  EXPECT_EQ(CEodeEvolve(mem, 5.0, x, v, &t, CE_NORMAL), CE_SUCCESS);
   RunResult r;
-  r.x.assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
-  r.v.assign(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
+  for (sunrealtype tout : touts) {
+    sunrealtype t = 0;
+    EXPECT_EQ(CEodeEvolve(mem, tout, x, v, &t, CE_NORMAL), CE_SUCCESS);
+    r.x.insert(r.x.end(), N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
+    r.v.insert(r.v.end(), N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
+  }
   CEodeFree(&mem);
   N_VDestroy(x);
   N_VDestroy(v);
@@ -98,6 +107,28 @@ TEST_P(FusedKernel, GivesBitwiseTheNumbersOfTheGenericPathWhenUpdatingInPlace) {
   EXPECT_TRUE(std::isfinite(in_place.x[kN / 2]) && in_place.x[kN / 2] != 0);
 }
 
+// The lean loop writes every position but its last step's over the one before (and so knows its
+// last step in advance): runs of every length to touts on and off the step grid, with the guard's
+// checks cutting them, give the numbers of the step-by-step generic path at every tout.
+TEST_P(FusedKernel, GivesBitwiseTheGenericNumbersAtEveryToutWhenWritingPositionsInPlace) {
+  constexpr sunindextype kN = 2 * ceode::kInPlaceMinLen + 3;
+  std::vector<sunrealtype> touts;
+  sunrealtype tout = 0;
+  for (int k = 1; k <= 24; ++k) touts.push_back(tout += 0.01 * k + 0.0037 * (k % 3));
+  for (long guard_every : {0L, 7L}) {
+    SCOPED_TRACE("guard every " + std::to_string(guard_every));
+    const RunResult generic = RunChain(GetParam(), false, false, kN, true, touts, guard_every);
+    const RunResult lean = RunChain(GetParam(), true, false, kN, true, touts, guard_every);
+    ASSERT_EQ(generic.x.size(), lean.x.size());
+    long differing = 0;
+    for (size_t i = 0; i < generic.x.size(); ++i) {
+      differing += generic.x[i] != lean.x[i] || generic.v[i] != lean.v[i];
+    }
+    EXPECT_EQ(differing, 0);
+    EXPECT_TRUE(std::isfinite(lean.x.back()) && lean.x.back() != 0);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
                          ::testing::Values("G3_CD", "G3_A2", "G4_A34", "G5", "G5_TOP", "G6_O5",
                                            "G6_O6", "G7_O7", "G8_O8"),
@@ -125,6 +156,7 @@ struct FailedRun {
   sunrealtype t = 0;
   long steps = 0;
   RunResult state;
+  std::string message;  // what CEODE wrote to its error file
 };
 
 // fused = false takes the generic step, one TakeStep at a time; fused without a mass matrix takes
@@ -144,7 +176,8 @@ FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_ev
   void* mem = CEodeCreate(ctx);
   EXPECT_EQ(CEodeInit(mem, FailingChainRhs, 0, x, v), CE_SUCCESS);
   EXPECT_EQ(CEodeSetUserData(mem, &fc), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetErrFile(mem, nullptr), CE_SUCCESS);
+  FILE* err = std::tmpfile();
+  EXPECT_EQ(CEodeSetErrFile(mem, err), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem, "G4_A34"), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
   EXPECT_EQ(
@@ -158,36 +191,53 @@ FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_ev
   r.state.x.assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
   r.state.v.assign(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
   CEodeFree(&mem);
+  std::rewind(err);
+  for (int c = std::fgetc(err); c != EOF; c = std::fgetc(err)) r.message += static_cast<char>(c);
+  std::fclose(err);
   N_VDestroy(x);
   N_VDestroy(v);
   SUNContext_Free(&ctx);
   return r;
 }
 
-// f fails before the step writes anything: the in-place path returns exactly the last good
-// state of the out-of-place one.
-TEST(InPlaceUpdate, AFailingRhsLeavesExactlyTheLastGoodState) {
+// f fails before the step writes anything, but the lean loop's earlier steps wrote the position
+// over x(t): it is rebuilt from x(t + h) less the last increment, to rounding; the velocity and
+// the time are exactly those of the out-of-place path.
+TEST(InPlaceUpdate, AFailingRhsLeavesTheLastGoodStateWithItsPositionToRounding) {
   const FailedRun exact = RunToFailure(false, false);
   const FailedRun in_place = RunToFailure(true, false);
   EXPECT_EQ(exact.flag, CE_RHSFUNC_FAIL);
   EXPECT_EQ(in_place.flag, CE_RHSFUNC_FAIL);
   EXPECT_EQ(in_place.t, exact.t);
+  EXPECT_EQ(in_place.steps, exact.steps);
   EXPECT_GT(exact.t, kFailAt - 0.02);
-  EXPECT_TRUE(in_place.state.x == exact.state.x);
   EXPECT_TRUE(in_place.state.v == exact.state.v);
+  // One addition undone by one subtraction: a few units in the last place of |x| <= 1.
+  sunrealtype worst = 0;
+  for (size_t i = 0; i < exact.state.x.size(); ++i) {
+    worst = std::max(worst, std::fabs(in_place.state.x[i] - exact.state.x[i]));
+  }
+  EXPECT_LE(worst, 4 * std::numeric_limits<sunrealtype>::epsilon());
 }
 
-// A non-finite acceleration is seen by the check after the update: the position returned is
-// still exactly the last good one; the velocity is the failed step's (non-finite where f was).
-TEST(InPlaceUpdate, ANonFiniteAccelerationKeepsTheLastGoodPositionOnly) {
+// A non-finite acceleration is seen by the check after the update, which the lean loop wrote over
+// the last good position: the state returned is the failed step's (non-finite where f was), and
+// f is named as the cause.
+TEST(InPlaceUpdate, ANonFiniteAccelerationReturnsTheFailedStepsStateAndNamesF) {
   const FailedRun exact = RunToFailure(false, true);
   const FailedRun in_place = RunToFailure(true, true);
   EXPECT_EQ(exact.flag, CE_RHSFUNC_FAIL);
   EXPECT_EQ(in_place.flag, CE_RHSFUNC_FAIL);
   EXPECT_EQ(in_place.t, exact.t);
-  EXPECT_TRUE(in_place.state.x == exact.state.x);
-  for (sunrealtype vi : exact.state.v) ASSERT_TRUE(std::isfinite(vi));
+  EXPECT_EQ(in_place.steps, exact.steps);
+  for (sunrealtype xi : exact.state.x) ASSERT_TRUE(std::isfinite(xi));
+  EXPECT_FALSE(std::isfinite(in_place.state.x[7]));
   EXPECT_FALSE(std::isfinite(in_place.state.v[7]));
+  EXPECT_TRUE(std::isfinite(in_place.state.x[1000]));
+  EXPECT_NE(in_place.message.find("f returned non-finite values"), std::string::npos)
+      << in_place.message;
+  EXPECT_EQ(in_place.message.find("callbacks must not modify x"), std::string::npos)
+      << in_place.message;
 }
 
 // The lean loop leaves on f's failure, on a non-finite update and for the guard's check; each
@@ -453,7 +503,8 @@ class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
   static int NewSlot(int d, int k, bool in_place) {
     return in_place && ceode::InPlaceLevel(d, k) ? k : ceode::kMaxDegree + k;
   }
-  ceode::UpdatePlan Plan(int d, const ceode::StepCoeffs& co, bool in_place) {
+  // over: the position too is written over its last value (pool_[0]), as the lean loop does.
+  ceode::UpdatePlan Plan(int d, const ceode::StepCoeffs& co, bool in_place, bool over = false) {
     N_Vector D[ceode::kMaxDegree] = {};
     N_Vector Dn[ceode::kMaxDegree] = {};
     for (int k = 1; k < d; ++k) {
@@ -461,7 +512,7 @@ class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
       Dn[k] = pool_[NewSlot(d, k, in_place)];
     }
     ceode::UpdatePlan plan;
-    ceode::BuildUpdatePlan(d, co, D, Dn, pool_[0], pool_[kVectors - 1], &plan);
+    ceode::BuildUpdatePlan(d, co, D, Dn, pool_[0], over ? pool_[0] : pool_[kVectors - 1], &plan);
     return plan;
   }
 
@@ -481,22 +532,24 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNam
     std::vector<std::vector<sunrealtype>> ref;  // the outputs: x(t + h), then level 1 .. d - 1
     ref.push_back(Entries(kVectors - 1));
     for (int k = 1; k < d; ++k) ref.push_back(Entries(NewSlot(d, k, false)));
-    for (bool in_place : {false, true}) {
+    for (int mode = 0; mode < 3; ++mode) {  // out of place, history in place, position too
+      const bool in_place = mode > 0;
+      const bool over = mode == 2;
       ceode::FusedPlan fp;
-      ASSERT_TRUE(ceode::BuildFusedPlan(Plan(d, co, in_place), {}, &fp)) << set.name;
+      ASSERT_TRUE(ceode::BuildFusedPlan(Plan(d, co, in_place, over), {}, &fp)) << set.name;
       shaped += fp.shape > 0 ? 1 : 0;
       Fill();
       ceode::UpdateSerial(fp, GetParam());
       long differing = 0;
       for (int k = 0; k < d; ++k) {
-        const std::vector<sunrealtype> got =
-            Entries(k == 0 ? kVectors - 1 : NewSlot(d, k, in_place));
+        const int slot = k == 0 ? (over ? 0 : kVectors - 1) : NewSlot(d, k, in_place);
+        const std::vector<sunrealtype> got = Entries(slot);
         for (size_t i = 0; i < got.size(); ++i) differing += got[i] != ref[k][i] ? 1 : 0;
       }
-      EXPECT_EQ(differing, 0) << set.name << (in_place ? ", in place" : ", out of place");
+      EXPECT_EQ(differing, 0) << set.name << " mode " << mode;
     }
   }
-  EXPECT_GE(shaped, 2 * 9) << "plans with a kernel of their own";
+  EXPECT_GE(shaped, 3 * 9) << "plans with a kernel of their own";
 }
 
 INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
