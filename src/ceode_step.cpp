@@ -280,6 +280,8 @@ void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_V
 // cover every step: the step itself builds nothing. In-place plans write the InPlaceLevel
 // derivatives over their history (Dn[k] = D[k], never swapped): the explicit fused step only,
 // whose update runs once per step after f, uncompensated (docs/theory.md, "In-place update").
+// The lean loop's steps that write the position over x(t + h) trade only the history's places:
+// plan_ix, not the step count, names the configuration.
 namespace {
 
 // The six plans from the current vectors; returns whether the fused backend can run them. With
@@ -342,7 +344,7 @@ void BuildPlans(CEodeMemRec* ce) {
   ce->in_place_active = in_place;
   // The position over its last value loses x(tcur); after a failing f the lean loop rebuilds it
   // from x(tcur + h) and the history, which for d = 3 needs the old z (f's buffer) to be unused.
-  ce->xin_ready = xin && fusable && serial && (ce->degree > 3 || ce->co.wz_old == 0);
+  ce->xin_ready = xin && fusable && (ce->degree > 3 || ce->co.wz_old == 0);
   ce->fused_ready = fusable && serial;
   ce->fused_mpi = fusable && mpi;
 }
@@ -463,18 +465,23 @@ sunrealtype StepTime(const CEodeMemRec* ce, int k) {
   return ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + k) * ce->h;
 }
 
+// ||x||_1 over every rank from this rank's part (any: a vector of the run, for its
+// communicator); NaN when the reduction failed.
+inline sunrealtype GlobalL1(CEodeMemRec* ce, N_Vector any, sunrealtype local) {
+  if (N_VDotProdMultiAllReduce(1, any, &local) != 0) {
+    ce->reduce_failed = true;  // CheckState names the communication, not the state
+    return std::nan("");
+  }
+  return local;
+}
+
 // The step's update after the solve (inlined into TakeStep: a call less per step); returns
 // ||x(t + h)||_1 for the growth check, NaN when its global reduction failed.
 inline sunrealtype Update(CEodeMemRec* ce) {
   const int ip = ce->plan_ix;
   if (ce->fused && ce->fused_ready) return UpdateSerial(ce->fused_plans[ip], ce->n);
   if (ce->fused && ce->fused_mpi) {  // the same kernel on the local part, one allreduce
-    sunrealtype l1 = UpdateSerial(ce->fused_plans[ip], ce->fused_len);
-    if (N_VDotProdMultiAllReduce(1, ce->xnew, &l1) != 0) {
-      ce->reduce_failed = true;  // CheckState names the communication, not the state
-      return std::nan("");
-    }
-    return l1;
+    return GlobalL1(ce, ce->xnew, UpdateSerial(ce->fused_plans[ip], ce->fused_len));
   }
   UpdateReference(ce->plans[ip], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
   return N_VL1Norm(ce->xnew);
@@ -693,13 +700,15 @@ int LeanExit(CEodeMemRec* ce, int ip, const LeanEnd& e, long int* taken) {
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
 }
 
-// TakeStep's explicit step on serial vectors without a mass matrix, many in a row: f's vectors
+// TakeStep's explicit step on serial (or NVECTOR_PARALLEL: the same kernel on this rank's part,
+// one allreduce per step) vectors without a mass matrix, many in a row: f's vectors
 // come from a table of the six configurations and the vectors rotate once at the end, so that a
 // step at n = 1 is f, the update and a few tests (bench_step, docs/results.md). With in-place
 // plans every step but the last writes x(t + 2h) over x(t + h), as a hand loop does
 // (docs/theory.md, "In-place update").
 __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype target,
                                                 long int max_steps, long int* taken) {
+  const sunindextype len = ce->fused_len;  // this rank's part on NVECTOR_PARALLEL
   PhaseVectors pv[kNumPlans];
   int ip = ce->plan_ix;
   for (int j = 0; j < kNumPlans; ++j) {
@@ -709,9 +718,9 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
              ce->D[1],
              ce->Dnew[2],
              &ce->fused_plans[i],
-             SerialKernel(ce->fused_plans[i], ce->n),
+             SerialKernel(ce->fused_plans[i], len),
              over,
-             over != nullptr ? SerialKernel(*over, ce->n) : nullptr};
+             over != nullptr ? SerialKernel(*over, len) : nullptr};
     RotateVectors(ce);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
@@ -724,7 +733,8 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
     ++ce->nfe;
     if (e.rv != 0) break;
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;
-    e.xl1 = over ? p.update_over(*p.plan_over, ce->n) : p.update(*p.plan, ce->n);
+    e.xl1 = over ? p.update_over(*p.plan_over, len) : p.update(*p.plan, len);
+    if (ce->fused_mpi) e.xl1 = GlobalL1(ce, p.x, e.xl1);  // one allreduce, as TakeStep's
     e.state_ok = std::isfinite(e.xl1) && !Exploded(e.xl1, bound);
     if (!e.state_ok) {
       e.failed_over = over;
@@ -746,8 +756,8 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
   // The distance first: a CE_ONE_STEP call decides on it alone.
   const bool lean = target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps &&
-                    ce->fused && ce->fused_ready && ce->solve_accel == SolveExplicit &&
-                    ce->mfn == nullptr && ce->M == nullptr;
+                    ce->fused && (ce->fused_ready || ce->fused_mpi) &&
+                    ce->solve_accel == SolveExplicit && ce->mfn == nullptr && ce->M == nullptr;
   if (lean) return LeanExplicitSteps(ce, target, max_steps, taken);
   const int flag = TakeStep(ce);
   *taken = flag == CE_SUCCESS ? 1 : 0;
