@@ -32,6 +32,7 @@
 #define CEODE_BENCH_FE_DAMPED_SCENE_H_
 
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -185,33 +186,39 @@ struct CeCurve {
 
 // Steps are fractions of each set's own (undamped) stable step from the guard.
 inline void CeodeCurves(SUNContext ctx, Scene* s, const std::vector<CeCurve>& curves,
-                        wp::Table* table) {
+                        wp::Rounds* rounds) {
   for (const CeCurve& c : curves) {
     const double hs = fes::GuardStep(ctx, &s->prob, c.cfg.method);
     for (double f : c.frac) {
-      const double h = fes::FixedStep(s->prob, f * hs);
-      fes::CeodeStats st;
+      const double hr = f * hs;
+      const double h = fes::FixedStep(s->prob, hr);
+      // The statistics of the numbers run (the first call); the timed calls overwrite them.
+      auto st = std::make_shared<fes::CeodeStats>();
       wp::Outcome got;
-      const bool ok = wp::Measure(
-          table, "CEODE", c.label, h,
-          [&](wp::Outcome* o) { return fes::CeodeRun(ctx, &s->prob, c.cfg, f * hs, o, &st); },
-          &got);
+      const fes::CeodeCfg cfg = c.cfg;
+      const bool ok = rounds->Measure(
+                          "CEODE", c.label, h,
+                          [ctx, s, cfg, hr, st](wp::Outcome* o) {
+                            return fes::CeodeRun(ctx, &s->prob, cfg, hr, o, st.get());
+                          },
+                          &got) >= 0;
       if (ok && c.cfg.vel) {
         std::printf(
             "    %s h = %.3e: %.3f f/step, %.3f nonlinear iters/step, %ld PC steps, "
             "%ld NLS steps, coupling kappa |df/dv| = %.3e\n",
             c.label.c_str(), h, static_cast<double>(got.rhs_evals) / got.steps,
-            static_cast<double>(st.nni) / got.steps, st.npc, st.nnls, st.coupling);
+            static_cast<double>(st->nni) / got.steps, st->npc, st->nnls, st->coupling);
       }
     }
   }
 }
 
-inline void HandCurve(Scene* s, const std::vector<double>& frac, double hs, wp::Table* table) {
+inline void HandCurve(Scene* s, const std::vector<double>& frac, double hs, wp::Rounds* rounds) {
   for (double f : frac) {
-    const double h = fes::FixedStep(s->prob, f * hs);
-    wp::Measure(table, "CEODE-hand", "CD-damped", h,
-                [&](wp::Outcome* o) { return HandRun(s, f * hs, o); });
+    const double hr = f * hs;
+    const double h = fes::FixedStep(s->prob, hr);
+    rounds->Measure("CEODE-hand", "CD-damped", h,
+                    [s, hr](wp::Outcome* o) { return HandRun(s, hr, o); });
   }
 }
 
@@ -319,9 +326,11 @@ inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
         s.modes.w[1], omega_max, hs, z1, fe::RayleighZeta(s.plate, s.modes.w[1]), zt,
         s.modes.residual, s.prob.tend, s.prob.nout);
     wp::Table table(scene, args.csv);
-    HandCurve(&s, HandFractions(kind, args.quick), hs, &table);
-    CeodeCurves(ctx, &s, CeodeConfigs(kind, args.quick), &table);
-    fes::PeerCurves(ctx, &s.prob, args.quick, &table);
+    wp::Rounds rounds(&table);
+    HandCurve(&s, HandFractions(kind, args.quick), hs, &rounds);
+    CeodeCurves(ctx, &s, CeodeConfigs(kind, args.quick), &rounds);
+    fes::PeerCurves(ctx, &s.prob, args.quick, &rounds);
+    rounds.Run();
     if (kind == Damping::kStiffness) G4Probe(ctx, &s);
     bad += Checks(table, kind);
     fes::PrintJudged(table, {1e-3, 1e-4, 1e-6});

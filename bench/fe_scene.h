@@ -336,20 +336,20 @@ constexpr double kSundialsCutoff = 1.5;
 // One curve per configuration over the tolerances; a curve stops once one run costs
 // max_seconds (it is past every CEODE point by then) or fails.
 inline void SundialsCurves(SUNContext ctx, Problem* p, const std::vector<SunConfig>& configs,
-                           const std::vector<double>& tols, double max_seconds, wp::Table* table) {
+                           const std::vector<double>& tols, double max_seconds,
+                           wp::Rounds* rounds) {
   for (const SunConfig& c : configs) {
     for (double tol : tols) {
-      if (!wp::Measure(table, c.solver, c.config, tol,
-                       [&](wp::Outcome* o) { return SunRun(ctx, p, c, tol, o); })) {
-        break;
-      }
-      if (table->rows().back().seconds > max_seconds) break;
+      const double first =
+          rounds->Measure(c.solver, c.config, tol,
+                          [ctx, p, c, tol](wp::Outcome* o) { return SunRun(ctx, p, c, tol, o); });
+      if (first < 0 || first > max_seconds) break;
     }
   }
 }
 
 // The SUNDIALS configurations every plate variant is compared with, over one tolerance list.
-inline void PeerCurves(SUNContext ctx, Problem* p, bool quick, wp::Table* table) {
+inline void PeerCurves(SUNContext ctx, Problem* p, bool quick, wp::Rounds* rounds) {
   const std::vector<SunConfig> configs = {
       {Kind::kErk, 3, "ARKODE-ERK", "order3"},      {Kind::kErk, 4, "ARKODE-ERK", "order4"},
       {Kind::kErk, 5, "ARKODE-ERK", "order5"},      {Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
@@ -357,7 +357,7 @@ inline void PeerCurves(SUNContext ctx, Problem* p, bool quick, wp::Table* table)
       {Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
   const std::vector<double> tols =
       quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
-  SundialsCurves(ctx, p, configs, tols, quick ? 0.3 : kSundialsCutoff, table);
+  SundialsCurves(ctx, p, configs, tols, quick ? 0.3 : kSundialsCutoff, rounds);
 }
 
 // ------------------------------------------------------------ equal error

@@ -3,7 +3,8 @@
 //
 //  * Timing: every configuration is run back to back until one repetition has
 //    lasted >= 50 ms, and the per-run time is the median of 5 repetitions (3 for
-//    runs of >= 0.5 s, one run of >= 2 s is its own measurement).
+//    runs of >= 0.5 s, one run of >= 2 s is its own measurement). The FE scenes
+//    (issue 11) time the same repetitions in interleaved rounds (Rounds).
 //    Each timed run is the whole user-visible cost: create, init, integrate in
 //    one-step mode with the error measured after every step, free. The clock
 //    is the process CPU time (see Now).
@@ -45,6 +46,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -107,29 +110,59 @@ constexpr int kReps = 5;
 constexpr double kFewRepSeconds = 0.5;
 constexpr double kOneRunSeconds = 2.0;
 
+// How one configuration is timed, from its first (warming) call: `calls` calls back to back
+// fill one repetition of >= kMinRepSeconds, over `reps` repetitions; reps = 0 when the first
+// call (>= kOneRunSeconds) is its own measurement.
+struct RepPlan {
+  long calls = 1;
+  int reps = 0;
+};
+
+inline RepPlan PlanReps(double first) {
+  RepPlan p;
+  if (first >= kOneRunSeconds) return p;
+  p.calls = first >= kMinRepSeconds ? 1 : static_cast<long>(std::ceil(kMinRepSeconds / first));
+  p.reps = first >= kFewRepSeconds ? 3 : kReps;
+  return p;
+}
+
+// Seconds per call of one repetition of `calls` calls; < 0 if a call failed.
+template <class F>
+double TimeRep(F&& run, long calls) {
+  const double t0 = Now();
+  for (long c = 0; c < calls; ++c) {
+    if (run() != 0) return -1;
+  }
+  return (Now() - t0) / static_cast<double>(calls);
+}
+
+// NaN when any value is NaN (a failed measurement stays visible).
+inline double MedianOf(std::vector<double> v) {
+  for (double x : v) {
+    if (std::isnan(x)) return x;
+  }
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
 // Median seconds of one call of run(), which returns 0 on success. The first
 // call calibrates how many calls fill 50 ms (it also warms caches and the
 // allocator, so it is not counted unless it is a run of >= kOneRunSeconds).
 // Returns < 0 if any call failed.
 template <class F>
 double TimeMedian(F&& run) {
-  double t0 = Now();
+  const double t0 = Now();
   if (run() != 0) return -1;
   const double first = Now() - t0;
-  if (first >= kOneRunSeconds) return first;
-  const long calls =
-      first >= kMinRepSeconds ? 1 : static_cast<long>(std::ceil(kMinRepSeconds / first));
-  const int reps = first >= kFewRepSeconds ? 3 : kReps;
+  const RepPlan plan = PlanReps(first);
+  if (plan.reps == 0) return first;
   std::vector<double> per_call;
-  for (int r = 0; r < reps; ++r) {
-    t0 = Now();
-    for (long c = 0; c < calls; ++c) {
-      if (run() != 0) return -1;
-    }
-    per_call.push_back((Now() - t0) / static_cast<double>(calls));
+  for (int r = 0; r < plan.reps; ++r) {
+    const double t = TimeRep(run, plan.calls);
+    if (t < 0) return -1;
+    per_call.push_back(t);
   }
-  std::sort(per_call.begin(), per_call.end());
-  return per_call[per_call.size() / 2];
+  return MedianOf(per_call);
 }
 
 // --------------------------------------------------------------------- rows
@@ -698,6 +731,87 @@ bool Measure(Table* table, const std::string& solver, const std::string& config,
   if (got != nullptr) *got = o;
   return true;
 }
+
+// Measure's interleaved form, for the scenes whose equal-error ratios are judged (the FE
+// scenes, issue 11). Timing the configurations one after the other puts a burst of load on
+// this shared machine on one solver's curve; here every configuration is first run once for
+// its numbers (and to plan its repetitions, as TimeMedian does), then Run() times repetition r
+// of every configuration in round r, in a shuffled order, and each one's median over the rounds
+// is its time. The rows are added by Run(), in the order the configurations were queued.
+class Rounds {
+ public:
+  explicit Rounds(Table* table) : table_(table) {}
+  Rounds(const Rounds&) = delete;
+  Rounds& operator=(const Rounds&) = delete;
+
+  // The numbers run; `once` is kept for the rounds, so it must own what it captures by
+  // reference past this call. Returns that run's seconds (< 0: it failed, a failure row).
+  double Measure(const std::string& solver, const std::string& config, double h_or_tol,
+                 std::function<int(Outcome*)> once, Outcome* got = nullptr) {
+    Entry e;
+    e.row.solver = solver;
+    e.row.config = config;
+    e.row.h_or_tol = h_or_tol;
+    Outcome o;
+    const double t0 = Now();
+    if (once(&o) != 0) {
+      table_->Fail(solver, config, h_or_tol, "failed or unstable");
+      return -1;
+    }
+    const double first = Now() - t0;
+    e.row.error = o.error;
+    e.row.drift = o.drift;
+    e.row.steps = o.steps;
+    e.row.rhs_evals = o.rhs_evals;
+    e.row.seconds = first;
+    e.plan = PlanReps(first);
+    e.once = std::move(once);
+    entries_.push_back(std::move(e));
+    if (got != nullptr) *got = o;
+    return first;
+  }
+
+  void Run() {
+    int rounds = 0;
+    for (const Entry& e : entries_) rounds = std::max(rounds, e.plan.reps);
+    std::vector<size_t> order(entries_.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::mt19937 rng(20261203u);  // a fixed seed: the same schedule on every run
+    for (int r = 0; r < rounds; ++r) {
+      std::shuffle(order.begin(), order.end(), rng);
+      for (size_t i : order) TimeOne(&entries_[i], r);
+    }
+    for (Entry& e : entries_) {
+      if (e.failed) {
+        table_->Fail(e.row.solver, e.row.config, e.row.h_or_tol, "failed while timing");
+        continue;
+      }
+      if (e.plan.reps > 0) e.row.seconds = MedianOf(e.per_call);
+      table_->Add(e.row);
+    }
+    entries_.clear();
+  }
+
+ private:
+  struct Entry {
+    Row row;
+    RepPlan plan;
+    std::function<int(Outcome*)> once;
+    std::vector<double> per_call;
+    bool failed = false;
+  };
+
+  static void TimeOne(Entry* e, int round) {
+    if (e->failed || round >= e->plan.reps) return;
+    Outcome scratch;
+    const double t = TimeRep([&]() { return e->once(&scratch); }, e->plan.calls);
+    if (t < 0) e->failed = true;
+    e->per_call.push_back(t);
+  }
+
+  Table* table_;
+  std::vector<Entry> entries_;
+};
 
 inline bool MeasureCeode(Table* table, SUNContext ctx, const SecondOrder& p, const char* method,
                          double h, bool zero_start, const std::string& config,

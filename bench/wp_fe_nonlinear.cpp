@@ -270,7 +270,7 @@ int HandRun(Scene* s, double h_req, wp::Outcome* out) {
       s->prob, h_req, [s](const double* x, double* a) { Accel(*s, x, a); }, out);
 }
 
-void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Table* table) {
+void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Rounds* rounds) {
   struct Curve {
     const char* method;
     std::vector<double> frac;
@@ -287,12 +287,14 @@ void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Table* table) {
     fes::CeodeCfg cfg;
     cfg.method = c.method;
     for (double f : c.frac) {
-      const double h = fes::FixedStep(s->prob, f * hs);
-      wp::Measure(table, "CEODE", c.method, h,
-                  [&](wp::Outcome* o) { return fes::CeodeRun(ctx, &s->prob, cfg, f * hs, o); });
+      const double hr = f * hs;
+      const double h = fes::FixedStep(s->prob, hr);
+      rounds->Measure("CEODE", c.method, h, [ctx, s, cfg, hr](wp::Outcome* o) {
+        return fes::CeodeRun(ctx, &s->prob, cfg, hr, o);
+      });
       if (std::string(c.method) != "G3_CD") continue;
-      wp::Measure(table, "CEODE-hand", "G3_CD", h,
-                  [&](wp::Outcome* o) { return HandRun(s, f * hs, o); });
+      rounds->Measure("CEODE-hand", "G3_CD", h,
+                      [s, hr](wp::Outcome* o) { return HandRun(s, hr, o); });
     }
   }
 }
@@ -320,8 +322,10 @@ int main(int argc, char** argv) {
         md.residual, kAmplitude, s.prob.tend, s.prob.nout);
     bad += Reference(ctx, &s, md);
     wp::Table table("fe_nonlinear", args.csv);
-    CeodeCurves(ctx, &s, args.quick, &table);
-    fes::PeerCurves(ctx, &s.prob, args.quick, &table);
+    wp::Rounds rounds(&table);
+    CeodeCurves(ctx, &s, args.quick, &rounds);
+    fes::PeerCurves(ctx, &s.prob, args.quick, &rounds);
+    rounds.Run();
     bad += fes::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6);
     const double p = fes::CurveOrder(table, "CEODE", "G3_CD");
     const bool ok = p > 1.8 && p < 2.3;

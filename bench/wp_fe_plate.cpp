@@ -279,7 +279,7 @@ int CheckHandAndOrder(const wp::Table& table) {
   return bad + !ok;
 }
 
-void CeodeCurves(SUNContext ctx, Scene* s, wp::Table* table, bool quick, WpResult* res) {
+void CeodeCurves(SUNContext ctx, Scene* s, wp::Rounds* rounds, bool quick, WpResult* res) {
   // G3_CD (and the hand loop) down to 1e-6, which takes a step 15 times below its limit.
   const std::vector<double> frac_cd =
       quick ? std::vector<double>{0.99, 0.5, 0.25}
@@ -287,18 +287,20 @@ void CeodeCurves(SUNContext ctx, Scene* s, wp::Table* table, bool quick, WpResul
   const std::vector<double> frac_a34 =
       quick ? std::vector<double>{0.99, 0.5} : std::vector<double>{0.99, 0.7, 0.5, 0.35, 0.25};
   for (const char* m : {"G3_CD", "G4_A34"}) {
-    const std::vector<double>& frac = std::string(m) == "G3_CD" ? frac_cd : frac_a34;
+    const bool cd = std::string(m) == "G3_CD";
     const double hs = fes::GuardStep(ctx, &s->p, m);
-    if (std::string(m) == "G3_CD") res->h_cd = hs;
+    if (cd) res->h_cd = hs;
     fes::CeodeCfg cfg;
     cfg.method = m;
-    for (double f : frac) {
-      const double h = fes::FixedStep(s->p, f * hs);
-      wp::Measure(table, "CEODE", m, h,
-                  [&](wp::Outcome* o) { return fes::CeodeRun(ctx, &s->p, cfg, f * hs, o); });
-      if (std::string(m) != "G3_CD") continue;
-      wp::Measure(table, "CEODE-hand", "G3_CD", h,
-                  [&](wp::Outcome* o) { return HandRun(s, f * hs, o); });
+    for (double f : cd ? frac_cd : frac_a34) {
+      const double hr = f * hs;
+      const double h = fes::FixedStep(s->p, hr);
+      rounds->Measure("CEODE", m, h, [ctx, s, cfg, hr](wp::Outcome* o) {
+        return fes::CeodeRun(ctx, &s->p, cfg, hr, o);
+      });
+      if (!cd) continue;
+      rounds->Measure("CEODE-hand", "G3_CD", h,
+                      [s, hr](wp::Outcome* o) { return HandRun(s, hr, o); });
     }
   }
 }
@@ -317,7 +319,7 @@ void G5Probe(SUNContext ctx, Scene* s, double h_cd) {
 }
 
 // The SUNDIALS configurations of the linear plate (KLU: its Jacobian is constant and sparse).
-void SundialsCurves(SUNContext ctx, Scene* s, wp::Table* table, bool quick) {
+void SundialsCurves(SUNContext ctx, Scene* s, wp::Rounds* rounds, bool quick) {
   using fes::Kind;
   const std::vector<fes::SunConfig> configs = {
       {Kind::kErk, 3, "ARKODE-ERK", "order3"},      {Kind::kErk, 4, "ARKODE-ERK", "order4"},
@@ -326,7 +328,7 @@ void SundialsCurves(SUNContext ctx, Scene* s, wp::Table* table, bool quick) {
       {Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
   const std::vector<double> tols =
       quick ? std::vector<double>{1e-5} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7};
-  fes::SundialsCurves(ctx, &s->p, configs, tols, quick ? 0.3 : fes::kSundialsCutoff, table);
+  fes::SundialsCurves(ctx, &s->p, configs, tols, quick ? 0.3 : fes::kSundialsCutoff, rounds);
 }
 
 WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
@@ -336,9 +338,11 @@ WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
       "(%.6e), %d outputs ==\n",
       s->plate.nx, s->plate.ny, s->plate.n, s->w1, s->w2, s->p.tend, s->p.nout);
   wp::Table table("fe_plate", args.csv);
-  CeodeCurves(ctx, s, &table, args.quick, &res);
+  wp::Rounds rounds(&table);
+  CeodeCurves(ctx, s, &rounds, args.quick, &res);
   G5Probe(ctx, s, res.h_cd);
-  SundialsCurves(ctx, s, &table, args.quick);
+  SundialsCurves(ctx, s, &rounds, args.quick);
+  rounds.Run();
   res.bad += CheckHandAndOrder(table);
   fes::PrintJudged(table, {1e-4, 1e-6});
   std::printf("(issue 11 asks CE/SUN <= 1/3 and CE/hand <= 1.2 at both levels)\n");
@@ -369,15 +373,6 @@ double PerStep(const std::function<int(Scene*, wp::Outcome*)>& run, Scene* s, do
 }
 
 constexpr int kScaleRounds = 3;
-
-// NaN when any round failed.
-double MedianOf(std::vector<double> v) {
-  for (double x : v) {
-    if (std::isnan(x)) return x;
-  }
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // One mesh of 4 ny x ny square elements; h_cd is G3_CD's stable step on square
 // elements of size dx_ref (the stable step scales with the element size).
@@ -414,7 +409,7 @@ ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
   }
   ScalePoint p{n, 0, 0, 0, 0};
   double* out[4] = {&p.hand, &p.cd, &p.a34, &p.g5};
-  for (int k = 0; k < 4; ++k) *out[k] = MedianOf(per_step[k]);
+  for (int k = 0; k < 4; ++k) *out[k] = wp::MedianOf(per_step[k]);
   return p;
 }
 
