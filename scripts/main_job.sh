@@ -108,8 +108,8 @@ run_build() {  # build dir, suffix
     run_scene "$name$sfx" "$bd/bench/$t"
   done
   if [ -x "$bd/bench/bench_step" ]; then
-    step "per-step cost$sfx (Google Benchmark, median of 5, repetitions interleaved at random)"
-    if ! "$bd/bench/bench_step" --benchmark_min_time=0.05 --benchmark_repetitions=5 \
+    step "per-step cost$sfx (Google Benchmark, median of 11, repetitions interleaved at random)"
+    if ! "$bd/bench/bench_step" --benchmark_min_time=0.05 --benchmark_repetitions=11 \
         --benchmark_enable_random_interleaving=true \
         --benchmark_report_aggregates_only=true --benchmark_out="$OUT/bench_step$sfx.json" \
         --benchmark_out_format=json > "$OUT/bench_step$sfx.txt" 2>&1; then
