@@ -515,6 +515,16 @@ int PositionLostFailure(CEodeMemRec* ce, sunrealtype t, const char* func) {
                       ce->method_name.c_str());
 }
 
+// What a step that failed after its update gives back: the in-place plans have written the
+// velocity (and, when x_kept is false, the position) over the last completed step's.
+const char* ReturnedState(const CEodeMemRec* ce, bool x_kept) {
+  if (!ce->in_place_active) return "the state returned is that of the last completed step";
+  return x_kept ? "the position returned is the last completed step's, the velocity the failed "
+                  "step's (written in place): restart with CEodeReInit"
+                : "the position and velocity returned are the failed step's (written in place): "
+                  "restart with CEodeReInit";
+}
+
 // Explosive growth or a non-finite state: stop long before overflow, while the state is still
 // readable, and say whether f or the step size is to blame. x_kept: x(t) is still in xnext.
 int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func,
@@ -524,9 +534,9 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, sunrealtype xl1, const char* func
     return ProcessError(ce, CE_VECTOROP_ERR, func,
                         "The global reduction of the step's growth check failed at t = %.17g (step "
                         "%ld): N_VDotProdMultiAllReduce (an MPI_Allreduce on NVECTOR_PARALLEL) "
-                        "returned an error, so the vector's communicator failed; the state is "
-                        "that of the last completed step (docs/theory.md, \"In-place update\").",
-                        static_cast<double>(t), ce->nst + 1);
+                        "returned an error, so the vector's communicator failed; %s "
+                        "(docs/theory.md, \"In-place update\").",
+                        static_cast<double>(t), ce->nst + 1, ReturnedState(ce, x_kept));
   }
   if (std::isfinite(xl1) && Exploded(xl1, GrowthBound(ce))) {
     return ProcessError(ce, CE_UNSTABLE, func,

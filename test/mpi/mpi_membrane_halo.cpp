@@ -51,8 +51,10 @@ double StepSize(const char* method, const membrane::Strip& s) {
   return 0.9 * Omega / membrane::OmegaMax(s);
 }
 
-// Integrates kSteps steps on x (either vector kind); returns CEODE's flag.
-int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused) {
+// Integrates kSteps steps on x (either vector kind); returns CEODE's flag and, on a failure, its
+// message in *msg (if given).
+int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused,
+              std::string* msg = nullptr) {
   N_Vector v = N_VClone(x);
   membrane::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
   const double h = StepSize(c.method, *s);
@@ -65,6 +67,11 @@ int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused) {
   if (flag == CE_SUCCESS) flag = CEodeSetFusedKernel(mem, fused ? 1 : 0);
   sunrealtype t = 0;
   if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, kSteps * h, x, v, &t, CE_NORMAL);
+  const char* text = nullptr;
+  if (flag != CE_SUCCESS && msg != nullptr && CEodeGetLastErrorMessage(mem, &text) == CE_SUCCESS &&
+      text != nullptr) {
+    *msg = text;
+  }
   CEodeFree(&mem);
   N_VDestroy(v);
   return flag;
@@ -88,6 +95,7 @@ struct ParallelResult {
   std::vector<double> x;  // gathered on rank 0
   int flag = CE_SUCCESS;  // the worst rank's
   long exchanges = 0;     // halo exchanges summed over the ranks
+  std::string msg;        // this rank's error message
 };
 
 // A global reduction that fails, as N_VDotProdMultiAllReduce does when MPI_Allreduce does.
@@ -108,7 +116,7 @@ ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid,
   N_Vector x = N_VNew_Parallel(comm, membrane::LocalLength(s), g.Size(), ctx);
   if (failing_reduction) x->ops->nvdotprodmultiallreduce = FailingReduction;
   ParallelResult r;
-  r.flag = Integrate(x, &s, c, true);
+  r.flag = Integrate(x, &s, c, true, &r.msg);
   MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
   MPI_Allreduce(&s.nexchange, &r.exchanges, 1, MPI_LONG, MPI_SUM, comm);
   std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
@@ -197,11 +205,29 @@ TEST(MembraneOnRanksEdgeCase, WithMoreRanksThanRowsGivesTheSerialNumbers) {
 // Negative control: with the halo rows never exchanged (stale zeros), the strips' edge rows see
 // a fixed edge that is not there, and the comparison must notice.
 // The growth check's norm is CEODE's one reduction per step; when it fails, the step reports the
-// vector operation (not a non-finite state or an unstable step size) on every rank, and the state
-// it returns is finite.
+// vector operation (not a non-finite state or an unstable step size) on every rank, the state
+// it returns is finite, and the message says which state that is. On kGrid's strips (< 1024
+// entries a rank) the plans keep two buffers: the last completed step's state.
 TEST(MembraneOnRanksControl, AFailedGlobalReductionIsReportedAsAVectorOperationError) {
   const ParallelResult r = ParallelRun(Case{"G3_CD", false}, true, kGrid, true);
   EXPECT_EQ(r.flag, CE_VECTOROP_ERR);
+  EXPECT_NE(r.msg.find("global reduction"), std::string::npos) << r.msg;
+  EXPECT_NE(r.msg.find("that of the last completed step"), std::string::npos) << r.msg;
+  bool finite = true;
+  for (double v : r.x) finite = finite && std::isfinite(v);
+  EXPECT_TRUE(finite);
+}
+
+// With >= 1024 entries a rank the lean loop writes the velocity and the position in place, so
+// the first step's failed reduction leaves the failed step's position and velocity: the message
+// must say so and point to CEodeReInit (docs/theory.md, "In-place update").
+TEST(MembraneOnRanksControl, AFailedReductionAfterAnInPlaceUpdateSaysTheStateIsTheFailedSteps) {
+  constexpr Grid kLarge{64, 48};  // 1024 entries a rank on 3 ranks
+  const ParallelResult r = ParallelRun(Case{"G3_CD", false}, true, kLarge, true);
+  EXPECT_EQ(r.flag, CE_VECTOROP_ERR);
+  EXPECT_NE(r.msg.find("position and velocity returned are the failed step's"), std::string::npos)
+      << r.msg;
+  EXPECT_NE(r.msg.find("CEodeReInit"), std::string::npos) << r.msg;
   bool finite = true;
   for (double v : r.x) finite = finite && std::isfinite(v);
   EXPECT_TRUE(finite);
