@@ -1,0 +1,131 @@
+// The benchmark harness's rules (bench/wp_common.h), on which every ratio in docs/results.md
+// rests: the equal-error rule (TimeAtError: log time interpolated linearly in log error), the
+// repetition plan and median of TimeMedian, and the interleaved rounds of the FE scenes
+// (wp::Rounds). The timed functions spin on the harness's own clock (process CPU time) for a
+// set time, so the number of calls each rule makes is known in advance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "wp_common.h"
+
+namespace {
+
+wp::Row MakeRow(const std::string& solver, double error, double seconds) {
+  wp::Row r;
+  r.solver = solver;
+  r.config = "c";
+  r.error = error;
+  r.seconds = seconds;
+  r.steps = 1;
+  return r;
+}
+
+// Busy for `seconds` of the harness's clock (a sleep would not count: the clock is CPU time).
+void Spin(double seconds) {
+  const double t0 = wp::Now();
+  volatile double sink = 0;
+  while (wp::Now() - t0 < seconds) sink = sink + 1;
+}
+
+TEST(TimeAtError, InterpolatesLogTimeLinearlyInLogErrorBetweenTwoPoints) {
+  const std::vector<wp::Row> rows = {MakeRow("A", 1e-2, 1.0), MakeRow("A", 1e-4, 100.0)};
+  // Half way in log error between 1e-2 and 1e-4 is half way in log time between 1 and 100.
+  EXPECT_NEAR(wp::TimeAtError(rows, "A", "c", 1e-3), 10.0, 1e-12);
+  EXPECT_NEAR(wp::TimeAtError(rows, "A", "c", 1e-4), 100.0, 1e-12);
+}
+
+TEST(TimeAtError, TakesTheCheapestCrossingOnANonMonotoneCurveAndNeverExtrapolates) {
+  // A non-monotone curve: the second point already reaches 1e-5, more cheaply than the third.
+  const std::vector<wp::Row> rows = {MakeRow("A", 1e-3, 1.0), MakeRow("A", 1e-6, 2.0),
+                                     MakeRow("A", 1e-5, 3.0), MakeRow("B", 1e-9, 0.1)};
+  EXPECT_NEAR(wp::TimeAtError(rows, "A", "c", 1e-5), std::exp(std::log(2.0) * 2.0 / 3.0), 1e-12);
+  EXPECT_LT(wp::TimeAtError(rows, "A", "c", 1e-7), 0);  // never reached: no extrapolation
+  EXPECT_NEAR(wp::TimeAtError(rows, "B", "c", 1e-3), 0.1, 0);
+}
+
+TEST(PlanReps, RepeatsShortRunsUntilARepetitionFillsTheMinimumTime) {
+  const wp::RepPlan p = wp::PlanReps(0.01);
+  EXPECT_EQ(p.calls, 5);
+  EXPECT_EQ(p.reps, wp::kReps);
+}
+
+TEST(PlanReps, TimesLongRunsThreeTimesAndVeryLongRunsOnce) {
+  EXPECT_EQ(wp::PlanReps(0.2).calls, 1);
+  EXPECT_EQ(wp::PlanReps(0.2).reps, wp::kReps);
+  EXPECT_EQ(wp::PlanReps(wp::kFewRepSeconds).reps, 3);
+  EXPECT_EQ(wp::PlanReps(wp::kOneRunSeconds).reps, 0);
+}
+
+TEST(MedianOf, IsTheMiddleValueAndNaNWhenAnyValueIsNaN) {
+  EXPECT_EQ(wp::MedianOf({5, 1, 4, 2, 3}), 3);
+  EXPECT_TRUE(std::isnan(wp::MedianOf({1, std::nan(""), 3})));
+}
+
+TEST(TimeMedian, CallsOnceToCalibrateThenOnceARepetitionAndReportsThePerCallTime) {
+  int calls = 0;
+  const double t = wp::TimeMedian([&]() {
+    ++calls;
+    Spin(1.2 * wp::kMinRepSeconds);
+    return 0;
+  });
+  EXPECT_EQ(calls, 1 + wp::kReps);
+  EXPECT_GE(t, 1.2 * wp::kMinRepSeconds);
+  EXPECT_LT(t, 3 * wp::kMinRepSeconds);  // not the sum of the repetitions
+}
+
+TEST(TimeMedian, ReportsAFailureOfAnyCallAsNegative) {
+  int calls = 0;
+  EXPECT_LT(wp::TimeMedian([&]() { return ++calls == 3 ? 1 : 0; }), 0);
+  EXPECT_LT(wp::TimeMedian([]() { return 1; }), 0);
+}
+
+// Two configurations of one spin each: the numbers run of each, then one repetition of each in
+// every round, so the timed calls alternate between the two (in a shuffled order per round).
+TEST(Rounds, TimesOneRepetitionOfEveryConfigurationPerRoundAndAddsRowsInQueueOrder) {
+  wp::Table table("harness", "");
+  wp::Rounds rounds(&table);
+  std::vector<int> log;
+  for (int id : {0, 1}) {
+    const double first =
+        rounds.Measure("S", id == 0 ? "first" : "second", id, [&log, id](wp::Outcome* o) {
+          log.push_back(id);
+          Spin(1.2 * wp::kMinRepSeconds);
+          o->error = 1e-3 * (id + 1);
+          o->steps = 10;
+          return 0;
+        });
+    EXPECT_GE(first, 1.2 * wp::kMinRepSeconds);
+  }
+  EXPECT_TRUE(table.rows().empty());  // rows come with their times, after the rounds
+  rounds.Run();
+  ASSERT_EQ(log.size(), 2u + 2u * wp::kReps);
+  for (size_t r = 0; r < static_cast<size_t>(wp::kReps); ++r) {
+    EXPECT_NE(log[2 + 2 * r], log[3 + 2 * r]) << "round " << r << " timed one configuration twice";
+  }
+  ASSERT_EQ(table.rows().size(), 2u);
+  EXPECT_EQ(table.rows()[0].config, "first");
+  EXPECT_EQ(table.rows()[1].config, "second");
+  EXPECT_EQ(table.rows()[1].error, 2e-3);  // the numbers run's figures
+  for (const wp::Row& row : table.rows()) {
+    EXPECT_GE(row.seconds, 1.2 * wp::kMinRepSeconds);
+    EXPECT_LT(row.seconds, 3 * wp::kMinRepSeconds);
+  }
+  EXPECT_EQ(table.failures(), 0);
+}
+
+TEST(Rounds, ReportsAFailedNumbersRunAndAFailureWhileTimingAsFailuresNotRows) {
+  wp::Table table("harness", "");
+  wp::Rounds rounds(&table);
+  EXPECT_LT(rounds.Measure("S", "fails", 1, [](wp::Outcome*) { return 1; }), 0);
+  int calls = 0;
+  EXPECT_GE(rounds.Measure("S", "fails later", 2, [&calls](wp::Outcome*) { return ++calls > 3; }),
+            0);
+  rounds.Run();
+  EXPECT_TRUE(table.rows().empty());
+  EXPECT_EQ(table.failures(), 2);
+}
+
+}  // namespace
