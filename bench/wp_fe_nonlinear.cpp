@@ -157,7 +157,7 @@ int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
   const int n = s->plate.n;
   const double* Y = N_VGetArrayPointer(y);
   double* D = N_VGetArrayPointer(yd);
-  std::copy(Y + n, Y + 2 * n, D);
+  std::copy(Y + n, Y + 2 * static_cast<ptrdiff_t>(n), D);
   Accel(*s, Y, D + n);
   return 0;
 }
@@ -168,7 +168,7 @@ int RhsImplicit(sunrealtype, N_Vector y, N_Vector yd, void* user) {
   const int n = s->plate.n;
   const double* Y = N_VGetArrayPointer(y);
   double* D = N_VGetArrayPointer(yd);
-  std::copy(Y + n, Y + 2 * n, D);
+  std::copy(Y + n, Y + 2 * static_cast<ptrdiff_t>(n), D);
   fe::Accel(s->plate, Y, D + n);
   return 0;
 }
@@ -179,7 +179,7 @@ int RhsExplicit(sunrealtype, N_Vector y, N_Vector yd, void* user) {
   const int n = p.n;
   const double* Y = N_VGetArrayPointer(y);
   double* D = N_VGetArrayPointer(yd);
-  std::fill(D, D + 2 * n, 0.0);
+  std::fill(D, D + 2 * static_cast<ptrdiff_t>(n), 0.0);
   TrussRemainder(s->truss, Y, D + n);
   for (int k = 0; k < n; ++k) D[n + k] *= -p.invm[k];
   return 0;

@@ -77,7 +77,7 @@ int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
   const int n = s->plate.n;
   const double* Y = N_VGetArrayPointer(y);
   double* D = N_VGetArrayPointer(yd);
-  std::copy(Y + n, Y + 2 * n, D);
+  std::copy(Y + n, Y + 2 * static_cast<ptrdiff_t>(n), D);
   fe::Accel(s->plate, Y, D + n);
   return 0;
 }
@@ -102,7 +102,7 @@ int Jac1(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_V
       v[q++] = -p.invm[r] * p.val[k];
     }
   }
-  rp[2 * p.n] = q;
+  rp[2 * static_cast<ptrdiff_t>(p.n)] = q;
   return 0;
 }
 
@@ -385,7 +385,8 @@ ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
   s.p.user = &s;
   s.p.f2 = Rhs2;
   s.p.x0.assign(n, 0.0);
-  for (int k = 1; k < n; k += 2) s.p.x0[k] = 1e-3 * (k / 2 + 1.0) / (n / 2);
+  const int pairs = n / 2;
+  for (int j = 0; 2 * j + 1 < n; ++j) s.p.x0[2 * j + 1] = 1e-3 * (j + 1.0) / pairs;
   s.p.v0.assign(n, 0.0);
   s.p.nout = 1;
   const long steps = std::max(20L, std::min(1000L, static_cast<long>(3e6 / n)));
