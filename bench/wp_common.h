@@ -702,6 +702,21 @@ inline int IdaOnce(SUNContext ctx, const Residual& p, double tol, Outcome* out) 
 }
 
 // ------------------------------------------------------- measured + timed rows
+// The row of one configuration: its numbers from an Outcome, its time per run.
+inline Row OutcomeRow(const std::string& solver, const std::string& config, double h_or_tol,
+                      const Outcome& o, double seconds) {
+  Row r;
+  r.solver = solver;
+  r.config = config;
+  r.h_or_tol = h_or_tol;
+  r.error = o.error;
+  r.drift = o.drift;
+  r.steps = o.steps;
+  r.rhs_evals = o.rhs_evals;
+  r.seconds = seconds;
+  return r;
+}
+
 // Runs once for the numbers, then times the same call; adds a row or a failure.
 // Returns true when the row was added; *got (if given) receives the figures.
 template <class F>
@@ -718,16 +733,7 @@ bool Measure(Table* table, const std::string& solver, const std::string& config,
     table->Fail(solver, config, h_or_tol, "failed while timing");
     return false;
   }
-  Row r;
-  r.solver = solver;
-  r.config = config;
-  r.h_or_tol = h_or_tol;
-  r.error = o.error;
-  r.drift = o.drift;
-  r.steps = o.steps;
-  r.rhs_evals = o.rhs_evals;
-  r.seconds = secs;
-  table->Add(r);
+  table->Add(OutcomeRow(solver, config, h_or_tol, o, secs));
   if (got != nullptr) *got = o;
   return true;
 }
@@ -744,14 +750,10 @@ class Rounds {
   Rounds(const Rounds&) = delete;
   Rounds& operator=(const Rounds&) = delete;
 
-  // The numbers run; `once` is kept for the rounds, so it must own what it captures by
-  // reference past this call. Returns that run's seconds (< 0: it failed, a failure row).
+  // The numbers run; `once` is kept for the rounds, so nothing it captures by reference may end
+  // with the caller's scope. Returns that run's seconds (< 0: it failed, a failure row).
   double Measure(const std::string& solver, const std::string& config, double h_or_tol,
                  std::function<int(Outcome*)> once, Outcome* got = nullptr) {
-    Entry e;
-    e.row.solver = solver;
-    e.row.config = config;
-    e.row.h_or_tol = h_or_tol;
     Outcome o;
     const double t0 = Now();
     if (once(&o) != 0) {
@@ -759,11 +761,8 @@ class Rounds {
       return -1;
     }
     const double first = Now() - t0;
-    e.row.error = o.error;
-    e.row.drift = o.drift;
-    e.row.steps = o.steps;
-    e.row.rhs_evals = o.rhs_evals;
-    e.row.seconds = first;
+    Entry e;
+    e.row = OutcomeRow(solver, config, h_or_tol, o, first);
     e.plan = PlanReps(first);
     e.once = std::move(once);
     entries_.push_back(std::move(e));

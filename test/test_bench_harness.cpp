@@ -82,55 +82,50 @@ TEST(TimeMedian, ReportsAFailureOfAnyCallAsNegative) {
   EXPECT_LT(wp::TimeMedian([]() { return 1; }), 0);
 }
 
-// Two configurations of one spin each, queued as "first" and "second"; every call's id goes to
-// *log.
-void QueueTwoSpins(wp::Rounds* rounds, std::vector<int>* log) {
-  for (int id : {0, 1}) {
-    rounds->Measure("S", id == 0 ? "first" : "second", id, [log, id](wp::Outcome* o) {
-      log->push_back(id);
-      Spin(1.2 * wp::kMinRepSeconds);
-      o->error = 1e-3 * (id + 1);
-      o->steps = 10;
-      return 0;
-    });
+// Two configurations of one spin each, queued as "first" and "second" and timed by Run(); every
+// call's id goes to log_.
+class RoundsOfTwoSpins : public testing::Test {
+ protected:
+  RoundsOfTwoSpins() {
+    for (int id : {0, 1}) {
+      rounds_.Measure("S", id == 0 ? "first" : "second", id, [this, id](wp::Outcome* o) {
+        log_.push_back(id);
+        Spin(1.2 * wp::kMinRepSeconds);
+        o->error = 1e-3 * (id + 1);
+        o->steps = 10;
+        return 0;
+      });
+    }
+    queued_rows_ = table_.rows().size();
+    rounds_.Run();
   }
-}
+  wp::Table table_{"harness", ""};
+  wp::Rounds rounds_{&table_};
+  std::vector<int> log_;
+  size_t queued_rows_ = 0;  // rows before Run()
+};
 
 // The numbers run of each, then one repetition of each in every round: the timed calls alternate
 // between the two (in a shuffled order per round).
-TEST(Rounds, TimesOneRepetitionOfEveryConfigurationPerRound) {
-  wp::Table table("harness", "");
-  wp::Rounds rounds(&table);
-  std::vector<int> log;
-  QueueTwoSpins(&rounds, &log);
-  EXPECT_TRUE(table.rows().empty());  // rows come with their times, after the rounds
-  rounds.Run();
-  ASSERT_EQ(log.size(), 2U + 2U * wp::kReps);
+TEST_F(RoundsOfTwoSpins, TimeOneRepetitionOfEveryConfigurationPerRound) {
+  EXPECT_EQ(queued_rows_, 0U);  // rows come with their times, after the rounds
+  ASSERT_EQ(log_.size(), 2U + 2U * wp::kReps);
   for (size_t r = 0; r < static_cast<size_t>(wp::kReps); ++r) {
-    EXPECT_NE(log[2 + 2 * r], log[3 + 2 * r]) << "round " << r << " timed one configuration twice";
+    EXPECT_NE(log_[2 + 2 * r], log_[3 + 2 * r])
+        << "round " << r << " timed one configuration twice";
   }
 }
 
-TEST(Rounds, AddsRowsInQueueOrderWithTheNumbersRunsFigures) {
-  wp::Table table("harness", "");
-  wp::Rounds rounds(&table);
-  std::vector<int> log;
-  QueueTwoSpins(&rounds, &log);
-  rounds.Run();
-  ASSERT_EQ(table.rows().size(), 2U);
-  EXPECT_EQ(table.rows()[0].config, "first");
-  EXPECT_EQ(table.rows()[1].config, "second");
-  EXPECT_EQ(table.rows()[1].error, 2e-3);
-  EXPECT_EQ(table.failures(), 0);
+TEST_F(RoundsOfTwoSpins, AddRowsInQueueOrderWithTheNumbersRunsFigures) {
+  ASSERT_EQ(table_.rows().size(), 2U);
+  EXPECT_EQ(table_.rows()[0].config, "first");
+  EXPECT_EQ(table_.rows()[1].config, "second");
+  EXPECT_EQ(table_.rows()[1].error, 2e-3);
+  EXPECT_EQ(table_.failures(), 0);
 }
 
-TEST(Rounds, ReportsTheMedianSecondsOfOneCallNotTheSumOfTheRounds) {
-  wp::Table table("harness", "");
-  wp::Rounds rounds(&table);
-  std::vector<int> log;
-  QueueTwoSpins(&rounds, &log);
-  rounds.Run();
-  for (const wp::Row& row : table.rows()) {
+TEST_F(RoundsOfTwoSpins, ReportTheMedianSecondsOfOneCallNotTheSumOfTheRounds) {
+  for (const wp::Row& row : table_.rows()) {
     EXPECT_GE(row.seconds, 1.2 * wp::kMinRepSeconds);
     EXPECT_LT(row.seconds, 3 * wp::kMinRepSeconds);
   }
