@@ -19,8 +19,8 @@
 //  * CEODE with the velocity dependence declared: prediction-correction (CE_IMPLICIT_PC),
 //    CE_IMPLICIT_AUTO (PC while its corrections contract by 5, else the nonlinear solver),
 //    Newton with a matrix-free SPGMR on M - kappa df/dv (stiff variant: also at a loosened
-//    Newton tolerance, 1e-7); G4_A34 with AUTO (mass variant; with C = b K it diverges at
-//    every step tried, printed by G4Probe); and (stiff variant) the undeclared,
+//    Newton tolerance, 1e-7); G4_A34 and G5_O4 with AUTO (mass variant; with C = b K G4_A34
+//    diverges at every step tried, printed by G4Probe); and (stiff variant) the undeclared,
 //    lagged-velocity explicit step (first order, docs/theory.md 4.1).
 //  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
 //    ARKStep IMEX (damping -C v implicit and linear, K x explicit) + SPGMR; ARKStep
@@ -243,11 +243,14 @@ inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
   newton.mode = CE_IMPLICIT_NEWTON;
   fes::CeodeCfg a34 = autom;
   a34.method = "G4_A34";
+  fes::CeodeCfg o4 = autom;
+  o4.method = "G5_O4";
   if (kind == Damping::kMass) {
     return {{"G3_CD-AUTO", autom, f_cd},
             {"G3_CD-PC", pc, quick ? V{0.9, 0.45} : V{0.9, 0.4, 0.12}},
             {"G3_CD-Newton-SPGMR", newton, quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4}},
-            {"G4_A34-AUTO", a34, f_few}};
+            {"G4_A34-AUTO", a34, f_few},
+            {"G5_O4-AUTO", o4, quick ? V{0.9} : V{0.9, 0.6, 0.4}}};
   }
   // The Newton tolerance is CEODE's 1e-12 by default; a user at 1e-4 .. 1e-6 can loosen it.
   fes::CeodeCfg loose = newton;

@@ -24,7 +24,7 @@
 //
 // Curves (error = max over the outputs of ||x - x_ref||_2 / ||x0||_2):
 //  * CEODE-hand: the leapfrog loop a user writes, same f (must equal CEODE G3_CD);
-//  * CEODE G3_CD, G4_A34, G7_O7 at fractions of each set's stable step (guard at x0);
+//  * CEODE G3_CD, G4_A34, G5_O4, G7_O7 at fractions of each set's stable step (guard at x0);
 //  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
 //    ARKStep IMEX + SPGMR (x' = v, v' = -M^{-1} K x implicit and linear, the nonlinear
 //    remainder -M^{-1} N(x) explicit); ARKStep DIRK + SPGMR (all implicit).
@@ -278,9 +278,11 @@ void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Rounds* rounds) {
   const std::vector<Curve> curves =
       quick ? std::vector<Curve>{{"G3_CD", {0.9, 0.45, 0.225}},
                                  {"G4_A34", {0.9, 0.45}},
+                                 {"G5_O4", {0.9}},
                                  {"G7_O7", {0.9}}}
             : std::vector<Curve>{{"G3_CD", {0.9, 0.6, 0.4, 0.25, 0.12, 0.06}},
                                  {"G4_A34", {0.9, 0.6, 0.4, 0.25}},
+                                 {"G5_O4", {0.9, 0.6, 0.4}},
                                  {"G7_O7", {0.9, 0.6}}};
   for (const Curve& c : curves) {
     const double hs = fes::GuardStep(ctx, &s->prob, c.method);

@@ -24,6 +24,7 @@ constexpr LongRunBehaviour kLongRun[] = {
     {"G5", kLongRunGrowing, 2.65e-13, 0, 0},
     {"G5_TOP", kLongRunLinearDrift, 4.08e-11, 3, 0.06816569051},
     {"G5_ONES", kLongRunGrowing, 1.65e-13, 0, 0},
+    {"G5_O4", kLongRunLinearDrift, 3.38e-13, 5, 1.970651341},
     {"G6_O5", kLongRunLinearDrift, 2.25e-13, 5, 0.8050},
     {"G6_O6", kLongRunRoundOff, 1.42e-16, 0, 0.066},
     {"G7_O7", kLongRunRoundOff, 8.18e-16, 0, 1.0320},

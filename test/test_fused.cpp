@@ -130,8 +130,8 @@ TEST_P(FusedKernel, GivesBitwiseTheGenericNumbersAtEveryToutWhenWritingPositions
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
-                         ::testing::Values("G3_CD", "G3_A2", "G4_A34", "G5", "G5_TOP", "G6_O5",
-                                           "G6_O6", "G7_O7", "G8_O8"),
+                         ::testing::Values("G3_CD", "G3_A2", "G4_A34", "G5", "G5_TOP", "G5_O4",
+                                           "G6_O5", "G6_O6", "G7_O7", "G8_O8"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            return info.param;
                          });

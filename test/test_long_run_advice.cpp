@@ -89,14 +89,16 @@ TEST(LongRunAdvice, RecommendsTheBoundedSetAndTheSlowestStableDriftForTheStepAtH
   EXPECT_NE(Advice("G5", 3e-3).find("G3_CD"), std::string::npos);
   EXPECT_NE(Advice("G5", 3e-3).find("G7_O7"), std::string::npos);
   EXPECT_NE(Advice("G5", 0.9).find("G7_O7"), std::string::npos);
-  // Beyond 0.9 * 1.032 no set without resolved drift is stable: the slowest linear drift.
-  EXPECT_NE(Advice("G5", 0.95).find("G4_A34"), std::string::npos);
-  // Beyond G5_TOP's limit 0.068 the slowest stable drift is G4_A34's.
-  EXPECT_NE(Advice("G4_A54", 1.0).find("G4_A34"), std::string::npos);
+  // Beyond 0.9 * 1.032 no set without resolved drift is stable: the slowest linear drift,
+  // G5_O4's (3.4e-13, where G4_A34 drifts at 4.3e-8).
+  EXPECT_NE(Advice("G5", 0.95).find("G5_O4"), std::string::npos);
+  // Beyond G5_TOP's limit 0.068 the slowest stable drift is G5_O4's, up to 0.9 * 1.97.
+  EXPECT_NE(Advice("G4_A54", 1.0).find("G5_O4"), std::string::npos);
   EXPECT_EQ(Advice("G4_A54", 1.0).find("G5_TOP"), std::string::npos);
-  // Between 0.9 * 1.73 and 0.9 * 2 only G3_CD is stable.
-  EXPECT_NE(Advice("G4_A34", 1.7).find("G3_CD"), std::string::npos);
-  EXPECT_EQ(Advice("G4_A34", 1.7).find("G4_A34"), std::string::npos);
+  EXPECT_NE(Advice("G4_A34", 1.7).find("G5_O4"), std::string::npos);
+  // Between 0.9 * 1.97 and 0.9 * 2 only G3_CD is stable.
+  EXPECT_NE(Advice("G4_A34", 1.78).find("G3_CD"), std::string::npos);
+  EXPECT_EQ(Advice("G4_A34", 1.78).find("G5_O4"), std::string::npos);
   // Beyond every limit: reduce h. Already bounded: nothing to add.
   EXPECT_NE(Advice("G4_A34", 2.5).find("reduce h"), std::string::npos);
   EXPECT_EQ(Advice("G3_CD", 0.5), "");
