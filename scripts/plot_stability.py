@@ -23,7 +23,7 @@ LABELS = {"HHT": "HHT-α (α = −0.05)", "RK3": "RK3 (Kutta)", "RK4": "RK4", "A
 FIGURES = {
     "g3": (["G3_CD", "G3_A43", "G3_A2"], 3.0, "Degree 3 (β = 1/2)"),
     "g4": (["G4_A54", "G4_A14", "G4_A34", "G3_CD"], 3.0, "Degree 4 (β = 1/3, γ = 1/2)"),
-    "g5": (["G5", "G5_TOP", "G5_ONES", "G4_A34"], 3.0, "Degree 5"),
+    "g5": (["G5", "G5_TOP", "G5_ONES", "G5_O4", "G4_A34"], 3.0, "Degree 5"),
 }
 
 
