@@ -35,6 +35,7 @@
 // Runners (CEODE, SUNDIALS) and the equal-error table: bench/fe_scene.h, shared with the plate
 // variants. Timing, rows, CSV: bench/wp_common.h (one clock, one median rule).
 // Usage: wp_fe_plate [--csv FILE] [--quick]
+//        wp_fe_plate --count SOLVER NY STEPS (one untimed run, for callgrind: see CountMain)
 // Exit code 0 when the modes converged, the stable-step criteria hold, the hand
 // loop reproduces CEODE G3_CD, G3_CD converges at order 2, and every run
 // succeeded. Never on a timing.
@@ -375,25 +376,33 @@ double PerStep(const std::function<int(Scene*, wp::Outcome*)>& run, Scene* s, do
 
 constexpr int kScaleRounds = 3;
 
+// The solvers of the scaling part, each at its own fraction of G3_CD's step (inside its limit).
+constexpr const char* kScaleSets[3] = {"G3_CD", "G4_A34", "G5_O4"};
+constexpr double kScaleFrac[3] = {1.0, 0.8, 0.95};
+
+// The scaling scene on one mesh of 4 ny x ny square elements: a smooth start, no reference
+// (the modes are not needed, the error is not looked at).
+void MakeScaleScene(int ny, Scene* s) {
+  s->plate = fe::MakePlate(4 * ny, ny);
+  const int n = s->plate.n;
+  s->p.n = n;
+  s->p.user = s;
+  s->p.f2 = Rhs2;
+  s->p.x0.assign(n, 0.0);
+  const int pairs = n / 2;
+  for (int j = 0; 2 * j + 1 < n; ++j) s->p.x0[2 * j + 1] = 1e-3 * (j + 1.0) / pairs;
+  s->p.v0.assign(n, 0.0);
+  s->p.nout = 1;
+}
+
 // One mesh of 4 ny x ny square elements; h_cd is G3_CD's stable step on square
 // elements of size dx_ref (the stable step scales with the element size).
 ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
   Scene s;
-  s.plate = fe::MakePlate(4 * ny, ny);
+  MakeScaleScene(ny, &s);
   const int n = s.plate.n;
-  // Modes are not needed here: a smooth start, the error is not looked at (no reference).
-  s.p.n = n;
-  s.p.user = &s;
-  s.p.f2 = Rhs2;
-  s.p.x0.assign(n, 0.0);
-  const int pairs = n / 2;
-  for (int j = 0; 2 * j + 1 < n; ++j) s.p.x0[2 * j + 1] = 1e-3 * (j + 1.0) / pairs;
-  s.p.v0.assign(n, 0.0);
-  s.p.nout = 1;
   const long steps = std::max(20L, std::min(1000L, static_cast<long>(3e6 / n)));
   const double h = 0.9 * h_cd * (1.0 / ny) / dx_ref;
-  const char* sets[3] = {"G3_CD", "G4_A34", "G5_O4"};
-  const double scale[3] = {1.0, 0.8, 0.95};  // inside each set's limit
   // The four solvers in turn, kScaleRounds times, each one's median over the rounds: a burst of
   // load on this shared machine then falls on one round of every solver, not on one solver.
   std::vector<double> per_step[4];
@@ -401,9 +410,9 @@ ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
     per_step[0].push_back(
         PerStep([h](Scene* sc, wp::Outcome* o) { return HandRun(sc, h, o); }, &s, h, steps));
     for (int k = 0; k < 3; ++k) {
-      const double hk = scale[k] * h;
+      const double hk = kScaleFrac[k] * h;
       fes::CeodeCfg cfg;
-      cfg.method = sets[k];
+      cfg.method = kScaleSets[k];
       per_step[k + 1].push_back(
           PerStep([&](Scene* sc, wp::Outcome* o) { return fes::CeodeRun(ctx, &sc->p, cfg, hk, o); },
                   &s, hk, steps));
@@ -461,9 +470,48 @@ int ScalingPart(SUNContext ctx, const wp::Args& args, double h_cd, double dx_ref
   return bad;
 }
 
+// ------------------------------------------------------- instruction counts
+// wp_fe_plate --count SOLVER NY STEPS: SOLVER (hand, G3_CD, G4_A34 or G5_O4) integrates the scaling
+// scene on the 4 NY x NY mesh for STEPS steps, untimed, and prints its step count. Under callgrind
+// (bench/fe_plate_instructions.sh) two step counts give instructions and simulated cache misses per
+// step, counts that do not move with the machine's load. The step is 0.9 x 2 / (largest element
+// frequency), inside G3_CD's limit since that bound is above omega_max (part 1).
+int CountMain(int argc, char** argv) {
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: %s --count hand|G3_CD|G4_A34|G5_O4 NY STEPS\n", argv[0]);
+    return 2;
+  }
+  const std::string solver = argv[2];
+  const int ny = std::atoi(argv[3]);
+  const long steps = std::atol(argv[4]);
+  const double* frac = nullptr;
+  for (int k = 0; k < 3; ++k) {
+    if (solver == kScaleSets[k]) frac = &kScaleFrac[k];
+  }
+  if (ny < 1 || steps < 1 || (frac == nullptr && solver != "hand")) {
+    std::fprintf(stderr, "--count: unknown solver '%s' or NY, STEPS below 1\n", solver.c_str());
+    return 2;
+  }
+  SUNContext ctx = nullptr;
+  if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
+  Scene s;
+  MakeScaleScene(ny, &s);
+  const double h = 0.9 * 2 / ElementBound(s.plate) * (frac == nullptr ? 1.0 : *frac);
+  s.p.tend = h * static_cast<double>(steps);
+  wp::Outcome o;
+  fes::CeodeCfg cfg;
+  cfg.method = solver.c_str();
+  const int rc = frac == nullptr ? HandRun(&s, h, &o) : fes::CeodeRun(ctx, &s.p, cfg, h, &o);
+  std::printf("%s on %d DOF: %ld steps (asked %ld), run %s\n", solver.c_str(), s.plate.n, o.steps,
+              steps, rc == 0 ? "ok" : "FAILED");
+  SUNContext_Free(&ctx);
+  return rc == 0 && o.steps == steps ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--count") return CountMain(argc, argv);
   const wp::Args args = wp::ParseArgs(argc, argv);
   SUNContext ctx = nullptr;
   if (wp::Failed(SUNContext_Create(SUN_COMM_NULL, &ctx), "SUNContext_Create")) return 1;
