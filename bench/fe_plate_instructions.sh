@@ -11,7 +11,9 @@
 # (misses, which the working set brings at 10^6 whoever runs the loop).
 #
 #   bench/fe_plate_instructions.sh BUILD_DIR [NY ...]     default NY: 35 112 354 (10^4 .. 10^6 DOF)
-# Needs valgrind. Takes about 15 minutes for the default meshes.
+# Needs valgrind. Took about 8 minutes for NY = 35 354 (session 11). The simulated misses follow
+# the cache that valgrind reads from cpuid; a VM that reports the host's whole L3 (512 MB here) gives
+# none at any size, so read them only where that size is real (or pass --LL= by hand).
 set -euo pipefail
 bin=$1/bench/wp_fe_plate
 shift
