@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace membrane {
@@ -64,6 +65,25 @@ inline Strip MakeStrip(MPI_Comm comm, int nx, int ny) {
 }
 
 inline long LocalLength(const Strip& s) { return static_cast<long>(s.nrows) * s.nx; }
+inline long GlobalLength(const Strip& s) { return static_cast<long>(s.nx) * s.ny; }
+
+// The square grid for about n DOFs (bench/mpi_membrane.cpp's --n).
+inline Strip MakeStrip(MPI_Comm comm, long n) {
+  const int side = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n))));
+  return MakeStrip(comm, side, side);
+}
+
+// Rank r's entries, for gathering a distributed state.
+inline void Range(const Strip& s, int r, long* off, long* len) {
+  int row0 = 0, nrows = 0;
+  RowRange(s.ny, s.size, r, &row0, &nrows);
+  *off = static_cast<long>(row0) * s.nx;
+  *len = static_cast<long>(nrows) * s.nx;
+}
+
+inline std::string Describe(const Strip& s) {
+  return "membrane " + std::to_string(s.nx) + " x " + std::to_string(s.ny);
+}
 
 // One grid row: a = k (w + e + n + s - 4 c), summed in this order for every entry; the missing
 // neighbour at a side edge is a zero term, as in the serial loop.
@@ -162,6 +182,33 @@ inline void InitialState(const Strip& s, double* x, double* v) {
       v[static_cast<long>(r) * s.nx + j] = 0;
     }
   }
+}
+
+// The exact solution at t = steps * h: of the central-difference recurrence (discrete = true)
+// or of the ODE; its largest deviation from x (the whole grid), relative to the amplitude.
+inline double Accuracy(const Strip& s, const double* x, long steps, double h, bool discrete,
+                       double* tol, const char** what) {
+  const auto modes = InitialModes(s);
+  std::vector<double> factor;
+  double amp = 0;
+  for (const auto& m : modes) {
+    const double w = Omega(s, m);
+    const double theta = std::acos(1 - 0.5 * (w * h) * (w * h));
+    factor.push_back(m.amplitude * (discrete ? std::cos(steps * theta) : std::cos(w * steps * h)));
+    amp += std::fabs(m.amplitude);
+  }
+  double err = 0;
+  for (int i = 0; i < s.ny; ++i) {
+    for (int j = 0; j < s.nx; ++j) {
+      double e = 0;
+      for (size_t k = 0; k < modes.size(); ++k) e += factor[k] * Phi(s, modes[k], i, j);
+      err = std::max(err, std::fabs(x[static_cast<long>(i) * s.nx + j] - e));
+    }
+  }
+  *tol = discrete ? 1e-9 : 1e-3;
+  *what = discrete ? "max |x - exact| / amplitude against the exact central-difference solution"
+                   : "max |x - exact| / amplitude against the exact ODE solution";
+  return err / amp;
 }
 
 }  // namespace membrane

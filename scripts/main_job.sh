@@ -171,28 +171,34 @@ fi
 step "$o3_note"
 
 # ---- MPI (issue 11, docs/mpi.md) ------------------------------------------------------------
-# The membrane on NVECTOR_PARALLEL at N = 10^6 (bench/mpi_membrane: one row strip per rank, halo
-# exchange in f) against NVECTOR_SERIAL: bitwise equality (the program's own check, exit 1 when
-# it fails) and the 1 -> 2 rank speedup, measured side by side in one `mpiexec -n 2` run (the
-# 1-rank runs happen on rank 0 while rank 1 sleeps; 200 steps, best of 3, interleaved).
-# Outputs docs/results/mpi_scaling.{csv,txt}, and mpi_scaling_o3.* on the -O3 SUNDIALS build.
+# Two partitioned models on NVECTOR_PARALLEL at N = 10^6, halo exchange in f, against
+# NVECTOR_SERIAL: the membrane (bench/mpi_membrane: one row strip per rank) and the Q4 plate of
+# wp_fe_plate (bench/mpi_fe_plate: one block of node columns per rank). Bitwise equality (the
+# program's own check, exit 1 when it fails) and the 1 -> 2 rank speedup, measured side by side
+# in one `mpiexec -n 2` run each (the 1-rank runs happen on rank 0 while rank 1 sleeps; 200 steps,
+# best of 3, interleaved). Outputs docs/results/mpi_scaling.{csv,txt} (membrane) and
+# mpi_fe_plate.{csv,txt}, and *_o3.* on the -O3 SUNDIALS build.
 # Not run (and not a failure) when there is no mpiexec or the build has no MPI/nvecparallel.
-mpi_scaling() {  # build dir, suffix
-  local bd=$1 sfx=$2 t1
-  if ! cmake --build "$bd" -j"$JOBS" --target mpi_membrane >> "$BUILD/main_job_mpi.log" 2>&1; then
-    step "mpi_scaling$sfx: mpi_membrane not built (no MPI or nvecparallel? $BUILD/main_job_mpi.log)"
+mpi_scene() {  # build dir, suffix, program, output name
+  local bd=$1 sfx=$2 prog=$3 name=$4 t1
+  if ! cmake --build "$bd" -j"$JOBS" --target "$prog" >> "$BUILD/main_job_mpi.log" 2>&1; then
+    step "$name$sfx: $prog not built (no MPI or nvecparallel? $BUILD/main_job_mpi.log)"
     return
   fi
   t1=$(date +%s)
-  step "scene mpi_scaling$sfx (mpiexec -n 2, N = 10^6) ..."
+  step "scene $name$sfx (mpiexec -n 2, N = 10^6) ..."
   if OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 \
-      mpiexec -n 2 "$bd/bench/mpi_membrane" --n 1000000 --steps 200 --reps 3 \
-      --csv "$OUT/mpi_scaling$sfx.csv" > "$OUT/mpi_scaling$sfx.txt" 2>&1; then
-    step "scene mpi_scaling$sfx done in $(( $(date +%s) - t1 )) s: $(grep -E '^speedup' "$OUT/mpi_scaling$sfx.txt")"
+      mpiexec -n 2 "$bd/bench/$prog" --n 1000000 --steps 200 --reps 3 \
+      --csv "$OUT/$name$sfx.csv" > "$OUT/$name$sfx.txt" 2>&1; then
+    step "scene $name$sfx done in $(( $(date +%s) - t1 )) s: $(grep -E '^speedup' "$OUT/$name$sfx.txt")"
   else
-    step "scene mpi_scaling$sfx FAILED its checks after $(( $(date +%s) - t1 )) s; see $OUT/mpi_scaling$sfx.txt"
+    step "scene $name$sfx FAILED its checks after $(( $(date +%s) - t1 )) s; see $OUT/$name$sfx.txt"
     status=1
   fi
+}
+mpi_scaling() {  # build dir, suffix
+  mpi_scene "$1" "$2" mpi_membrane mpi_scaling
+  mpi_scene "$1" "$2" mpi_fe_plate mpi_fe_plate
 }
 if command -v mpiexec > /dev/null; then
   mpi_scaling "$BUILD" ""
