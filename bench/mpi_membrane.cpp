@@ -25,6 +25,7 @@
 //   mpiexec -n 2 mpi_membrane|mpi_fe_plate [--n N] [--steps S] [--reps R] [--method NAME]
 //                                      [--csv FILE]
 //   mpiexec -n 2 mpi_membrane --quick        (N = 10^4, 100 steps, 1 repetition: ctest)
+//   ... --no-halo    (negative control: the P-rank run skips its halo exchanges; exit 1)
 //   ... --only serial|one|many                 (that configuration alone, for a profiler; no
 //   checks)
 // Defaults: N = 10^6 (1000 x 1000), 300 steps, 3 repetitions, G3_CD at 0.9 of its limit.
@@ -72,6 +73,7 @@ struct Options {
   double h_factor = 0.9;
   bool quick = false;
   std::string only;  // "serial", "one" or "many": that configuration alone (profiling, no checks)
+  bool no_halo = false;  // negative control: the P-rank f never exchanges (the checks must fail)
 };
 
 bool ParseArgs(int argc, char** argv, Options* o) {
@@ -93,6 +95,8 @@ bool ParseArgs(int argc, char** argv, Options* o) {
       o->method = argv[++i];
     } else if (a == "--only" && more) {
       o->only = argv[++i];
+    } else if (a == "--no-halo") {
+      o->no_halo = true;
     } else if (a == "--csv" && more) {
       o->csv = argv[++i];
     } else {
@@ -530,7 +534,8 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       std::fprintf(stderr,
                    "usage: mpiexec -n P mpi_membrane [--quick] [--n N] [--steps S] "
-                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many]\n");
+                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many] "
+                   "[--no-halo]\n");
     }
     MPI_Finalize();
     return 2;
@@ -538,6 +543,7 @@ int main(int argc, char** argv) {
   const std::string load0 = LoadAverage();
   Problem p;
   Setup(&p, o.n, rank, size);
+  p.world.exchange = !o.no_halo;
   const double h = StepSize(o, p.whole);
   int bad = h > 0 ? 0 : 1;
   if (bad == 0) {
