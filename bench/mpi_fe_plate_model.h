@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "fe_plate_model.h"
+#include "mpi_partition.h"
 
 namespace fe_strip {
 
@@ -59,10 +60,7 @@ struct Strip {
 
 // The balanced column partition: rank owns free node columns [*c0, *c0 + *nc).
 inline void ColumnRange(int nx, int size, int rank, int* c0, int* nc) {
-  const int base = nx / size;
-  const int extra = nx % size;
-  *nc = base + (rank < extra ? 1 : 0);
-  *c0 = rank * base + std::min(rank, extra);
+  mpi_partition::BalancedRange(nx, size, rank, c0, nc);
 }
 
 // omega_max^2 <= max_r sum_q |K_rq| / m_r (Gershgorin on M^{-1} K).

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "mpi_partition.h"
+
 namespace membrane {
 
 // One rank's strip: rows [row0, row0 + nrows) of the grid, with a halo row above and below
@@ -38,13 +40,9 @@ struct Strip {
   bool exchange = true;    // false: stale halo rows (only the test's negative control)
 };
 
-// The balanced row partition: rank owns rows [*row0, *row0 + *nrows); the first ny % size ranks
-// own one row more.
+// The balanced row partition: rank owns rows [*row0, *row0 + *nrows).
 inline void RowRange(int ny, int size, int rank, int* row0, int* nrows) {
-  const int base = ny / size;
-  const int extra = ny % size;
-  *nrows = base + (rank < extra ? 1 : 0);
-  *row0 = rank * base + std::min(rank, extra);
+  mpi_partition::BalancedRange(ny, size, rank, row0, nrows);
 }
 
 inline Strip MakeStrip(MPI_Comm comm, int nx, int ny) {
