@@ -11,19 +11,23 @@
 //
 // One GoogleTest program run by every rank (mpiexec -n 2 / -n 3); the tests are collective.
 #include <ceode/ceode.h>
-#include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include "ceode_sundials_compat.h"
+#include "mpi_gtest.h"
 #include "mpi_membrane_model.h"
 
 namespace {
+
+using mpi_gtest::BitwiseDifferences;
+using mpi_gtest::Case;
+using mpi_gtest::CaseName;
+using mpi_gtest::OnRankZero;
+using mpi_gtest::RunCase;
 
 struct Grid {
   int nx;
@@ -33,46 +37,13 @@ struct Grid {
 constexpr Grid kGrid{37, 23};
 constexpr long kSteps = 200;
 
-struct Case {
-  const char* method;
-  bool compensated;
-};
-
-std::string CaseName(const testing::TestParamInfo<Case>& info) {
-  return std::string(info.param.method) + (info.param.compensated ? "_compensated" : "");
-}
-
-double StepSize(const char* method, const membrane::Strip& s) {
-  int degree = 0;
-  sunrealtype params[16];
-  sunrealtype Omega = 0;
-  EXPECT_EQ(CEodeGetMethodParams(method, &degree, params, 16), CE_SUCCESS);
-  EXPECT_EQ(CEodeStabilityLimit(degree, params, 0, &Omega), CE_SUCCESS);
-  return 0.9 * Omega / membrane::OmegaMax(s);
-}
-
 // Integrates kSteps steps on x (either vector kind); returns CEODE's flag and, on a failure, its
 // message in *msg (if given).
 int Integrate(N_Vector x, membrane::Strip* s, const Case& c, bool fused,
               std::string* msg = nullptr) {
   N_Vector v = N_VClone(x);
   membrane::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
-  const double h = StepSize(c.method, *s);
-  void* mem = CEodeCreate(x->sunctx);
-  int flag = CEodeInit(mem, membrane::Rhs, 0, x, v);
-  if (flag == CE_SUCCESS) flag = CEodeSetMethodByName(mem, c.method);
-  if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, h);
-  if (flag == CE_SUCCESS) flag = CEodeSetUserData(mem, s);
-  if (flag == CE_SUCCESS) flag = CEodeSetCompensatedSummation(mem, c.compensated ? 1 : 0);
-  if (flag == CE_SUCCESS) flag = CEodeSetFusedKernel(mem, fused ? 1 : 0);
-  sunrealtype t = 0;
-  if (flag == CE_SUCCESS) flag = CEodeEvolve(mem, kSteps * h, x, v, &t, CE_NORMAL);
-  const char* text = nullptr;
-  if (flag != CE_SUCCESS && msg != nullptr && CEodeGetLastErrorMessage(mem, &text) == CE_SUCCESS &&
-      text != nullptr) {
-    *msg = text;
-  }
-  CEodeFree(&mem);
+  const int flag = RunCase(c, fused, membrane::Rhs, s, membrane::OmegaMax(*s), kSteps, x, v, msg);
   N_VDestroy(v);
   return flag;
 }
@@ -132,34 +103,6 @@ ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid,
   N_VDestroy(x);
   SUNContext_Free(&ctx);
   return r;
-}
-
-// The bit pattern (so that -0 and +0 differ and a NaN never matches itself).
-uint64_t Bits(double d) {
-  uint64_t u = 0;
-  std::memcpy(&u, &d, sizeof u);
-  return u;
-}
-
-// Entries whose bits differ (rank 0's count, broadcast so that every rank asserts the same).
-long BitwiseDifferences(const std::vector<double>& a, const std::vector<double>& b) {
-  long n = 0;
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank == 0) {
-    n = a.size() == b.size() ? 0 : -1;
-    for (size_t i = 0; n >= 0 && i < a.size(); ++i) {
-      if (Bits(a[i]) != Bits(b[i])) ++n;
-    }
-  }
-  MPI_Bcast(&n, 1, MPI_LONG, 0, MPI_COMM_WORLD);
-  return n;
-}
-
-bool OnRankZero() {
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank == 0;
 }
 
 class MembraneOnRanks : public testing::TestWithParam<Case> {};
@@ -249,14 +192,7 @@ TEST(MembraneOnRanksControl, WithoutTheHaloExchangeDiffersFromSerial) {
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   testing::InitGoogleTest(&argc, argv);
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  // one report: the other ranks run the same collective tests silently
-  if (rank != 0)
-    delete testing::UnitTest::GetInstance()->listeners().Release(
-        testing::UnitTest::GetInstance()->listeners().default_result_printer());
-  int failed = RUN_ALL_TESTS() != 0 ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  const int failed = mpi_gtest::RunOnAllRanks();
   MPI_Finalize();
   return failed;
 }
