@@ -9,24 +9,28 @@
 //   serial  NVECTOR_SERIAL, the whole grid on rank 0 (CEODE's fused serial kernel);
 //   1 rank  NVECTOR_PARALLEL on MPI_COMM_SELF, the whole grid on rank 0 (the generic path);
 //   P ranks NVECTOR_PARALLEL on MPI_COMM_WORLD, one strip per rank;
+//   petsc   NVECTOR_PETSC on 1 rank and on P (built with CEODE_HAVE_PETSC, i.e. against Debian's
+//           SUNDIALS): the same strips on PETSc MPI Vecs, which expose no array to CEODE, so
+//           its generic N_Vector path; f reaches the entries through VecGetArray;
 // while one configuration runs, the ranks it does not use sleep (no busy polling), so a
 // 1-rank timing is not slowed by an idle rank spinning on the second core.
 // Time per step is the fastest repetition's (the slowest rank's) wall time over the timed
 // steps; the speedup is 1-rank time over P-rank time. The guard's start-up check and the first
 // steps are outside the timed interval.
 //
-// Checks (exit code 1 when one fails; never on a timing): the gathered P-rank state and the
-// 1-rank state are bitwise equal to the serial state; the hand loop agrees with CEODE to 1e-12;
-// the model's own accuracy check (model::Accuracy): on the membrane, for G3_CD, the exact
-// solution of the central-difference recurrence on the two excited modes (x_n = cos(n theta)
-// x_0 with cos(theta) = 1 - (omega h)^2 / 2) to 1e-9 relative, other sets the exact ODE solution
-// to 1e-3; on the plate, a bounded state (its accuracy is wp_fe_plate's check).
+// Checks (exit code 1 when one fails; never on a timing): the gathered P-rank states and the
+// 1-rank states (NVECTOR_PARALLEL and NVECTOR_PETSC) are bitwise equal to the serial state; the
+// hand loop agrees with CEODE to 1e-12; the model's own accuracy check (model::Accuracy): on the
+// membrane, for G3_CD, the exact solution of the central-difference recurrence on the two excited
+// modes (x_n = cos(n theta) x_0 with cos(theta) = 1 - (omega h)^2 / 2) to 1e-9 relative, other sets
+// the exact ODE solution to 1e-3; on the plate, a bounded state (its accuracy is wp_fe_plate's
+// check).
 //
 //   mpiexec -n 2 mpi_membrane|mpi_fe_plate [--n N] [--steps S] [--reps R] [--method NAME]
 //                                      [--csv FILE]
 //   mpiexec -n 2 mpi_membrane --quick        (N = 10^4, 100 steps, 1 repetition: ctest)
 //   ... --no-halo    (negative control: the P-rank run skips its halo exchanges; exit 1)
-//   ... --only serial|one|many                 (that configuration alone, for a profiler; no
+//   ... --only serial|one|many|petsc           (that configuration alone, for a profiler; no
 //   checks)
 // Defaults: N = 10^6 (1000 x 1000), 300 steps, 3 repetitions, G3_CD at 0.9 of its limit.
 #include <ceode/ceode.h>
@@ -42,6 +46,10 @@
 #include <vector>
 
 #include "ceode_sundials_compat.h"
+#if defined(CEODE_HAVE_PETSC)
+#include <nvector/nvector_petsc.h>
+#include <petscvec.h>
+#endif
 // One driver, two partitioned models with the same interface (CMake builds both):
 #if defined(CEODE_MPI_FE_PLATE)
 #include "mpi_fe_plate_model.h"
@@ -56,8 +64,9 @@ namespace model = membrane;  // mpi_membrane: the 5-point membrane, one row stri
 // because that interface passes no user pointer.
 long g_allreduce_calls = 0;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 
-extern "C" int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type,
-                             MPI_Op op, MPI_Comm comm) {
+// The name in parentheses: PETSc's logging defines MPI_Allreduce as a function-like macro.
+extern "C" int(MPI_Allreduce)(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type,
+                              MPI_Op op, MPI_Comm comm) {
   ++g_allreduce_calls;
   return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
 }
@@ -72,7 +81,7 @@ struct Options {
   std::string csv;
   double h_factor = 0.9;
   bool quick = false;
-  std::string only;  // "serial", "one" or "many": that configuration alone (profiling, no checks)
+  std::string only;      // "serial", "one", "many" or "petsc": that alone (profiling, no checks)
   bool no_halo = false;  // negative control: the P-rank f never exchanges (the checks must fail)
 };
 
@@ -103,8 +112,8 @@ bool ParseArgs(int argc, char** argv, Options* o) {
       return false;
     }
   }
-  const bool only_ok =
-      o->only.empty() || o->only == "serial" || o->only == "one" || o->only == "many";
+  const bool only_ok = o->only.empty() || o->only == "serial" || o->only == "one" ||
+                       o->only == "many" || o->only == "petsc";
   return o->n >= 4 && o->steps >= 4 && o->reps >= 1 && only_ok;
 }
 
@@ -139,11 +148,47 @@ double CpuSeconds() {
 
 constexpr long kWarmSteps = 2;  // the start (and the guard's check) happen here, untimed
 
+// The local entries of x: its array, or a PETSc Vec's, checked out until ReleaseArray.
+double* AcquireArray(N_Vector x) {
+#if defined(CEODE_HAVE_PETSC)
+  if (N_VGetVectorID(x) == SUNDIALS_NVEC_PETSC) {
+    PetscScalar* a = nullptr;
+    return VecGetArray(N_VGetVector_Petsc(x), &a) == 0 ? a : nullptr;
+  }
+#endif
+  return N_VGetArrayPointer(x);
+}
+
+void ReleaseArray(N_Vector x, double* a) {
+#if defined(CEODE_HAVE_PETSC)
+  if (N_VGetVectorID(x) == SUNDIALS_NVEC_PETSC) VecRestoreArray(N_VGetVector_Petsc(x), &a);
+#else
+  (void)x;
+  (void)a;
+#endif
+}
+
+// f on any of the vector kinds: the model's Accel (with its halo exchange) on the local arrays.
+int AnyRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
+  if (N_VGetVectorID(x) != SUNDIALS_NVEC_PETSC) return model::Rhs(t, x, v, f, data);
+  double* xa = AcquireArray(x);
+  double* fa = AcquireArray(f);
+  const int rv =
+      xa != nullptr && fa != nullptr ? model::Accel(static_cast<model::Strip*>(data), xa, fa) : -1;
+  ReleaseArray(x, xa);
+  ReleaseArray(f, fa);
+  return rv;
+}
+
 // A CEODE memory for the membrane on x, v (either vector kind), at the initial state.
 void* CreateSolver(N_Vector x, N_Vector v, model::Strip* s, const Options& o, double h) {
-  model::InitialState(*s, N_VGetArrayPointer(x), N_VGetArrayPointer(v));
+  double* xa = AcquireArray(x);
+  double* va = AcquireArray(v);
+  model::InitialState(*s, xa, va);
+  ReleaseArray(x, xa);
+  ReleaseArray(v, va);
   void* mem = CEodeCreate(x->sunctx);
-  int flag = mem == nullptr ? CE_MEM_FAIL : CEodeInit(mem, model::Rhs, 0, x, v);
+  int flag = mem == nullptr ? CE_MEM_FAIL : CEodeInit(mem, AnyRhs, 0, x, v);
   if (flag == CE_SUCCESS) flag = CEodeSetMethodByName(mem, o.method.c_str());
   if (flag == CE_SUCCESS) flag = CEodeSetFixedStep(mem, h);
   if (flag == CE_SUCCESS) flag = CEodeSetUserData(mem, s);
@@ -303,9 +348,37 @@ struct Problem {
   SUNContext ctx_self = nullptr;
   SUNContext ctx_world = nullptr;
   N_Vector xs = nullptr, vs = nullptr, x1 = nullptr, v1 = nullptr, xp = nullptr, vp = nullptr;
+  N_Vector xq1 = nullptr, vq1 = nullptr, xqp = nullptr, vqp = nullptr;  // NVECTOR_PETSC
   std::vector<double> hand1;  // the hand loop's state on 1 rank (rank 0) and on this rank's strip
   std::vector<double> handp;
 };
+
+// An NVECTOR_PETSC vector on a new PETSc MPI Vec of local length len (its x owns no Vec: Teardown
+// destroys it), or nullptr without PETSc.
+N_Vector NewPetscVector(MPI_Comm comm, long len, long n, SUNContext ctx) {
+#if defined(CEODE_HAVE_PETSC)
+  Vec X = nullptr;
+  if (VecCreateMPI(comm, len, n, &X) != 0) MPI_Abort(MPI_COMM_WORLD, 1);
+  return N_VMake_Petsc(X, ctx);
+#else
+  (void)comm, (void)len, (void)n, (void)ctx;
+  return nullptr;
+#endif
+}
+
+void DestroyPetscVector(N_Vector* x) {
+#if defined(CEODE_HAVE_PETSC)
+  if (*x == nullptr) return;
+  Vec X = N_VGetVector_Petsc(*x);
+  N_VDestroy(*x);
+  VecDestroy(&X);
+  *x = nullptr;
+#else
+  (void)x;
+#endif
+}
+
+N_Vector CloneOrNull(N_Vector x) { return x != nullptr ? N_VClone(x) : nullptr; }
 
 void Setup(Problem* p, long n_target, int rank, int size) {
   MPI_Comm world = MPI_COMM_WORLD;
@@ -318,6 +391,8 @@ void Setup(Problem* p, long n_target, int rank, int size) {
   if (size > 1) {
     p->xp = N_VNew_Parallel(world, model::LocalLength(p->world), n, p->ctx_world);
     p->vp = N_VClone(p->xp);
+    p->xqp = NewPetscVector(world, model::LocalLength(p->world), n, p->ctx_world);
+    p->vqp = CloneOrNull(p->xqp);
   }
   if (rank != 0) return;
   if (SUNContext_Create(SUN_COMM_NULL, &p->ctx_serial) != 0) MPI_Abort(world, 1);
@@ -326,9 +401,16 @@ void Setup(Problem* p, long n_target, int rank, int size) {
   p->vs = N_VClone(p->xs);
   p->x1 = N_VNew_Parallel(self, n, n, p->ctx_self);
   p->v1 = N_VClone(p->x1);
+  p->xq1 = NewPetscVector(self, n, n, p->ctx_self);
+  p->vq1 = CloneOrNull(p->xq1);
 }
 
 void Teardown(Problem* p) {
+  for (N_Vector* v : {&p->vq1, &p->vqp}) {  // N_VClone's Vecs belong to their N_Vector
+    if (*v != nullptr) N_VDestroy(*v);
+  }
+  DestroyPetscVector(&p->xq1);
+  DestroyPetscVector(&p->xqp);
   for (N_Vector* v : {&p->xs, &p->vs, &p->x1, &p->v1, &p->xp, &p->vp}) {
     if (*v != nullptr) N_VDestroy(*v);
   }
@@ -338,16 +420,18 @@ void Teardown(Problem* p) {
 }
 
 // The repetitions, interleaved so that a change of machine load hits every configuration.
-// cfg: serial, parallel 1 rank, parallel P ranks, hand 1 rank, hand P ranks (the last two: the
-// same partition without CEODE, G3_CD only; P-rank entries only when size > 1).
-enum { kSerial, kOne, kMany, kHandOne, kHandMany, kNumConfigs };
+// cfg: serial, parallel 1 rank, parallel P ranks, hand 1 rank, hand P ranks (the same partition
+// without CEODE, G3_CD only), PETSc 1 rank, PETSc P ranks (with CEODE_HAVE_PETSC); P-rank entries
+// only when size > 1.
+enum { kSerial, kOne, kMany, kHandOne, kHandMany, kPetscOne, kPetscMany, kNumConfigs };
 
 std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, int size) {
   std::vector<Config> cfg(kNumConfigs);
-  const char* names[kNumConfigs] = {"serial", "parallel", "parallel", "hand", "hand"};
+  const char* names[kNumConfigs] = {"serial", "parallel", "parallel", "hand",
+                                    "hand",   "petsc",    "petsc"};
   for (int c = 0; c < kNumConfigs; ++c) {
     cfg[c].name = names[c];
-    cfg[c].ranks = c == kMany || c == kHandMany ? size : 1;
+    cfg[c].ranks = c == kMany || c == kHandMany || c == kPetscMany ? size : 1;
   }
   const auto run = [&o](const char* name) { return o.only.empty() || o.only == name; };
   const bool hand = o.method == "G3_CD" && o.only.empty();
@@ -362,6 +446,14 @@ std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, in
     SleepyBarrier(MPI_COMM_WORLD);
     if (size > 1 && run("many")) {
       Record(&cfg[kMany], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
+    }
+    SleepyBarrier(MPI_COMM_WORLD);
+    if (rank == 0 && p->xq1 != nullptr && run("petsc")) {
+      Record(&cfg[kPetscOne], Integrate(p->xq1, p->vq1, &p->self, o, h, MPI_COMM_SELF));
+    }
+    SleepyBarrier(MPI_COMM_WORLD);
+    if (size > 1 && p->xqp != nullptr && run("petsc")) {
+      Record(&cfg[kPetscMany], Integrate(p->xqp, p->vqp, &p->world, o, h, MPI_COMM_WORLD));
     }
     if (rank == 0 && hand) {
       Record(&cfg[kHandOne], HandIntegrate(&p->self, o, h, MPI_COMM_SELF, &p->hand1));
@@ -398,10 +490,13 @@ namespace {
 
 struct Verdict {
   bool ok = true;
-  Compare one;        // 1 rank against serial
-  Compare many;       // P ranks against serial
-  Compare hand;       // the hand loop on 1 rank against CEODE serial (rounding apart)
-  Compare hand_many;  // the hand loop on P ranks against on 1 rank (bitwise)
+  Compare one;         // 1 rank against serial
+  Compare many;        // P ranks against serial
+  Compare hand;        // the hand loop on 1 rank against CEODE serial (rounding apart)
+  Compare hand_many;   // the hand loop on P ranks against on 1 rank (bitwise)
+  Compare petsc_one;   // NVECTOR_PETSC on 1 rank against serial
+  Compare petsc_many;  // ... on P ranks
+  bool petsc = false;
   double error = 0;
   double tol = 0;
   const char* what = "";
@@ -414,13 +509,20 @@ constexpr double kHandTol = 1e-12;
 
 // Rank 0: bitwise equality of the parallel states with the serial one, and the accuracy check.
 Verdict Check(const Problem& p, const std::vector<double>& gathered,
-              const std::vector<double>& hand_gathered, const Options& o, double h,
-              const std::vector<Config>& cfg) {
+              const std::vector<double>& hand_gathered, const std::vector<double>& petsc_gathered,
+              const Options& o, double h, const std::vector<Config>& cfg) {
   Verdict v;
   const long n = model::GlobalLength(p.whole);
   const double* xs = N_VGetArrayPointer(p.xs);
   v.one = Diff(xs, N_VGetArrayPointer(p.x1), n);
   if (!gathered.empty()) v.many = Diff(xs, gathered.data(), n);
+  v.petsc = p.xq1 != nullptr;
+  if (v.petsc) {
+    double* q = AcquireArray(p.xq1);
+    v.petsc_one = Diff(xs, q, n);
+    ReleaseArray(p.xq1, q);
+  }
+  if (!petsc_gathered.empty()) v.petsc_many = Diff(xs, petsc_gathered.data(), n);
   if (!p.hand1.empty()) {
     v.hand = Diff(xs, p.hand1.data(), n);
     v.ok = v.hand.maxdiff <= kHandTol;
@@ -433,7 +535,8 @@ Verdict Check(const Problem& p, const std::vector<double>& gathered,
   v.error = model::Accuracy(p.whole, xs, o.steps, h, v.discrete, &v.tol, &v.what);
   const double tol = v.tol;
   for (const Config& c : cfg) v.ok = v.ok && c.flag == CE_SUCCESS;
-  v.ok = v.ok && v.one.ndiff == 0 && v.many.ndiff == 0 && v.error <= tol;
+  v.ok = v.ok && v.one.ndiff == 0 && v.many.ndiff == 0 && v.petsc_one.ndiff == 0 &&
+         v.petsc_many.ndiff == 0 && v.error <= tol;
   return v;
 }
 
@@ -458,6 +561,14 @@ void Table(const std::vector<Config>& cfg, long n, int size) {
       "speedup 1 -> %d ranks (NVECTOR_PARALLEL): %.3f wall, %.3f CPU time of the slowest "
       "rank (target >= 1.6 wall at N = 10^6 on 2 ranks; a timing, not a check)\n",
       size, cfg[kOne].Best() / cfg[kMany].Best(), cfg[kOne].BestCpu() / cfg[kMany].BestCpu());
+  if (!cfg[kPetscOne].per_step.empty() && !cfg[kPetscMany].per_step.empty()) {
+    std::printf(
+        "speedup 1 -> %d ranks (NVECTOR_PETSC, CEODE's generic path): %.3f wall, %.3f CPU; "
+        "PETSc / NVECTOR_PARALLEL per step: %.3f on 1 rank, %.3f on %d\n",
+        size, cfg[kPetscOne].Best() / cfg[kPetscMany].Best(),
+        cfg[kPetscOne].BestCpu() / cfg[kPetscMany].BestCpu(),
+        cfg[kPetscOne].Best() / cfg[kOne].Best(), cfg[kPetscMany].Best() / cfg[kMany].Best(), size);
+  }
   if (cfg[kHandOne].per_step.empty() || cfg[kHandMany].per_step.empty()) return;
   std::printf(
       "speedup 1 -> %d ranks of the hand loop (the machine's limit for this f and update): "
@@ -481,6 +592,14 @@ void Report(const Options& o, const Problem& p, double h, const std::vector<Conf
   if (size > 1) {
     std::printf("; %d ranks vs serial: %ld differ (max |diff| %.3g)", size, v.many.ndiff,
                 v.many.maxdiff);
+  }
+  if (v.petsc) {
+    std::printf("\nbitwise, NVECTOR_PETSC: 1 rank vs serial: %ld differ (max |diff| %.3g)",
+                v.petsc_one.ndiff, v.petsc_one.maxdiff);
+    if (size > 1) {
+      std::printf("; %d ranks vs serial: %ld differ (max |diff| %.3g)", size, v.petsc_many.ndiff,
+                  v.petsc_many.maxdiff);
+    }
   }
   if (!p.hand1.empty()) {
     std::printf("\nhand loop: 1 rank vs CEODE serial max |diff| %.3g (tolerance %g)",
@@ -526,6 +645,10 @@ void WriteCsv(const Options& o, const Problem& p, double h, const std::vector<Co
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
+#if defined(CEODE_HAVE_PETSC)
+  // On the MPI already initialised: PetscFinalize leaves MPI to MPI_Finalize.
+  if (PetscInitializeNoArguments() != 0) MPI_Abort(MPI_COMM_WORLD, 1);
+#endif
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -534,7 +657,7 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       std::fprintf(stderr,
                    "usage: mpiexec -n P mpi_membrane [--quick] [--n N] [--steps S] "
-                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many] "
+                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many|petsc] "
                    "[--no-halo]\n");
     }
     MPI_Finalize();
@@ -552,10 +675,13 @@ int main(int argc, char** argv) {
         Gather(p, p.xp != nullptr ? N_VGetArrayPointer(p.xp) : nullptr, rank, size);
     const std::vector<double> hand_gathered =
         Gather(p, p.handp.empty() ? nullptr : p.handp.data(), rank, size);
+    double* q = p.xqp != nullptr ? AcquireArray(p.xqp) : nullptr;
+    const std::vector<double> petsc_gathered = Gather(p, q, rank, size);
+    if (q != nullptr) ReleaseArray(p.xqp, q);
     if (rank == 0 && !o.only.empty()) {
       ReportOnly(cfg);
     } else if (rank == 0) {
-      const Verdict v = Check(p, gathered, hand_gathered, o, h, cfg);
+      const Verdict v = Check(p, gathered, hand_gathered, petsc_gathered, o, h, cfg);
       Report(o, p, h, cfg, v, load0, size);
       if (!o.csv.empty()) WriteCsv(o, p, h, cfg);
       bad = v.ok ? 0 : 1;
@@ -565,6 +691,9 @@ int main(int argc, char** argv) {
   }
   MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD);
   Teardown(&p);
+#if defined(CEODE_HAVE_PETSC)
+  PetscFinalize();
+#endif
   MPI_Finalize();
   return bad;
 }
