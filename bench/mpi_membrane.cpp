@@ -7,7 +7,7 @@
 //
 // In one run (mpiexec -n 2), side by side and interleaved repetition by repetition:
 //   serial  NVECTOR_SERIAL, the whole grid on rank 0 (CEODE's fused serial kernel);
-//   1 rank  NVECTOR_PARALLEL on MPI_COMM_SELF, the whole grid on rank 0 (the generic path);
+//   1 rank  NVECTOR_PARALLEL on MPI_COMM_SELF, the whole grid on rank 0 (the fused kernel too);
 //   P ranks NVECTOR_PARALLEL on MPI_COMM_WORLD, one strip per rank;
 //   petsc   NVECTOR_PETSC on 1 rank and on P (built with CEODE_HAVE_PETSC, i.e. against Debian's
 //           SUNDIALS): the same strips on PETSc MPI Vecs, which expose no array to CEODE, so
@@ -180,7 +180,7 @@ int AnyRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
   return rv;
 }
 
-// A CEODE memory for the membrane on x, v (either vector kind), at the initial state.
+// A CEODE memory for the model on x, v (any of the vector kinds), at the initial state.
 void* CreateSolver(N_Vector x, N_Vector v, model::Strip* s, const Options& o, double h) {
   double* xa = AcquireArray(x);
   double* va = AcquireArray(v);
