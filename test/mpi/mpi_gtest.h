@@ -87,6 +87,25 @@ inline long BitwiseDifferences(const std::vector<double>& a, const std::vector<d
   return n;
 }
 
+// Every rank's block of a distributed state (contiguous, in rank order, as both models partition)
+// gathered on rank 0 in global order; empty on the other ranks.
+inline std::vector<double> GatherOnRankZero(const double* local, long len) {
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int n = static_cast<int>(len);
+  std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  long total = 0;
+  for (int q = 0; q < size; ++q) {
+    displs[q] = static_cast<int>(total);
+    total += counts[q];
+  }
+  std::vector<double> all(OnRankZero() ? static_cast<size_t>(total) : 0);
+  MPI_Gatherv(local, n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0,
+              MPI_COMM_WORLD);
+  return all;
+}
+
 // RUN_ALL_TESTS on every rank (the tests are collective), printed by rank 0 alone; 1 when any
 // rank failed. Call after MPI_Init and testing::InitGoogleTest.
 inline int RunOnAllRanks() {

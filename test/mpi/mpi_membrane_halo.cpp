@@ -26,6 +26,7 @@ namespace {
 using mpi_gtest::BitwiseDifferences;
 using mpi_gtest::Case;
 using mpi_gtest::CaseName;
+using mpi_gtest::GatherOnRankZero;
 using mpi_gtest::OnRankZero;
 using mpi_gtest::RunCase;
 
@@ -77,9 +78,6 @@ int FailingReduction(int /*nvec*/, N_Vector /*x*/, sunrealtype* /*sum*/) { retur
 ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid,
                            bool failing_reduction = false) {
   MPI_Comm comm = MPI_COMM_WORLD;
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
   SUNContext ctx = nullptr;
   EXPECT_EQ(SUNContext_Create(CEODE_SUN_COMM_ARG(comm), &ctx), 0);
   membrane::Strip s = membrane::MakeStrip(comm, g.nx, g.ny);
@@ -90,16 +88,7 @@ ParallelResult ParallelRun(const Case& c, bool exchange, Grid g = kGrid,
   r.flag = Integrate(x, &s, c, true, &r.msg);
   MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
   MPI_Allreduce(&s.nexchange, &r.exchanges, 1, MPI_LONG, MPI_SUM, comm);
-  std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
-  for (int q = 0; q < size; ++q) {
-    int row0 = 0, nrows = 0;
-    membrane::RowRange(g.ny, size, q, &row0, &nrows);
-    counts[q] = nrows * g.nx;
-    displs[q] = row0 * g.nx;
-  }
-  if (rank == 0) r.x.resize(static_cast<size_t>(g.Size()));
-  MPI_Gatherv(N_VGetArrayPointer(x), static_cast<int>(membrane::LocalLength(s)), MPI_DOUBLE,
-              r.x.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, comm);
+  r.x = GatherOnRankZero(N_VGetArrayPointer(x), membrane::LocalLength(s));
   N_VDestroy(x);
   SUNContext_Free(&ctx);
   return r;

@@ -34,6 +34,7 @@ namespace {
 using mpi_gtest::BitwiseDifferences;
 using mpi_gtest::Case;
 using mpi_gtest::CaseName;
+using mpi_gtest::GatherOnRankZero;
 using mpi_gtest::OnRankZero;
 using mpi_gtest::RunCase;
 
@@ -105,9 +106,6 @@ enum class Wrap { kPetsc, kParallelOnArrays };
 // Every rank: its block on a PETSc MPI Vec; the state gathered on rank 0 in DOF order.
 PetscResult PetscRun(const Case& c, bool exchange, Wrap wrap = Wrap::kPetsc) {
   MPI_Comm comm = MPI_COMM_WORLD;
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
   SUNContext ctx = nullptr;
   EXPECT_EQ(SUNContext_Create(CEODE_SUN_COMM_ARG(comm), &ctx), 0);
   fe_strip::Strip s = fe_strip::MakeStrip(comm, kDofs);
@@ -131,18 +129,9 @@ PetscResult PetscRun(const Case& c, bool exchange, Wrap wrap = Wrap::kPetsc) {
   if (xarray != nullptr) VecRestoreArray(X, &xarray);
   MPI_Allreduce(MPI_IN_PLACE, &r.flag, 1, MPI_INT, MPI_MIN, comm);
   MPI_Allreduce(&s.nexchange, &r.exchanges, 1, MPI_LONG, MPI_SUM, comm);
-  std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
-  for (int q = 0; q < size; ++q) {
-    long off = 0, len = 0;
-    fe_strip::Range(s, q, &off, &len);
-    counts[q] = static_cast<int>(len);
-    displs[q] = static_cast<int>(off);
-  }
-  if (rank == 0) r.x.resize(static_cast<size_t>(fe_strip::GlobalLength(s)));
   const PetscScalar* xa = nullptr;
   VecGetArrayRead(X, &xa);
-  MPI_Gatherv(xa, static_cast<int>(fe_strip::LocalLength(s)), MPI_DOUBLE, r.x.data(), counts.data(),
-              displs.data(), MPI_DOUBLE, 0, comm);
+  r.x = GatherOnRankZero(xa, fe_strip::LocalLength(s));
   VecRestoreArrayRead(X, &xa);
   VecDestroy(&X);
   SUNContext_Free(&ctx);
