@@ -328,8 +328,9 @@ def write(results, out_path):
              "Do not edit: the next run overwrites it. -->", "",
              "Each scene runs CEODE, ARKODE, CVODE and IDA (and, where they apply, Boost.Odeint, GSL "
              "and a hand-written loop of CEODE's method) on one problem and reports error against CPU "
-             "time. The headline figures use SUNDIALS built `-O3`; the second column of ratios is the "
-             "same run against the unoptimised SUNDIALS package. Why the code is shaped as it is: "
+             "time. The headline figures use SUNDIALS built `-O3`; the column \"CEODE / SUNDIALS, -O0 "
+             "package\" is the same scene run against the unoptimised SUNDIALS package. Why the code "
+             "is shaped as it is: "
              "[performance.md](performance.md).", "")
     how_measured(page, info, cvs, [(f"MPI {label}", s) for label, n, _, s in mpi_runs if n])
 
