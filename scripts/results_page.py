@@ -22,7 +22,7 @@ from collections import defaultdict
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import summary_table  # noqa: E402
-from wp_curves import read_curves, time_to_reach  # noqa: E402
+from wp_curves import time_to_reach  # noqa: E402
 
 # name, title, the problem in one sentence (error measure included).
 SCENES = [
@@ -312,15 +312,98 @@ def compact_summary(rows):
     return lines
 
 
+def section(page, heading, intro, body, missing="Not run in this job."):
+    """Heading, intro paragraph, then body (a list of lines) or the missing line."""
+    page.add(heading, "", intro, "")
+    page.add(*(body + [""] if body else [missing, ""]))
+
+
+def losses_lines(rows, bs, ho, mri_best):
+    losses = collect_losses(rows, bs, ho, mri_best)
+    lines = []
+    for key, title in LOSS_TITLES:
+        if losses.get(key):
+            lines.append(f"* {title}:")
+            per = defaultdict(list)
+            for who, text in losses[key]:
+                per[who].append(text)
+            lines += [f"  * {who}: {'; '.join(texts)}." for who, texts in per.items()]
+    return lines
+
+
+def high_order_lines(page, ho):
+    if not ho:
+        return []
+    lines = page.figure("wp_high_order", "high-order work-precision")
+    lines += ["| problem | error | best CEODE | s | best other | s | CEODE / other |",
+              "|---|---|---|---|---|---|---|"]
+    for problem, lv, c, o in ho:
+        ratio = fmt(c[1] / o[1]) if c and o else "–"
+        lines.append(f"| {problem} | {lv:.0e} | {c[0] if c else 'not reached'} | "
+                     f"{fmt(c[1]) if c else '–'} | {o[0] if o else 'not reached'} | "
+                     f"{fmt(o[1]) if o else '–'} | **{ratio}** |")
+    return lines
+
+
+def chain_lines(page):
+    chain = page.headline("chain_dae", "csv")
+    if not chain:
+        return []
+    import plot_dae  # noqa: E402  (matplotlib only when the scene ran)
+    pts, slope = plot_dae.chain_slope(plot_dae.read_rows([page.path(chain)]))
+    lines = ["![chain N-scaling](results/chain_dae.png)", ""] if page.exists("chain_dae.png") else []
+    return lines + [f"N = {pts[0][0]} … {pts[-1][0]}: {fmt(pts[0][1] * 1e6)} µs to "
+                    f"{fmt(pts[-1][1] * 1e6)} µs per step, log-log slope **{slope:.3f}** "
+                    f"(`{chain}`)."]
+
+
+def bench_step_lines(bs_name, bs):
+    if not bs:
+        return []
+    ns = sorted({n for _, n in bs})
+    methods = sorted({m for m, _ in bs}, key=lambda m: (len(m), m))
+    lines = ["| set | " + " | ".join(f"n = {power(n)}" for n in ns) + " |",
+             "|---|" + "---|" * len(ns)]
+    lines += [f"| {m} | " + " | ".join(fmt(bs[(m, n)][0]) if (m, n) in bs else "" for n in ns)
+              + " |" for m in methods]
+    return lines + ["", f"From `{bs_name}`."]
+
+
+def mpi_lines(mpi_runs):
+    if not any(n for _, n, _, _ in mpi_runs):
+        return []
+    lines = ["| model | CEODE speedup | hand-loop speedup | CEODE / hand per step, 2 ranks | file |",
+             "|---|---|---|---|---|"]
+    for label, n, best, _ in mpi_runs:
+        if not n:
+            lines.append(f"| {label} | not run | | | |")
+            continue
+        c1, c2 = best.get(("parallel", 1)), best.get(("parallel", 2))
+        h1, h2 = best.get(("hand", 1)), best.get(("hand", 2))
+        lines.append(f"| {label} | **{fmt(c1 / c2) if c1 and c2 else '–'}** | "
+                     f"{fmt(h1 / h2) if h1 and h2 else '–'} | "
+                     f"{fmt(c2 / h2) if c2 and h2 else '–'} | `{n}` |")
+    return lines + ["", "Every run's states are compared with the serial run entry by entry; the "
+                    "job fails when they differ."]
+
+
+def mri_lines(mri_name, mri_best):
+    if not mri_best:
+        return []
+    lines = ["| ω | amplitude of the fast mode | best CEODE / RK4 over H |", "|---|---|---|"]
+    lines += [f"| {omega} | {amp} | {', '.join(fmt(x, 2) for x in ratios)} |"
+              for (omega, amp), ratios in mri_best.items()]
+    return lines + ["", f"From `{mri_name}`."]
+
+
 def write(results, out_path):
     page = Page(results)
-    info = run_info(page)
     ratios_path = page.path("ratios.csv")
     rows = summary_table.read_rows(ratios_path) if os.path.exists(ratios_path) else []
     bs_name, bs, cvs = bench_step(page)
     mpi_runs = [(label, *mpi(page, stem)) for stem, label in
                 (("mpi_scaling", "membrane"), ("mpi_fe_plate", "Q4 plate"))]
-    ho_name, ho = high_order(page)
+    ho = high_order(page)[1]
     mri_name, mri_best = mri(page)
 
     page.add("# Results: CEODE side by side with SUNDIALS and other integrators", "",
@@ -330,115 +413,35 @@ def write(results, out_path):
              "and a hand-written loop of CEODE's method) on one problem and reports error against CPU "
              "time. The headline figures use SUNDIALS built `-O3`; the column \"CEODE / SUNDIALS, -O0 "
              "package\" is the same scene run against the unoptimised SUNDIALS package. Why the code "
-             "is shaped as it is: "
-             "[performance.md](performance.md).", "")
-    how_measured(page, info, cvs, [(f"MPI {label}", s) for label, n, _, s in mpi_runs if n])
-
-    page.add("## Summary at equal error", "")
-    if rows:
-        page.add(*compact_summary(rows))
-        page.add("", "Ratios of CPU time to reach the error, one per error level, in the order of "
-                 "the error column; –: not measured or a level one side does not reach. FE levels "
-                 "are relative position errors. Each scene below has the full row: which "
-                 "configurations were best and their times.", "")
-    else:
-        page.add("No `ratios.csv` in this run.", "")
-
-    page.add("## Where CEODE loses", "",
-             "Every ratio above 1 in this run, from the data.", "")
-    losses = collect_losses(rows, bs, ho, mri_best)
-    for key, title in LOSS_TITLES:
-        if losses.get(key):
-            page.add(f"* {title}:")
-            per = defaultdict(list)
-            for who, text in losses[key]:
-                per[who].append(text)
-            page.add(*[f"  * {who}: {'; '.join(texts)}." for who, texts in per.items()])
-    if not any(losses.values()):
-        page.add("Nowhere in this run.")
-    page.add("")
-
+             "is shaped as it is: [performance.md](performance.md).", "")
+    how_measured(page, run_info(page), cvs, [(f"MPI {label}", s) for label, n, _, s in mpi_runs if n])
+    section(page, "## Summary at equal error",
+            "Ratios of CPU time to reach the error, one per error level, in the order of the error "
+            "column; –: not measured or a level one side does not reach. FE levels are relative "
+            "position errors. Each scene below has the full row: which configurations were best and "
+            "their times.", compact_summary(rows) if rows else [], "No `ratios.csv` in this run.")
+    section(page, "## Where CEODE loses", "Every ratio above 1 in this run, from the data.",
+            losses_lines(rows, bs, ho, mri_best), "Nowhere in this run.")
     page.add("## Scenes", "")
     for name, title, sentence in SCENES:
         scene_section(page, rows, name, title, sentence)
-
     name, title, sentence = HIGH_ORDER
-    page.add(f"### {title} (`{name}`)", "", sentence, "")
-    if ho_name:
-        page.add(*page.figure(name, "high-order work-precision"))
-        page.add("| problem | error | best CEODE | s | best other | s | CEODE / other |",
-                 "|---|---|---|---|---|---|---|")
-        for problem, lv, c, o in ho:
-            ratio = fmt(c[1] / o[1]) if c and o else "–"
-            page.add(f"| {problem} | {lv:.0e} | {c[0] if c else 'not reached'} | "
-                     f"{fmt(c[1]) if c else '–'} | {o[0] if o else 'not reached'} | "
-                     f"{fmt(o[1]) if o else '–'} | **{ratio}** |")
-        page.add("")
-    else:
-        page.add("Not run in this job.", "")
-
-    page.add("### Chain of N pendulums: cost per step against N (`chain_dae`)", "",
-             "CEODE alone (G3_CD, sparse saddle point with KLU), 1 000 steps per size; linear "
-             "growth is slope 1.", "")
-    chain = page.headline("chain_dae", "csv")
-    if chain:
-        import plot_dae  # noqa: E402
-        pts, slope = plot_dae.chain_slope(plot_dae.read_rows([page.path(chain)]))
-        if page.exists("chain_dae.png"):
-            page.add("![chain N-scaling](results/chain_dae.png)", "")
-        page.add(f"N = {pts[0][0]} … {pts[-1][0]}: {fmt(pts[0][1] * 1e6)} µs to "
-                 f"{fmt(pts[-1][1] * 1e6)} µs per step, log-log slope **{slope:.3f}** (`{chain}`).", "")
-    else:
-        page.add("Not run in this job.", "")
-
-    page.add("## Per-step cost against a hand-written loop (`bench_step`)", "",
-             "n independent springs on the explicit path, h = 1e-3, CEODE integrating to a distant "
-             "`tout` against a hand loop of the same method that calls f as its own pass; median "
-             "CPU time per step, ratio CEODE / hand loop.", "")
-    if bs:
-        ns = sorted({n for _, n in bs})
-        methods = sorted({m for m, _ in bs}, key=lambda m: (len(m), m))
-        page.add("| set | " + " | ".join(f"n = {power(n)}" for n in ns) + " |",
-                 "|---|" + "---|" * len(ns))
-        for m in methods:
-            page.add(f"| {m} | " + " | ".join(fmt(bs[(m, n)][0]) if (m, n) in bs else ""
-                                              for n in ns) + " |")
-        page.add("", f"From `{bs_name}`.", "")
-    else:
-        page.add("Not run in this job.", "")
-
-    page.add("## MPI: 1 → 2 ranks at N = 10⁶ (`NVECTOR_PARALLEL`)", "",
-             "Each model partitioned over ranks with a halo exchange in f; best of the repetitions. "
-             "The hand loop runs the same method on the same partition: its speedup is what the "
-             "machine gives.", "")
-    if any(n for _, n, _, _ in mpi_runs):
-        page.add("| model | CEODE speedup | hand-loop speedup | CEODE / hand per step, 2 ranks | file |",
-                 "|---|---|---|---|---|")
-        for label, n, best, _ in mpi_runs:
-            if not n:
-                page.add(f"| {label} | not run | | | |")
-                continue
-            c1, c2 = best.get(("parallel", 1)), best.get(("parallel", 2))
-            h1, h2 = best.get(("hand", 1)), best.get(("hand", 2))
-            page.add(f"| {label} | **{fmt(c1 / c2) if c1 and c2 else '–'}** | "
-                     f"{fmt(h1 / h2) if h1 and h2 else '–'} | {fmt(c2 / h2) if c2 and h2 else '–'} "
-                     f"| `{n}` |")
-        page.add("", "Every run's states are compared with the serial run entry by entry; the job "
-                 "fails when they differ.", "")
-    else:
-        page.add("Not run in this job (no `mpiexec`, or no MPI build).", "")
-
-    page.add("## CEODE as MRIStep's inner stepper (`mri_inner_cost`)", "",
-             "Fast evaluations CEODE needs to match the MRI error of an almost exact inner solve, "
-             "over RK4's, for each slow step H (largest first); counts, not timings.", "")
-    if mri_best:
-        page.add("| ω | amplitude of the fast mode | best CEODE / RK4 over H |", "|---|---|---|")
-        for (omega, amp), ratios in mri_best.items():
-            page.add(f"| {omega} | {amp} | {', '.join(fmt(x, 2) for x in ratios)} |")
-        page.add("", f"From `{mri_name}`.", "")
-    else:
-        page.add("Not run in this job.", "")
-
+    section(page, f"### {title} (`{name}`)", sentence, high_order_lines(page, ho))
+    section(page, "### Chain of N pendulums: cost per step against N (`chain_dae`)",
+            "CEODE alone (G3_CD, sparse saddle point with KLU), 1 000 steps per size; linear growth "
+            "is slope 1.", chain_lines(page))
+    section(page, "## Per-step cost against a hand-written loop (`bench_step`)",
+            "n independent springs on the explicit path, h = 1e-3, CEODE integrating to a distant "
+            "`tout` against a hand loop of the same method that calls f as its own pass; median CPU "
+            "time per step, ratio CEODE / hand loop.", bench_step_lines(bs_name, bs))
+    section(page, "## MPI: 1 → 2 ranks at N = 10⁶ (`NVECTOR_PARALLEL`)",
+            "Each model partitioned over ranks with a halo exchange in f; best of the repetitions. "
+            "The hand loop runs the same method on the same partition: its speedup is what the "
+            "machine gives.", mpi_lines(mpi_runs), "Not run in this job (no `mpiexec`, or no MPI build).")
+    section(page, "## CEODE as MRIStep's inner stepper (`mri_inner_cost`)",
+            "Fast evaluations CEODE needs to match the MRI error of an almost exact inner solve, "
+            "over RK4's, for each slow step H (largest first); counts, not timings.",
+            mri_lines(mri_name, mri_best))
     page.add("## Files", "",
              "`docs/results/<scene>.csv` (schema `scene,solver,config,h_or_tol,error,drift,steps,"
              "rhs_evals,seconds`) and `<scene>.txt` for the unoptimised SUNDIALS, `<scene>_o3.*` for "
