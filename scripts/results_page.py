@@ -233,6 +233,26 @@ def scene_section(page, rows, name, title, sentence):
     if mine:
         page.add(*summary_table.table(mine, {name}))
         page.add("")
+    page.add(*scaling_lines(page, name))
+
+
+def scaling_lines(page, name):
+    """ns per DOF and step against the model size, from <scene>[_o3]_scaling.csv (FE plate)."""
+    names = (f"{name}{sfx}_scaling.csv" for sfx in ("_o3", ""))
+    path = next((n for n in names if page.exists(n)), None)
+    if not path:
+        return []
+    with open(page.path(path), newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return []
+    cols = [c for c in rows[0] if c != "dof"]
+    label = {c: ("hand loop" if c.startswith("hand") else c.upper()) for c in cols}
+    lines = [f"Cost per DOF and step against the model size (`{path}`, ns):", "",
+             "| DOF | " + " | ".join(label[c] for c in cols) + " |", "|---|" + "---|" * len(cols)]
+    lines += [f"| {int(r['dof']):,} | ".replace(",", " ") +
+              " | ".join(fmt(float(r[c]) / int(r["dof"]) * 1e9) for c in cols) + " |" for r in rows]
+    return lines + [""]
 
 
 def power(n):
