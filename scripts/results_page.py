@@ -293,7 +293,7 @@ def collect_losses(rows, bs, ho, mri_best):
             groups["high"].append((problem, f"{fmt(c[1] / o[1])}× {o[0]} at {lv:.0e} ({c[0]})"))
         elif o and not c:
             groups["high"].append((problem, f"{lv:.0e} not reached by CEODE ({o[0]} reaches it)"))
-    for (method, n), (ratio, t) in sorted(bs.items(), key=lambda kv: (len(kv[0][0]), kv[0])):
+    for (method, n), (ratio, t) in sorted(bs.items()):
         if ratio > 1:
             groups["step"].append((method, f"{fmt(ratio)}× at n = {power(n)} ({duration(t)} a step)"))
     for (omega, amp), ratios in mri_best.items():
@@ -371,7 +371,8 @@ def chain_lines(page):
         return []
     import plot_dae  # noqa: E402  (matplotlib only when the scene ran)
     pts, slope = plot_dae.chain_slope(plot_dae.read_rows([page.path(chain)]))
-    lines = ["![chain N-scaling](results/chain_dae.png)", ""] if page.exists("chain_dae.png") else []
+    png = "chain_dae.png"  # scripts/plot_dae.py draws the unoptimised half's CSV
+    lines = [f"![chain N-scaling, chain_dae.csv](results/{png})", ""] if page.exists(png) else []
     return lines + [f"N = {pts[0][0]} … {pts[-1][0]}: {fmt(pts[0][1] * 1e6)} µs to "
                     f"{fmt(pts[-1][1] * 1e6)} µs per step, log-log slope **{slope:.3f}** "
                     f"(`{chain}`)."]
@@ -381,7 +382,7 @@ def bench_step_lines(bs_name, bs):
     if not bs:
         return []
     ns = sorted({n for _, n in bs})
-    methods = sorted({m for m, _ in bs}, key=lambda m: (len(m), m))
+    methods = sorted({m for m, _ in bs})
     lines = ["| set | " + " | ".join(f"n = {power(n)}" for n in ns) + " |",
              "|---|" + "---|" * len(ns)]
     lines += [f"| {m} | " + " | ".join(fmt(bs[(m, n)][0]) if (m, n) in bs else "" for n in ns)
