@@ -676,7 +676,7 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (!refuse) return CE_SUCCESS;
   // The next CEodeEvolve restarts here and checks again, so a refused run cannot
   // be resumed by simply calling CEodeEvolve once more.
-  ce->started = false;
+  Restart(ce);
   return CE_UNSTABLE;
 }
 
@@ -757,12 +757,13 @@ int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
   if (flag != CE_SUCCESS) return flag;
   if (mode != CE_GUARD_OFF && mode != CE_GUARD_WARN && mode != CE_GUARD_REFUSE) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "mode = %d: use CE_GUARD_OFF, CE_GUARD_WARN or CE_GUARD_REFUSE.", mode);
+                               "mode = %d: use CE_GUARD_OFF, CE_GUARD_WARN or CE_GUARD_REFUSE.",
+                               mode);
   }
   if (every < 0) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "every = %ld: use 0 (check at start only) or a positive step count.",
-                        every);
+                               "every = %ld: use 0 (check at start only) or a positive step count.",
+                               every);
   }
   ce->guard.mode = mode;
   ce->guard.every = every;
@@ -777,8 +778,8 @@ int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
   if (flag != CE_SUCCESS) return flag;
   if (!(omega_max >= 0) || !std::isfinite(omega_max)) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "omega_max = %g: pass a non-negative frequency (0: estimate it).",
-                        static_cast<double>(omega_max));
+                               "omega_max = %g: pass a non-negative frequency (0: estimate it).",
+                               static_cast<double>(omega_max));
   }
   ce->guard.omega_user = omega_max;
   ce->guard.warned = false;

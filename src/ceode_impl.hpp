@@ -140,8 +140,8 @@ struct LsMem {
   CEodeMassFn mfn = nullptr;
   SUNMatrix M = nullptr;
   bool mass_constant = true;
-  bool mass_evaluated = false;  // M holds M(x, t) at least once
-  bool mass_dirty = true;       // M changed since A was last factored from it
+  bool mass_evaluated = false;      // M holds M(x, t) at least once
+  bool mass_dirty = true;           // M changed since A was last factored from it
   Holds a_holds = Holds::kNothing;  // what the factored A is
   SUNLinearSolver LS = nullptr;
   SUNMatrix A = nullptr;
@@ -186,20 +186,20 @@ struct NlsMem {
 
 // Prediction-correction, CE_IMPLICIT_AUTO and velocity-dependence detection (ceode_pc.cpp).
 struct PcMem {
-  int mode = CE_IMPLICIT_AUTO;  // the library chooses (docs/theory.md section 4.3)
-  bool mode_set = false;        // CEodeSetImplicitMode called
-  bool active = false;          // AUTO: the step in use is prediction-correction
-  long int nst_check = 0;       // AUTO: nst at the last check of the choice
-  N_Vector dir = nullptr;       // AUTO: the power iteration's direction, kept warm
-  int corrections = 0;          // 0: k_default
-  int k_default = 1;            // with the method (DefaultPCCorrections)
-  int vel_request = -1;         // CEodeSetVelocityDependence's value; -1: never called
+  int mode = CE_IMPLICIT_AUTO;         // the library chooses (docs/theory.md section 4.3)
+  bool mode_set = false;               // CEodeSetImplicitMode called
+  bool active = false;                 // AUTO: the step in use is prediction-correction
+  long int nst_check = 0;              // AUTO: nst at the last check of the choice
+  N_Vector dir = nullptr;              // AUTO: the power iteration's direction, kept warm
+  int corrections = 0;                 // 0: k_default
+  int k_default = 1;                   // with the method (DefaultPCCorrections)
+  int vel_request = -1;                // CEodeSetVelocityDependence's value; -1: never called
   CEodeRhsFn vel_checked_f = nullptr;  // f already probed for an undeclared dependence
-  sunrealtype coupling = 0;     // last estimate of kappa ||M^{-1} df/dv|| (0: none)
-  sunrealtype theta = 0;        // last measured contraction of the corrections (0: none)
-  bool theta_last = false;      // theta is newer than coupling
-  long int nsteps = 0;          // steps solved by prediction-correction
-  long int nfe = 0;             // f evaluations of the detection and the checks
+  sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
+  sunrealtype theta = 0;               // last measured contraction of the corrections (0: none)
+  bool theta_last = false;             // theta is newer than coupling
+  long int nsteps = 0;                 // steps solved by prediction-correction
+  long int nfe = 0;                    // f evaluations of the detection and the checks
 };
 
 // The runtime stability guard (ceode_guard.cpp).
@@ -225,7 +225,7 @@ struct ConstrMem {
   N_Vector lambda = nullptr;
   N_Vector phi = nullptr;
   bool template_checked = false;  // Phi seen to write every template entry
-  bool schur = true;  // Schur complement for small saddle systems (SaddleSetup)
+  bool schur = true;              // Schur complement for small saddle systems (SaddleSetup)
   long int nce = 0;
   long int nge = 0;  // constraint Jacobian (CEodeConstrJacFn) evaluations
   // The saddle-point solver's own statistics (CEODE's getters add them to the other solvers').
@@ -478,12 +478,12 @@ void ConstrReset(CEodeMemRec* ce);  // zeroes its counters (CEodeReInit)
 
 // ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);
-void GuardFree(CEodeMemRec* ce);     // its workspace (at CEodeInit and CEodeFree)
+void GuardFree(CEodeMemRec* ce);  // its workspace (at CEodeInit and CEodeFree)
 // Its copy of M is re-evaluated and its warning may be given again; with counters, they are
 // zeroed (CEodeReInit).
 void GuardReset(CEodeMemRec* ce, bool counters);
-void GuardMethodChanged(CEodeMemRec* ce);  // Omega_max is looked up again
-void GuardRequestCheck(CEodeMemRec* ce);   // at the next CEodeEvolve (a start)
+void GuardMethodChanged(CEodeMemRec* ce);                  // Omega_max is looked up again
+void GuardRequestCheck(CEodeMemRec* ce);                   // at the next CEodeEvolve (a start)
 int GuardCheckPending(CEodeMemRec* ce, const char* func);  // the requested check, once
 
 // ceode_stability.cpp

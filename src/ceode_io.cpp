@@ -274,7 +274,8 @@ int CEodeGetNumConstrJacEvals(void* mem, long int* n) {
   return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.con.nge; });
 }
 int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
-  return GetValue<sunrealtype>(mem, __func__, omega_max, [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
+  return GetValue<sunrealtype>(mem, __func__, omega_max,
+                               [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
 }
 
 int CEodeGetLastErrorMessage(void* mem, const char** msg) {

@@ -1,9 +1,9 @@
 // Mass matrix, linear solver and velocity Jacobian: the linear algebra glue.
 // The attached SUNLinearSolver factors either M (explicit path) or the Newton
 // matrix M - kappa df/dv (implicit path); a_holds records which one it holds.
-#include <sunmatrix/sunmatrix_band.h>
 #include <sundials/sundials_dense.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
@@ -139,7 +139,8 @@ int LsInitialize(CEodeMemRec* ce, const char* func) {
         "Difference-quotient Jacobians support dense and band matrices only: supply "
         "df/dv with CEodeSetVelJacFn for this matrix type (e.g. sparse/KLU).");
   }
-  if (ce->ls.A != nullptr && ce->vel_dependent && ce->ls.jac == nullptr && !HasLocalData(ce->xcur)) {
+  if (ce->ls.A != nullptr && ce->vel_dependent && ce->ls.jac == nullptr &&
+      !HasLocalData(ce->xcur)) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "Difference-quotient Jacobians need vectors with local data "
                         "(N_VGetArrayPointer): supply df/dv with CEodeSetVelJacFn.");
@@ -296,7 +297,8 @@ bool NewtonMatrixStale(const CEodeMemRec* ce, sunrealtype kappa) {
 bool LsUseOwnLu(CEodeMemRec* ce, bool use) {
   LsMem& ls = ce->ls;
   ls.own_lu = use && ls.LS != nullptr && ls.A != nullptr &&
-              SUNLinSolGetID(ls.LS) == SUNLINEARSOLVER_DENSE && SUNMatGetID(ls.A) == SUNMATRIX_DENSE;
+              SUNLinSolGetID(ls.LS) == SUNLINEARSOLVER_DENSE &&
+              SUNMatGetID(ls.A) == SUNMATRIX_DENSE;
   return ls.own_lu;
 }
 

@@ -97,10 +97,11 @@ int NlsConvTest(CEodeMemRec* ce, int m, sunrealtype delnrm, sunrealtype tol) {
     // A non-finite f is the user's to fix: a fresh Jacobian or a retry cannot
     // help, and "did not converge, reduce h" would send the user the wrong way.
     if (!IsFinite(ce->ftmp)) {
-      ce->nls.cb_flag = ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
-                                 "The acceleration became NaN or Inf inside the nonlinear solve at "
-                                 "t = %.17g: f returned non-finite values.",
-                                 static_cast<double>(ce->nls.t_eval));
+      ce->nls.cb_flag =
+          ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,
+                       "The acceleration became NaN or Inf inside the nonlinear solve at "
+                       "t = %.17g: f returned non-finite values.",
+                       static_cast<double>(ce->nls.t_eval));
       return -1;
     }
     return SUN_NLS_CONV_RECVR;
@@ -142,7 +143,7 @@ int NlsInitialize(CEodeMemRec* ce, const char* func) {
   }
   if (ce->nls.NLS == nullptr) {
     ce->nls.NLS = ce->ls.LS != nullptr ? SUNNonlinSol_Newton(ce->ycor, ce->sunctx)
-                                : SUNNonlinSol_FixedPoint(ce->ycor, 0, ce->sunctx);
+                                       : SUNNonlinSol_FixedPoint(ce->ycor, 0, ce->sunctx);
     if (ce->nls.NLS == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
     ce->nls.own = true;
   }
@@ -275,8 +276,8 @@ int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
   int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (maxcor < 1) {
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "maxcor = %d: need at least 1 iteration.",
-                        maxcor);
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "maxcor = %d: need at least 1 iteration.", maxcor);
   }
   ce->nls.maxcor = maxcor;
   ce->nls.maxcor_set = true;
