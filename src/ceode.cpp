@@ -62,6 +62,16 @@ bool IsFinite(N_Vector v) {
 
 namespace {
 
+// Every object whose size is the problem's: the modules' workspaces and the vectors.
+void FreeSized(CEodeMemRec* ce) {
+  NlsFree(ce);
+  PcFree(ce);
+  LsFree(ce);
+  ConstrFree(ce);
+  GuardFree(ce);
+  FreeVectors(ce);
+}
+
 int CheckInitialData(CEodeMemRec* ce, const char* func, N_Vector x0, N_Vector v0) {
   if (x0 == nullptr || v0 == nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -208,13 +218,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
   flag = ceode::CheckInitialData(ce, __func__, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (ce->initialized) {
-    // A second Init replaces the problem: drop every size-dependent object.
-    ceode::NlsFree(ce);
-    ceode::PcFree(ce);
-    ceode::LsFree(ce);
-    ceode::ConstrFree(ce);
-    ceode::GuardFree(ce);
-    ceode::FreeVectors(ce);
+    ceode::FreeSized(ce);  // a second Init replaces the problem
   }
   flag = ceode::AllocVectors(ce, x0);
   if (flag != CE_SUCCESS) return ceode::ProcessError(ce, flag, __func__, "Out of memory.");
@@ -320,12 +324,7 @@ void CEodeFree(void** mem) {
   if (mem == nullptr || *mem == nullptr) return;
   auto* ce = static_cast<CEodeMemRec*>(*mem);
   ceode::FirstOrderFree(ce);
-  ceode::NlsFree(ce);
-  ceode::PcFree(ce);
-  ceode::LsFree(ce);
-  ceode::ConstrFree(ce);
-  ceode::GuardFree(ce);
-  ceode::FreeVectors(ce);
+  ceode::FreeSized(ce);
   delete ce;
   *mem = nullptr;
 }
