@@ -122,7 +122,7 @@ int ConvTest(SUNNonlinearSolver nls, N_Vector /*ycor*/, N_Vector del, sunrealtyp
 constexpr sunindextype kDirectNewtonMaxN = 64;
 
 bool DirectNewtonApplies(const CEodeMemRec* ce) {
-  return ce->own_nls && ce->fused_ready && ce->n <= kDirectNewtonMaxN && ce->A != nullptr &&
+  return ce->own_nls && SerialBackend(ce) && ce->n <= kDirectNewtonMaxN && ce->A != nullptr &&
          ce->LS != nullptr && SUNLinSolGetType(ce->LS) == SUNLINEARSOLVER_DIRECT &&
          SUNNonlinSolGetType(ce->NLS) == SUNNONLINEARSOLVER_ROOTFIND;
 }

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "../src/ceode_fused.hpp"
+#include "../src/ceode_kernels.hpp"
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
 
 namespace {
