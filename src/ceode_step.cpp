@@ -371,10 +371,15 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
 
-// The step of each path of docs/theory.md: TakeStep with the solve of the kind (sections 4.1,
-// 4.2 ceode_nls.cpp, 4.3 ceode_pc.cpp, 8 ceode_constraints.cpp) and the update on the backend the
-// vectors allow; the explicit step without a mass matrix on the serial backend takes many steps
-// per call in the lean loop.
+// The step of each path of docs/theory.md: TakeStep with the solve of the kind,
+//   kExplicit     SolveExplicit (above; section 4.1),
+//   kNewton       SolveImplicit (ceode_nls.cpp; section 4.2),
+//   kPC           SolvePC (ceode_pc.cpp; section 4.3),
+//   kAuto         SolveAuto (ceode_pc.cpp: PC or Newton by the coupling; section 4.3),
+//   kConstrained  ConstrSolveStep (ceode_constraints.cpp; section 8),
+// then the update on the backend the vectors allow (serial, this rank's part of NVECTOR_PARALLEL,
+// or the N_Vector reference). The explicit step without a mass matrix on the serial backend takes
+// many steps per call in the lean loop (LeanExplicitSteps).
 void ChooseStep(CEodeMemRec* ce, bool restart) {
   StepMem* sm = ce->step.get();
   if (restart) {
