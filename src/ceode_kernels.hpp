@@ -76,9 +76,12 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
 
 // The data of a vector that exposes it (NVECTOR_SERIAL's content without a call).
 sunrealtype* SerialData(N_Vector v);
-// out[0 .. n) = sum_j c[j] x[j][0 .. n), j < m (1 <= m <= kMaxDegree + 3), with the values of
+// out[0 .. n) = sum_j c[j] x[j][0 .. n), j < m (0 <= m <= kMaxDegree + 3), with the values of
 // Combine on serial vectors (N_VLinearSum's a = +-b shortcuts included). out is not an input.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
+                   sunrealtype* out);
+// The same on the data of the vectors X (SerialData): the local data on NVECTOR_PARALLEL.
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
                    sunrealtype* out);
 // to = from: memcpy on serial vectors, N_VScale(1, ...) on others; the same values either way.
 void CopyVector(N_Vector from, N_Vector to);

@@ -548,16 +548,23 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
   return distinct;
 }
 
+// The terms are copied into a FusedTerms only as far as the form reads them: at n of a few the
+// copy is most of the call.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
                    sunrealtype* out) {
-  FusedTerms tk{};
-  tk.m = m;
+  FusedTerms tk;
   for (int j = 0; j < m; ++j) {
     tk.c[j] = c[j];
     tk.X[j] = const_cast<sunrealtype*>(x[j]);
   }
-  tk.form = FormOf(m, c);
-  kBlock[tk.form](tk, 0, n, out);
+  kBlock[FormOf(m, c)](tk, 0, n, out);
+}
+
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
+                   sunrealtype* out) {
+  const sunrealtype* x[kMaxTerms];
+  for (int j = 0; j < m; ++j) x[j] = SerialData(X[j]);
+  CombineSerial(n, m, c, x, out);
 }
 
 // Once both IDs say serial, the content is read directly (NV_DATA_S, NV_LENGTH_S): every getter

@@ -461,7 +461,7 @@ TEST_P(FusedKernelAgainstReference, RawCombinationAndCopyGiveBitwiseTheReference
   const sunindextype n = GetParam().n;
   Fill();
   const std::vector<std::vector<sunrealtype>> weights = {
-      {0.7}, {0.3, 0.3}, {0.3, -0.3}, {1.0, -1.0}, {-1.0, 0.25}, {0.1, 0.2, -0.3}};
+      {}, {0.7}, {0.3, 0.3}, {0.3, -0.3}, {1.0, -1.0}, {-1.0, 0.25}, {0.1, 0.2, -0.3}};
   std::vector<std::vector<sunrealtype>> all = weights;
   for (int m = 4; m <= 11; ++m) {
     std::vector<sunrealtype> c;
@@ -481,6 +481,8 @@ TEST_P(FusedKernelAgainstReference, RawCombinationAndCopyGiveBitwiseTheReference
     const sunrealtype* ref = N_VGetArrayPointer(pool_[8]);
     const sunrealtype* raw = N_VGetArrayPointer(pool_[9]);
     EXPECT_TRUE(std::equal(ref, ref + n, raw)) << m << " terms";
+    ceode::CombineSerial(n, m, c.data(), X, N_VGetArrayPointer(pool_[9]));
+    EXPECT_TRUE(std::equal(ref, ref + n, raw)) << m << " terms, from the vectors";
   }
   ceode::CopyVector(pool_[0], pool_[10]);
   EXPECT_TRUE(std::equal(N_VGetArrayPointer(pool_[0]), N_VGetArrayPointer(pool_[0]) + n,
