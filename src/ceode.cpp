@@ -210,6 +210,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
   if (ce->initialized) {
     // A second Init replaces the problem: drop every size-dependent object.
     ceode::NlsFree(ce);
+    ceode::PcFree(ce);
     ceode::LsFree(ce);
     ceode::ConstrFree(ce);
     ceode::GuardFree(ce);
@@ -240,17 +241,12 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   ce->tcur = t0;
   ce->tretlast = t0;
   ceode::Restart(ce);
-  ce->mass_evaluated = false;
-  ce->mass_dirty = true;
-  ce->a_holds = ceode::Holds::kNothing;
-  ce->jac_current = false;
-  ce->nst_lastsetup = -1;
-  ce->guard_warned = false;
-  ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
-  ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = ce->nge = 0;
-  ce->nfe_guard = ce->nme_guard = ce->nsetups_guard = 0;
-  ceode::ImplicitStatsReset(ce);
-  ceode::GuardRestart(ce);
+  ce->nst = ce->nfe = ce->nfe_start = 0;
+  ceode::LsReset(ce, true);
+  ceode::NlsReset(ce, true);
+  ceode::PcReset(ce);
+  ceode::ConstrReset(ce);
+  ceode::GuardReset(ce, true);
   return CE_SUCCESS;
 }
 
@@ -262,10 +258,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
   flag = ceode::Prepare(ce, __func__);
-  if (flag == CE_SUCCESS && ce->guard_pending) {
-    ce->guard_pending = false;
-    flag = ceode::GuardCheck(ce, __func__);
-  }
+  if (flag == CE_SUCCESS) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {
     // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
     *tret = ce->tcur;
@@ -328,6 +321,7 @@ void CEodeFree(void** mem) {
   auto* ce = static_cast<CEodeMemRec*>(*mem);
   ceode::FirstOrderFree(ce);
   ceode::NlsFree(ce);
+  ceode::PcFree(ce);
   ceode::LsFree(ce);
   ceode::ConstrFree(ce);
   ceode::GuardFree(ce);

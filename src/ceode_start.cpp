@@ -20,8 +20,8 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 }
 
 bool NeedsSolverWork(const CEodeMemRec* ce) {
-  return ce->LS != nullptr || ce->NLS != nullptr || ce->mfn != nullptr || ce->M != nullptr ||
-         ce->vel_dependent || ce->fo != nullptr || HasConstraints(ce);
+  return ce->ls.LS != nullptr || ce->nls.NLS != nullptr || ce->ls.mfn != nullptr ||
+         ce->ls.M != nullptr || ce->vel_dependent || ce->fo != nullptr || HasConstraints(ce);
 }
 
 // Each N_VClone costs about a thousand instructions in an unoptimised SUNDIALS build (the
@@ -239,7 +239,7 @@ int StartMethod(CEodeMemRec* ce) {
   ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
-  ce->guard_pending = true;
+  ce->guard.pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
   const long int nfe0 = ce->nfe;
   flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);

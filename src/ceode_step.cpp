@@ -31,7 +31,7 @@ int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, 
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func) {
   // No mass matrix (M = I): MassUpdate and MassSolve would do nothing; skip their calls.
-  if (ce->mfn == nullptr && ce->M == nullptr) return EvalRhs(ce, t, x, v, a, func);
+  if (ce->ls.mfn == nullptr && ce->ls.M == nullptr) return EvalRhs(ce, t, x, v, a, func);
   int flag = MassUpdate(ce, t, x, func);
   if (flag == CE_SUCCESS) flag = EvalRhs(ce, t, x, v, a, func);
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
@@ -206,7 +206,7 @@ int TakeStep(CEodeMemRec* ce) {
   }
   if (flag != CE_SUCCESS) return flag;
   Commit(ce, sm, t);
-  if (ce->guard_every > 0 && ce->nst % ce->guard_every == 0) return GuardCheck(ce, func);
+  if (ce->guard.every > 0 && ce->nst % ce->guard.every == 0) return GuardCheck(ce, func);
   return CE_SUCCESS;
 }
 
@@ -229,7 +229,7 @@ constexpr long int kLeanMinSteps = 8;
 // that the loop knows its last step in advance.
 long int LeanStepCount(const CEodeMemRec* ce, sunrealtype target, long int max_steps) {
   long int cap = max_steps;
-  if (ce->guard_every > 0) cap = std::min(cap, ce->guard_every - ce->nst % ce->guard_every);
+  if (ce->guard.every > 0) cap = std::min(cap, ce->guard.every - ce->nst % ce->guard.every);
   const auto remains = [&](long int j) {
     const sunrealtype tj =
         j == 0 ? ce->tcur : ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + j) * ce->h;
@@ -295,7 +295,7 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
     if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
     return CheckState(ce, e.t, e.update, func, !e.failed_over);
   }
-  const bool guard_due = e.steps > 0 && ce->guard_every > 0 && ce->nst % ce->guard_every == 0;
+  const bool guard_due = e.steps > 0 && ce->guard.every > 0 && ce->nst % ce->guard.every == 0;
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
 }
 
@@ -395,7 +395,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   const bool mpi = sm->fused && sm->mpi;
   sm->update = serial ? UpdateOnSerial : (mpi ? UpdateOnMpi : UpdateOnReference);
   const bool lean = (serial || mpi) && sm->solve_kind == SolveKind::kExplicit &&
-                    ce->mfn == nullptr && ce->M == nullptr;
+                    ce->ls.mfn == nullptr && ce->ls.M == nullptr;
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
 }
 

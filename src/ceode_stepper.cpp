@@ -39,26 +39,26 @@ struct Counters {
 };
 
 Counters SaveCounters(const CEodeMemRec* ce) {
-  return {ce->nst,     ce->nfe,        ce->nfe_start, ce->nni,          ce->nnf,
-          ce->nsetups, ce->nls_solves, ce->nje,       ce->nfeDQ,        ce->nme,
-          ce->nce,     ce->nfe_guard,  ce->nme_guard, ce->nsetups_guard};
+  return {ce->nst,     ce->nfe,        ce->nfe_start, ce->nls.nni,          ce->nls.nnf,
+          ce->ls.nsetups, ce->ls.nsolves, ce->ls.nje,       ce->ls.nfeDQ,        ce->ls.nme,
+          ce->con.nce,     ce->guard.nfe,  ce->guard.nme, ce->guard.nsetups};
 }
 
 void AddCounters(CEodeMemRec* ce, const Counters& c) {
   ce->nst += c.nst;
   ce->nfe += c.nfe;
   ce->nfe_start += c.nfe_start;
-  ce->nni += c.nni;
-  ce->nnf += c.nnf;
-  ce->nsetups += c.nsetups;
-  ce->nls_solves += c.nls_solves;
-  ce->nje += c.nje;
-  ce->nfeDQ += c.nfeDQ;
-  ce->nme += c.nme;
-  ce->nce += c.nce;
-  ce->nfe_guard += c.nfe_guard;
-  ce->nme_guard += c.nme_guard;
-  ce->nsetups_guard += c.nsetups_guard;
+  ce->nls.nni += c.nni;
+  ce->nls.nnf += c.nnf;
+  ce->ls.nsetups += c.nsetups;
+  ce->ls.nsolves += c.nls_solves;
+  ce->ls.nje += c.nje;
+  ce->ls.nfeDQ += c.nfeDQ;
+  ce->ls.nme += c.nme;
+  ce->con.nce += c.nce;
+  ce->guard.nfe += c.nfe_guard;
+  ce->guard.nme += c.nme_guard;
+  ce->guard.nsetups += c.nsetups_guard;
 }
 
 int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data);
@@ -277,7 +277,7 @@ int Allocate(Stepper* st, N_Vector y, const char* func) {
 // Problems the inner stepper cannot take: the forcing adds to x'' directly, so
 // a mass matrix would have to multiply it, and constraints would fight it.
 int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
-  if (ce->mfn != nullptr || ce->M != nullptr || HasConstraints(ce)) {
+  if (ce->ls.mfn != nullptr || ce->ls.M != nullptr || HasConstraints(ce)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The inner stepper needs M = I and no constraints (the MRI forcing is "
                         "added to the acceleration): divide f by M in your right-hand side.");
@@ -304,7 +304,7 @@ int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   st->g = ce->f;
   st->g_data = ce->user_data;
   st->h_max = ce->h;
-  st->omega_fixed = ce->omega_user > 0;
+  st->omega_fixed = ce->guard.omega_user > 0;
   ce->f = Trampoline;
   ce->user_data = st;
   *out = st;
@@ -452,10 +452,10 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   if (flag != CE_SUCCESS) return flag;
   WithForcingX(st, t0, 1, own.v, 1, st->u);
   const Counters saved = SaveCounters(ce);
-  const bool warned = ce->guard_warned;
+  const bool warned = ce->guard.warned;
   flag = CEodeReInit(ce, t0, own.x, st->u);
   AddCounters(ce, saved);
-  ce->guard_warned = warned;
+  ce->guard.warned = warned;
   ++st->nrestarts;
   const bool reuse = st->end_valid && CanReuse(st) && st->end_degree == ce->degree &&
                      std::fabs(t0 - st->t_end) <= 1e-8 * ce->h;
@@ -516,11 +516,11 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) CaptureEnd(st);
     // The first run estimated omega_max; later restarts check h against it without
     // a new power iteration.
-    if (!st->omega_fixed && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
-      const bool warned = ce->guard_warned;  // one warning per run, not one per restart
-      CEodeSetMaxFrequency(ce, ce->omega_est);
-      ce->guard_warned = warned;
-      ce->guard_pending = false;
+    if (!st->omega_fixed && ce->guard.omega_est > 0 && std::isfinite(ce->guard.omega_est)) {
+      const bool warned = ce->guard.warned;  // one warning per run, not one per restart
+      CEodeSetMaxFrequency(ce, ce->guard.omega_est);
+      ce->guard.warned = warned;
+      ce->guard.pending = false;
       st->omega_fixed = true;
     }
     WithForcingX(st, tout, 1, st->u, -1, own.v);
