@@ -6,7 +6,6 @@
 #include "ceode_impl.hpp"
 
 using ceode::Access;
-using ceode::BuildPlans;
 using ceode::ProcessError;
 using ceode::Restart;
 
@@ -119,18 +118,14 @@ int CEodeSetFusedKernel(void* mem, sunbooleantype on) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->fused = on != SUNFALSE;
-  if (ce->started) BuildPlans(ce);  // in-place plans run on the fused kernel only
-  return CE_SUCCESS;
+  return ceode::SetFusedKernel(ce, on != SUNFALSE, __func__);
 }
 
 int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->in_place = on != SUNFALSE;
-  if (ce->started) BuildPlans(ce);  // from the current vectors: the run goes on unchanged
-  return CE_SUCCESS;
+  return ceode::SetInPlaceUpdate(ce, on != SUNFALSE, __func__);
 }
 
 int CEodeSetFixedStep(void* mem, sunrealtype h) {

@@ -142,7 +142,7 @@ int Newton(CEodeMemRec* ce, const Raw& r, bool own_lu, bool setup) {
 }  // namespace
 
 bool DirectNewtonApplies(const CEodeMemRec* ce) {
-  return ce->nls.own && ce->fused && N_VGetVectorID(ce->ycor) == SUNDIALS_NVEC_SERIAL &&
+  return ce->nls.own && FusedKernelOn(ce) && N_VGetVectorID(ce->ycor) == SUNDIALS_NVEC_SERIAL &&
          ce->n <= kDirectNewtonMaxN && ce->ls.A != nullptr && ce->ls.LS != nullptr &&
          SUNLinSolGetType(ce->ls.LS) == SUNLINEARSOLVER_DIRECT &&
          SUNNonlinSolGetType(ce->nls.NLS) == SUNNONLINEARSOLVER_ROOTFIND;

@@ -214,7 +214,7 @@ void CombineEntries(const sunrealtype* c, const sunrealtype* const* x, sunindext
 // does a data-pointer call per vector (fused_ready: every vector is serial, NV_DATA_S is its data).
 void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_Vector* X,
                          N_Vector out) {
-  if (!ce->fused_ready || m < 2 || m > kMaxDegree) {
+  if (!SerialBackend(ce) || m < 2 || m > kMaxDegree) {
     N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
     return;
   }
@@ -268,14 +268,14 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   int flag = CheckVelocityDependence(ce, func);
   if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
   const int mode = ImplicitMode(ce);
-  ce->solve_accel = mode == CE_IMPLICIT_PC ? SolvePC : SolveImplicit;
+  SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
   if (ce->pc.dir == nullptr && (ce->pc.dir = N_VClone(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   flag = EstimateCoupling(ce, func);
   ce->pc.active = flag == CE_SUCCESS && ce->pc.coupling <= kPcContractionLimit;
-  ce->solve_accel = SolveAuto;
+  SetImplicitSolve(ce, SolveKind::kAuto);
   return flag;
 }
 
