@@ -262,7 +262,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
   flag = ceode::Prepare(ce, __func__);
-  if (flag == CE_SUCCESS) flag = ceode::GuardCheckPending(ce, __func__);
+  if (flag == CE_SUCCESS && ce->guard.pending) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {
     // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
     *tret = ce->tcur;

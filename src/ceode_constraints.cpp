@@ -621,7 +621,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   return CE_SUCCESS;
 }
 
-// The signature of every acceleration solve (CEodeMemRec::solve_accel); the errors name kFunc.
+// The signature of every acceleration solve (the step module's SolveFn); the errors name kFunc.
 int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                     const char* /*func*/) {
   ConWork* w = Work(ce);

@@ -4,13 +4,13 @@
 // residual, setup and test, on raw arrays in N_Vector serial's order of operations. The
 // numbers are those of the generic path (test_implicit compares them bit for bit); at n of a
 // few the generic path's vector dispatch costs more than f (docs/performance.md).
-#include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "ceode_impl.hpp"
+#include "ceode_kernels.hpp"
 
 namespace ceode {
 
@@ -18,9 +18,8 @@ namespace {
 
 constexpr sunindextype kDirectNewtonMaxN = 64;
 
-// The raw arrays of the iteration, looked up once per step. The backend runs on serial vectors
-// only, so the data pointers are read from the vectors' content (NV_DATA_S) rather than through
-// the vector operations' dispatch (a sixth of a Newton step at n of a few).
+// The raw arrays of the iteration, looked up once per step (SerialData: without the vector
+// operations' dispatch, a sixth of a Newton step at n of a few).
 struct Raw {
   sunindextype n;
   sunrealtype *apred, *atmp, *vtmp, *V0, *ftmp, *lstmp, *ewt, *ycor, *delta;
@@ -28,32 +27,15 @@ struct Raw {
 
 Raw RawArrays(const CEodeMemRec* ce) {
   return Raw{ce->n,
-             NV_DATA_S(ce->apred),
-             NV_DATA_S(ce->atmp),
-             NV_DATA_S(ce->vtmp),
-             NV_DATA_S(ce->V0),
-             NV_DATA_S(ce->ftmp),
-             NV_DATA_S(ce->lstmp),
-             NV_DATA_S(ce->ewt),
-             NV_DATA_S(ce->ycor),
-             NV_DATA_S(ce->nls.delta)};
-}
-
-// z = sum_j c_j X_j (j < m) on raw arrays, with N_VLinearCombination_Serial's values: its
-// m = 1 and m = 2 cases are N_VScale and N_VLinearSum, whose a = b and a = -b branches factor.
-void RawCombination(sunindextype n, int m, const sunrealtype* c, N_Vector* X, sunrealtype* z) {
-  const sunrealtype* x0 = NV_DATA_S(X[0]);
-  const sunrealtype* x1 = m >= 2 ? NV_DATA_S(X[1]) : nullptr;
-  if (m == 2 && (c[0] == c[1] || c[0] == -c[1])) {
-    const sunrealtype sgn = c[0] == c[1] ? 1 : -1;
-    for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * (x0[i] + (sgn * x1[i]));
-    return;
-  }
-  for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * x0[i];
-  for (int j = 1; j < m; ++j) {
-    const sunrealtype* xj = NV_DATA_S(X[j]);
-    for (sunindextype i = 0; i < n; ++i) z[i] += c[j] * xj[i];
-  }
+             SerialData(ce->apred),
+             SerialData(ce->atmp),
+             SerialData(ce->vtmp),
+             SerialData(ce->V0),
+             SerialData(ce->ftmp),
+             SerialData(ce->lstmp),
+             SerialData(ce->ewt),
+             SerialData(ce->ycor),
+             SerialData(ce->nls.delta)};
 }
 
 // ewt = 1 / (reltol |apred| + atol), atol from max |apred| (ErrorWeights' N_VMaxNorm, N_VAbs,
@@ -151,8 +133,8 @@ bool DirectNewtonApplies(const CEodeMemRec* ce) {
 void DirectPrepare(CEodeMemRec* ce) {
   const Raw r = RawArrays(ce);
   const int d = ce->degree;
-  RawCombination(r.n, d - 1, ce->co.V0 + 1, ce->D + 1, r.V0);
-  RawCombination(r.n, d - 2, ce->co.pred, ce->D + 2, r.apred);
+  CombineSerial(r.n, d - 1, ce->co.V0 + 1, ce->D + 1, r.V0);
+  CombineSerial(r.n, d - 2, ce->co.pred, ce->D + 2, r.apred);
   Weights(ce, r);
 }
 
@@ -164,7 +146,7 @@ int DirectSolve(CEodeMemRec* ce, bool setup) {
 
 void DirectAccel(CEodeMemRec* ce, N_Vector a) {
   const Raw r = RawArrays(ce);
-  sunrealtype* ad = NV_DATA_S(a);
+  sunrealtype* ad = SerialData(a);
   for (sunindextype i = 0; i < r.n; ++i) ad[i] = r.apred[i] + r.ycor[i];
 }
 
