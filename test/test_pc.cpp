@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,8 +37,10 @@ struct Config {
   sunrealtype tend = 10;
   int mode = CE_IMPLICIT_NEWTON;
   int corrections = 0;
-  int vel = SUNTRUE;  // CEodeSetVelocityDependence's argument; -1: never called
-  long int msbj = 0;  // 0: default
+  int vel = CE_VELOCITY_DEPENDENT;  // CEodeSetVelocityMode's argument; -1: no velocity setter
+  bool vel_boolean = false;         // vel through CEodeSetVelocityDependence (SUNTRUE/SUNFALSE)
+  long int msbj = 0;                // 0: default
+  std::function<bool(void*)> then;  // further calls after the setup; false abandons the run
 };
 
 struct Outcome {
@@ -77,7 +80,13 @@ Outcome Integrate(const ExactProblem& prob, const Config& c) {
       fail(CEodeSetImplicitMode(mem.get(), c.mode)) ||
       fail(CEodeSetPCCorrections(mem.get(), c.corrections)) ||
       (c.msbj > 0 && fail(CEodeSetJacEvalFrequency(mem.get(), c.msbj))) ||
-      (c.vel >= 0 && fail(CEodeSetVelocityDependence(mem.get(), c.vel)))) {
+      (c.vel >= 0 && !c.vel_boolean &&
+       fail(CEodeSetVelocityMode(mem.get(), static_cast<CEodeVelocityMode>(c.vel)))) ||
+      (c.vel >= 0 && c.vel_boolean && fail(CEodeSetVelocityDependence(mem.get(), c.vel)))) {
+    return r;
+  }
+  if (c.then && !c.then(mem.get())) {
+    r.flag = CE_ILL_INPUT;
     return r;
   }
   const long int nsteps = std::lround(c.tend / c.h);
@@ -547,7 +556,7 @@ TEST(DirectNewtonIteration, GivesSUNNonlinSolNewtonsNumbersBitForBit) {
 TEST(UndeclaredVelocityDependence, IsReportedOnceWithTheSetterToCall) {
   DampedForced prob;
   Config c;
-  c.vel = -1;  // CEodeSetVelocityDependence never called
+  c.vel = -1;  // no velocity setter called
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
   ASSERT_EQ(r.warnings.size(), 1u);
@@ -595,7 +604,7 @@ TEST(UndeclaredVelocityDependence, IsNotReportedForAVelocityIndependentForce) {
 TEST(UndeclaredVelocityDependence, IsNotProbedWhenTheUserDeclaredNone) {
   DampedForced prob;
   Config c;
-  c.vel = SUNFALSE;
+  c.vel = CE_VELOCITY_INDEPENDENT;
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
   EXPECT_TRUE(r.warnings.empty());

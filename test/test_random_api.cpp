@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
