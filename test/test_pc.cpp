@@ -648,6 +648,88 @@ TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
   EXPECT_TRUE(r.warnings.empty());
 }
 
+// The velocity mode: each value of CEodeVelocityMode gives the step it names, the boolean setter
+// is the same as its two modes, and a value outside the enum is refused without harm.
+TEST(VelocityMode, GivesEachModeTheStepItNames) {
+  DampedForced damped;  // f depends on x'
+  Harmonic harmonic;    // f does not
+  Config c;
+  c.vel = CE_VELOCITY_INDEPENDENT;
+  const Outcome indep = Integrate(damped, c);
+  c.vel = CE_VELOCITY_DEPENDENT;
+  const Outcome dep = Integrate(damped, c);
+  c.vel = CE_VELOCITY_DETECT;
+  const Outcome detect = Integrate(damped, c);
+  const Outcome detect_harmonic = Integrate(harmonic, c);
+  for (const Outcome* r : {&indep, &dep, &detect, &detect_harmonic}) {
+    ASSERT_EQ(r->flag, CE_SUCCESS);
+    EXPECT_TRUE(r->warnings.empty());
+  }
+  // independent: the explicit step, no probe of f
+  EXPECT_EQ(indep.npc + indep.nnls, 0);
+  EXPECT_EQ(indep.nfe_coupling, 0);
+  // dependent: every step solved by the nonlinear solver (CE_IMPLICIT_NEWTON), no probe
+  EXPECT_EQ(dep.nnls, dep.nst);
+  EXPECT_EQ(dep.nfe_coupling, 0);
+  // detect: one probe, then the implicit step on the damped force (the same numbers as declared)
+  // and the explicit step on the harmonic one
+  EXPECT_EQ(detect.nfe_coupling, 1);
+  EXPECT_EQ(detect.nnls, detect.nst);
+  EXPECT_EQ(MaxDiff(detect.x, dep.x), 0);
+  EXPECT_EQ(detect_harmonic.npc + detect_harmonic.nnls, 0);
+  EXPECT_EQ(detect_harmonic.nfe_coupling, 1);
+  // CEodeSetVelocityDependence(SUNTRUE / SUNFALSE) is CE_VELOCITY_DEPENDENT / _INDEPENDENT
+  c.vel_boolean = true;
+  c.vel = SUNTRUE;
+  const Outcome dep_boolean = Integrate(damped, c);
+  c.vel = SUNFALSE;
+  const Outcome indep_boolean = Integrate(damped, c);
+  ASSERT_EQ(dep_boolean.flag, CE_SUCCESS);
+  ASSERT_EQ(indep_boolean.flag, CE_SUCCESS);
+  EXPECT_EQ(MaxDiff(dep_boolean.x, dep.x), 0);
+  EXPECT_EQ(MaxDiff(dep_boolean.v, dep.v), 0);
+  EXPECT_EQ(MaxDiff(indep_boolean.x, indep.x), 0);
+  EXPECT_EQ(MaxDiff(indep_boolean.v, indep.v), 0);
+  EXPECT_EQ(dep_boolean.nfe, dep.nfe);
+  EXPECT_EQ(indep_boolean.nfe, indep.nfe);
+}
+
+TEST(VelocityMode, RefusesAValueOutsideTheEnumAndKeepsTheMemoryUsable) {
+  DampedForced prob;
+  Config c;
+  c.vel = CE_VELOCITY_DEPENDENT;
+  const Outcome clean = Integrate(prob, c);
+  std::vector<std::string> refusals;
+  c.then = [&refusals](void* mem) {
+    const char* msg = nullptr;
+    // 3 is inside the range of values of the enum type, outside its enumerators
+    if (CEodeSetVelocityMode(mem, static_cast<CEodeVelocityMode>(3)) != CE_ILL_INPUT) return false;
+    CEodeGetLastErrorMessage(mem, &msg);
+    refusals.push_back(msg);
+    // the boolean setter takes SUNTRUE and SUNFALSE only; detection has its own setter
+    for (int b : {static_cast<int>(CE_VELOCITY_DETECT), -1, 7}) {
+      if (CEodeSetVelocityDependence(mem, b) != CE_ILL_INPUT) return false;
+      CEodeGetLastErrorMessage(mem, &msg);
+      refusals.push_back(msg);
+    }
+    return true;
+  };
+  const Outcome after = Integrate(prob, c);
+  ASSERT_EQ(after.flag, CE_SUCCESS);
+  ASSERT_EQ(refusals.size(), 4u);
+  EXPECT_TRUE(ceode_test::Contains(refusals[0], "CE_VELOCITY_DETECT"));
+  for (size_t i = 1; i < refusals.size(); ++i) {
+    EXPECT_TRUE(ceode_test::Contains(refusals[i], "CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT)"))
+        << refusals[i];
+  }
+  // the refusals changed nothing: still the declared dependence, the same numbers
+  EXPECT_EQ(after.nnls, after.nst);
+  EXPECT_EQ(after.nfe, clean.nfe);
+  EXPECT_EQ(MaxDiff(after.x, clean.x), 0);
+  EXPECT_EQ(MaxDiff(after.v, clean.v), 0);
+  EXPECT_EQ(CEodeSetVelocityMode(nullptr, CE_VELOCITY_DETECT), CE_MEM_NULL);
+}
+
 TEST(ImplicitModeSetters, RefuseUnknownValuesWithAClearMessage) {
   Context ctx;
   Mem mem(CEodeCreate(ctx));
