@@ -17,9 +17,10 @@
 extern "C" {
 #endif
 
-/* SUNTRUE (default): on serial vectors the post-solve update runs in one pass over memory,
- * the same floating-point operations in the same order as the generic N_Vector path (so the
- * same numbers); SUNFALSE: the generic path. Other vector types always take the generic path. */
+/* SUNTRUE (default): on serial vectors (and on NVECTOR_PARALLEL's local part) the post-solve
+ * update runs in one pass over memory, the same floating-point operations in the same order as
+ * the generic N_Vector path (so the same numbers); SUNFALSE: the generic path. Other vector
+ * types always take the generic path. */
 SUNDIALS_EXPORT int CEodeSetFusedKernel(void* mem, sunbooleantype on);
 
 /* SUNTRUE (default): the fused explicit step may update D_1 and D_3..D_{d-2} in place on
