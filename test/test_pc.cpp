@@ -653,15 +653,20 @@ TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
 TEST(VelocityMode, GivesEachModeTheStepItNames) {
   DampedForced damped;  // f depends on x'
   Harmonic harmonic;    // f does not
-  Config c;
-  c.vel = CE_VELOCITY_INDEPENDENT;
-  const Outcome indep = Integrate(damped, c);
-  c.vel = CE_VELOCITY_DEPENDENT;
-  const Outcome dep = Integrate(damped, c);
-  c.vel = CE_VELOCITY_DETECT;
-  const Outcome detect = Integrate(damped, c);
-  const Outcome detect_harmonic = Integrate(harmonic, c);
-  for (const Outcome* r : {&indep, &dep, &detect, &detect_harmonic}) {
+  // vel through CEodeSetVelocityMode, or (boolean) through CEodeSetVelocityDependence
+  auto run = [](const ExactProblem& prob, int vel, bool boolean) {
+    Config c;
+    c.vel = vel;
+    c.vel_boolean = boolean;
+    return Integrate(prob, c);
+  };
+  const Outcome indep = run(damped, CE_VELOCITY_INDEPENDENT, false);
+  const Outcome dep = run(damped, CE_VELOCITY_DEPENDENT, false);
+  const Outcome detect = run(damped, CE_VELOCITY_DETECT, false);
+  const Outcome detect_harmonic = run(harmonic, CE_VELOCITY_DETECT, false);
+  const Outcome dep_boolean = run(damped, SUNTRUE, true);
+  const Outcome indep_boolean = run(damped, SUNFALSE, true);
+  for (const Outcome* r : {&indep, &dep, &detect, &detect_harmonic, &dep_boolean, &indep_boolean}) {
     ASSERT_EQ(r->flag, CE_SUCCESS);
     EXPECT_TRUE(r->warnings.empty());
   }
@@ -679,13 +684,6 @@ TEST(VelocityMode, GivesEachModeTheStepItNames) {
   EXPECT_EQ(detect_harmonic.npc + detect_harmonic.nnls, 0);
   EXPECT_EQ(detect_harmonic.nfe_coupling, 1);
   // CEodeSetVelocityDependence(SUNTRUE / SUNFALSE) is CE_VELOCITY_DEPENDENT / _INDEPENDENT
-  c.vel_boolean = true;
-  c.vel = SUNTRUE;
-  const Outcome dep_boolean = Integrate(damped, c);
-  c.vel = SUNFALSE;
-  const Outcome indep_boolean = Integrate(damped, c);
-  ASSERT_EQ(dep_boolean.flag, CE_SUCCESS);
-  ASSERT_EQ(indep_boolean.flag, CE_SUCCESS);
   EXPECT_EQ(MaxDiff(dep_boolean.x, dep.x), 0);
   EXPECT_EQ(MaxDiff(dep_boolean.v, dep.v), 0);
   EXPECT_EQ(MaxDiff(indep_boolean.x, indep.x), 0);
