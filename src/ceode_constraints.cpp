@@ -28,6 +28,7 @@
 #include <new>
 
 #include "ceode_saddle.hpp"
+#include "ceode_testing.h"
 
 namespace ceode {
 

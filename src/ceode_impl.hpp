@@ -122,6 +122,7 @@ struct LsMem {
   bool msbj_set = false;  // CEodeSetJacEvalFrequency called with msbj > 0 (see MatrixUsable)
   bool own_lu = false;    // the Newton matrix is factored with pivots below (LsUseOwnLu)
   std::vector<sunindextype> pivots;
+  sunrealtype** lu_cols = nullptr;  // the factored columns of A
   long int nsetups = 0;
   long int nsolves = 0;
   long int nje = 0;
@@ -129,7 +130,14 @@ struct LsMem {
   long int nme = 0;
 };
 
-// The nonlinear solve of the velocity-dependent step (ceode_nls.cpp).
+// The data of the nonlinear solve's work vectors for its serial backend (ceode_nls_direct.cpp).
+struct NlsRaw {
+  sunindextype n = 0;
+  sunrealtype *apred = nullptr, *atmp = nullptr, *vtmp = nullptr, *V0 = nullptr, *ftmp = nullptr,
+              *lstmp = nullptr, *ewt = nullptr, *ycor = nullptr, *delta = nullptr;
+};
+
+// The nonlinear solve of the velocity-dependent step (ceode_nls.cpp, ceode_nls_direct.cpp).
 struct NlsMem {
   SUNNonlinearSolver NLS = nullptr;
   bool own = false;
@@ -145,6 +153,7 @@ struct NlsMem {
   int cb_flag = 0;            // CE_* flag of a callback failure inside the NLS
   bool direct = false;        // the serial backend (ceode_nls_direct.cpp) runs the iteration
   bool jcur = false;          // its "matrix is current"
+  NlsRaw raw;                 // its arrays
   N_Vector delta = nullptr;   // its correction vector
   long int nni = 0;
   long int nnf = 0;
@@ -416,6 +425,7 @@ int NlsConvTest(CEodeMemRec* ce, int m, sunrealtype delnrm, sunrealtype tol);
 // n small), chosen by NlsInitialize: offset, predictor and weights; one Newton solve from a zero
 // correction; the corrected acceleration.
 bool DirectNewtonApplies(const CEodeMemRec* ce);
+void DirectArrays(CEodeMemRec* ce);  // the arrays, once the work vectors exist
 void DirectPrepare(CEodeMemRec* ce);
 int DirectSolve(CEodeMemRec* ce, bool setup);
 void DirectAccel(CEodeMemRec* ce, N_Vector a);

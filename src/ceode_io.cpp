@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "ceode_impl.hpp"
+#include "ceode_testing.h"
 
 using ceode::Access;
 using ceode::ProcessError;
@@ -142,15 +143,36 @@ int CEodeSetFixedStep(void* mem, sunrealtype h) {
   return CE_SUCCESS;
 }
 
+int CEodeSetVelocityMode(void* mem, CEodeVelocityMode mode) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  const int m = static_cast<int>(mode);
+  if (m != CE_VELOCITY_INDEPENDENT && m != CE_VELOCITY_DEPENDENT && m != CE_VELOCITY_DETECT) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "mode = %d: use CE_VELOCITY_INDEPENDENT, CE_VELOCITY_DEPENDENT or "
+                        "CE_VELOCITY_DETECT.",
+                        m);
+  }
+  // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp).
+  ceode::PcSetVelocityRequest(ce, m);
+  ce->vel_dependent = m == CE_VELOCITY_DEPENDENT;
+  Restart(ce);
+  return CE_SUCCESS;
+}
+
 int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp); any other nonzero value declares it.
-  ceode::PcSetVelocityRequest(ce, depends);
-  ce->vel_dependent = depends != SUNFALSE && depends != CE_VELOCITY_DETECT;
-  Restart(ce);
-  return CE_SUCCESS;
+  if (depends != SUNTRUE && depends != SUNFALSE) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "depends = %d: this setter takes SUNTRUE or SUNFALSE; detection of the "
+                        "dependence is CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT).",
+                        static_cast<int>(depends));
+  }
+  return CEodeSetVelocityMode(mem,
+                              depends == SUNTRUE ? CE_VELOCITY_DEPENDENT : CE_VELOCITY_INDEPENDENT);
 }
 
 int CEodeSetUserData(void* mem, void* user_data) {
@@ -237,9 +259,6 @@ int CEodeGetNumRhsEvals(void* mem, long int* n) {
 }
 int CEodeGetNumStartRhsEvals(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_start);
-}
-int CEodeGetNumGuardRhsEvals(void* mem, long int* n) {
-  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.guard.nfe; });
 }
 int CEodeGetNumNonlinSolvIters(void* mem, long int* n) {
   return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nni(ce); });

@@ -7,6 +7,8 @@
 #ifndef CEODE_SRC_CEODE_KERNELS_HPP_
 #define CEODE_SRC_CEODE_KERNELS_HPP_
 
+#include <nvector/nvector_serial.h>
+
 #include "ceode_impl.hpp"
 
 namespace ceode {
@@ -74,8 +76,12 @@ void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
 
 // ---- Serial backend: raw arrays (ceode_kernels_serial.cpp) ----
 
-// The data of a vector that exposes it (NVECTOR_SERIAL's content without a call).
-sunrealtype* SerialData(N_Vector v);
+// The data of a vector that exposes it (NVECTOR_SERIAL's content without a call). Inline: the
+// serial backends look up several vectors per step, and at n of a few a call each is visible.
+inline sunrealtype* SerialData(N_Vector v) {
+  if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
+  return N_VGetArrayPointer(v);
+}
 // out[0 .. n) = sum_j c[j] x[j][0 .. n), j < m (0 <= m <= kMaxDegree + 3), with the values of
 // Combine on serial vectors (N_VLinearSum's a = +-b shortcuts included). out is not an input.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,

@@ -490,11 +490,6 @@ sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKer
 // serial) without a call: every plan build takes a few hundred of these, and each call runs
 // through the vector's operation table (unoptimised in some SUNDIALS builds). Others through
 // the generic accessor.
-sunrealtype* SerialData(N_Vector v) {
-  if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
-  return N_VGetArrayPointer(v);
-}
-
 namespace {
 
 // 1 + the index in kShapes of the plan's shape (term counts), 0 for none.

@@ -18,29 +18,9 @@ namespace {
 
 constexpr sunindextype kDirectNewtonMaxN = 64;
 
-// The raw arrays of the iteration, looked up once per step (SerialData: without the vector
-// operations' dispatch, a sixth of a Newton step at n of a few).
-struct Raw {
-  sunindextype n;
-  sunrealtype *apred, *atmp, *vtmp, *V0, *ftmp, *lstmp, *ewt, *ycor, *delta;
-};
-
-Raw RawArrays(const CEodeMemRec* ce) {
-  return Raw{ce->n,
-             SerialData(ce->apred),
-             SerialData(ce->atmp),
-             SerialData(ce->vtmp),
-             SerialData(ce->V0),
-             SerialData(ce->ftmp),
-             SerialData(ce->lstmp),
-             SerialData(ce->ewt),
-             SerialData(ce->ycor),
-             SerialData(ce->nls.delta)};
-}
-
 // ewt = 1 / (reltol |apred| + atol), atol from max |apred| (ErrorWeights' N_VMaxNorm, N_VAbs,
 // N_VScale, N_VAddConst, N_VInv, in their order).
-void Weights(const CEodeMemRec* ce, const Raw& r) {
+void Weights(const CEodeMemRec* ce, const NlsRaw& r) {
   sunrealtype amax = 0;
   for (sunindextype i = 0; i < r.n; ++i) amax = std::max(amax, std::fabs(r.apred[i]));
   const sunrealtype atol =
@@ -51,7 +31,7 @@ void Weights(const CEodeMemRec* ce, const Raw& r) {
 }
 
 // F(ycor) = M a - f(t, x, V0 + kappa a), a = apred + ycor (the generic residual's operations).
-int Residual(CEodeMemRec* ce, const Raw& r) {
+int Residual(CEodeMemRec* ce, const NlsRaw& r) {
   const sunrealtype* y = r.ycor;
   const sunrealtype kappa = ce->co.kappa;
   for (sunindextype i = 0; i < r.n; ++i) {
@@ -68,11 +48,11 @@ int Residual(CEodeMemRec* ce, const Raw& r) {
 }
 
 // delta <- (M - kappa J)^{-1} (-delta), ycor += delta, then the test (one Newton iteration).
-int Iterate(CEodeMemRec* ce, const Raw& r, bool own_lu, int m) {
+int Iterate(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, int m) {
   sunrealtype* d = r.delta;
   for (sunindextype i = 0; i < r.n; ++i) d[i] = -d[i];
   if (own_lu) {
-    std::copy(d, d + r.n, r.lstmp);
+    for (sunindextype i = 0; i < r.n; ++i) r.lstmp[i] = d[i];
     LsSolveOwnLu(ce, r.lstmp);
   } else {
     const int rv = NlsLinearSolve(ce->nls.delta, ce);
@@ -89,7 +69,7 @@ int Iterate(CEodeMemRec* ce, const Raw& r, bool own_lu, int m) {
 }
 
 // One SUNNonlinSolSolve: the Newton loop and its one retry with a fresh matrix.
-int Newton(CEodeMemRec* ce, const Raw& r, bool own_lu, bool setup) {
+int Newton(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, bool setup) {
   bool jbad = false;
   bool& jcur = ce->nls.jcur;  // kept between solves, as SUNNonlinSol_Newton keeps its own
   for (;;) {
@@ -130,8 +110,23 @@ bool DirectNewtonApplies(const CEodeMemRec* ce) {
          SUNNonlinSolGetType(ce->nls.NLS) == SUNNONLINEARSOLVER_ROOTFIND;
 }
 
+void DirectArrays(CEodeMemRec* ce) {
+  // The solve's work vectors keep their buffers from one (re)start to the next, so their data
+  // pointers are looked up once, here.
+  ce->nls.raw = NlsRaw{ce->n,
+                       SerialData(ce->apred),
+                       SerialData(ce->atmp),
+                       SerialData(ce->vtmp),
+                       SerialData(ce->V0),
+                       SerialData(ce->ftmp),
+                       SerialData(ce->lstmp),
+                       SerialData(ce->ewt),
+                       SerialData(ce->ycor),
+                       SerialData(ce->nls.delta)};
+}
+
 void DirectPrepare(CEodeMemRec* ce) {
-  const Raw r = RawArrays(ce);
+  const NlsRaw& r = ce->nls.raw;
   const int d = ce->degree;
   CombineSerial(r.n, d - 1, ce->co.V0 + 1, ce->D + 1, r.V0);
   CombineSerial(r.n, d - 2, ce->co.pred, ce->D + 2, r.apred);
@@ -139,13 +134,13 @@ void DirectPrepare(CEodeMemRec* ce) {
 }
 
 int DirectSolve(CEodeMemRec* ce, bool setup) {
-  const Raw r = RawArrays(ce);
+  const NlsRaw& r = ce->nls.raw;
   std::fill(r.ycor, r.ycor + r.n, SUN_RCONST(0.0));
   return Newton(ce, r, ce->ls.own_lu, setup);
 }
 
 void DirectAccel(CEodeMemRec* ce, N_Vector a) {
-  const Raw r = RawArrays(ce);
+  const NlsRaw& r = ce->nls.raw;
   sunrealtype* ad = SerialData(a);
   for (sunindextype i = 0; i < r.n; ++i) ad[i] = r.apred[i] + r.ycor[i];
 }

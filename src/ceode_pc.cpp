@@ -166,8 +166,8 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
                  "t0 = %.17g; kappa*|df/dv w| = %.2g) but CEodeSetVelocityDependence was not "
                  "called: the explicit step feeds f the previous step's velocity, which drops "
                  "every method to first order. Call CEodeSetVelocityDependence(mem, SUNTRUE), "
-                 "or CE_VELOCITY_DETECT to let CEODE switch the implicit step on; SUNFALSE "
-                 "keeps the explicit step and silences this check.",
+                 "or CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT) to let CEODE switch the "
+                 "implicit step on; SUNFALSE keeps the explicit step and silences this check.",
                  static_cast<double>(sig), static_cast<double>(df), static_cast<double>(ce->tcur),
                  static_cast<double>(ce->pc.coupling));
     return CE_SUCCESS;

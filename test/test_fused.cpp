@@ -17,6 +17,7 @@
 
 #include "../src/ceode_kernels.hpp"
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+#include "ceode_testing.h"          // CEodeSetFusedKernel, CEodeSetInPlaceUpdate
 
 namespace {
 
