@@ -174,6 +174,7 @@ struct PcMem {
   sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
   sunrealtype theta = 0;               // last measured contraction of the corrections (0: none)
   bool theta_last = false;             // theta is newer than coupling
+  bool serial = false;                 // the velocity combinations run on the serial backend
   long int nsteps = 0;                 // steps solved by prediction-correction
   long int nfe = 0;                    // f evaluations of the detection and the checks
 };

@@ -86,7 +86,8 @@ inline sunrealtype* SerialData(N_Vector v) {
 // Combine on serial vectors (N_VLinearSum's a = +-b shortcuts included). out is not an input.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
                    sunrealtype* out);
-// The same on the data of the vectors X (SerialData): the local data on NVECTOR_PARALLEL.
+// The same on the data of the vectors X, all NVECTOR_SERIAL or all of another kind exposing
+// their (local) data.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
                    sunrealtype* out);
 // to = from: memcpy on serial vectors, N_VScale(1, ...) on others; the same values either way.

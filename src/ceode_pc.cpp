@@ -200,9 +200,10 @@ int RefreshCoupling(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func
 // out = sum_j c_j X_j: on the serial backend one pass of the library's own kernel (with the
 // reference's values), since at n of a few a generic vector operation in an unoptimised SUNDIALS
 // build costs more than the step's f (bench_implicit_step).
-void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_Vector* X,
-                         N_Vector out) {
-  if (!SerialBackend(ce)) {
+__attribute__((always_inline)) inline void VelocityCombination(const CEodeMemRec* ce, int m,
+                                                               const sunrealtype* c, N_Vector* X,
+                                                               N_Vector out) {
+  if (!ce->pc.serial) {
     N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
     return;
   }
@@ -238,6 +239,8 @@ int ImplicitMode(const CEodeMemRec* ce) {
 }  // namespace
 
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
+  // The velocity combinations' backend, once per start (the step module's rule).
+  ce->pc.serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
   if (HasConstraints(ce)) return CE_SUCCESS;
   int flag = CheckVelocityDependence(ce, func);
   if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
@@ -256,7 +259,7 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
 namespace {
 
 // v = V0 + kappa a into vtmp (one pass, the weights of SolvePC's corrections).
-void CorrectedVelocity(CEodeMemRec* ce, N_Vector a) {
+__attribute__((always_inline)) inline void CorrectedVelocity(CEodeMemRec* ce, N_Vector a) {
   const StepCoeffs& co = ce->co;
   const int d = ce->degree;
   sunrealtype c[kMaxDegree] = {};
