@@ -1,5 +1,5 @@
 // -----------------------------------------------------------------------------
-// fe_damped_scene.h: the Rayleigh-damped FE plate (issue 11, scene 3), shared by
+// fe_damped_scene.h: the Rayleigh-damped FE plate, shared by
 // bench/wp_fe_damped_mass.cpp (C = a M: mass-proportional) and
 // bench/wp_fe_damped_stiff.cpp (C = b K: stiffness-proportional).
 //

@@ -2,11 +2,11 @@
 # Instruction counts of the bench programs under callgrind (not timings): each figure is the
 # difference of two runs of a program's --count mode, so that start-up and set-up cancel.
 #
-#   bench/instructions.sh step BUILD_DIR [METHOD N]...        bench_step: per step of each variant
-#   bench/instructions.sh passes BUILD_DIR METHOD             bench_step: N_Vector data passes per step
-#   bench/instructions.sh high-order BUILD_DIR [METHOD[+comp]]...   wp_high_order: per run and per step
-#   bench/instructions.sh rk8pd BUILD_DIR                     wp_high_order: G8_O8 against GSL rk8pd
-#   bench/instructions.sh fe-plate BUILD_DIR [NY ...]         wp_fe_plate: per step and DOF, and LL misses
+#   bench/step_cost/instructions.sh step BUILD_DIR [METHOD N]...        bench_step: per step of each variant
+#   bench/step_cost/instructions.sh passes BUILD_DIR METHOD             bench_step: N_Vector data passes per step
+#   bench/step_cost/instructions.sh high-order BUILD_DIR [METHOD[+comp]]...   wp_high_order: per run and per step
+#   bench/step_cost/instructions.sh rk8pd BUILD_DIR                     wp_high_order: G8_O8 against GSL rk8pd
+#   bench/step_cost/instructions.sh fe-plate BUILD_DIR [NY ...]         wp_fe_plate: per step and DOF, and LL misses
 #
 # Needs valgrind. The simulated last-level-cache misses (fe-plate) follow the cache valgrind reads
 # from cpuid; read them only where that size is real (or pass --LL= by hand).

@@ -16,22 +16,12 @@
 //   E = 1/2 I1 (theta'^2 + psi'^2 sin^2 theta) + 1/2 I3 w3^2 + m g l cos(theta)
 // is conserved; error = max |E - E0| over every step.
 //
-// Methods:
-//  * CEODE G5_TOP, implicit path (CEodeSetVelocityDependence(SUNTRUE), Newton
-//    with SUNLinSol_Dense, analytic dg/dq'), h = 1e-2 ... 1e-5, both with the
-//    paper's zero start (CEodeSetZeroStart: reproduces its Table 7) and with the
-//    default consistent start;
-//  * CEODE's other implicit-step choices (consistent start): G5_TOP-auto, G6_O6-auto
-//    and G8_O8-auto (the library's default CE_IMPLICIT_AUTO), G5_TOP-J1-nls8 (Newton, df/dv
-//    every step, Newton tolerance 1e-8);
-//  * ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8);
-//  * ARKODE ERKStep adaptive (default order 4), CVODE Adams (fixed point) and
-//    CVODE BDF (Newton, dense), rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol (angles
-//    ~ 1, rates ~ 10);
-//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
-//    and Boost): odeint runge_kutta4 at the same h, odeint rkf78, dopri5,
-//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances and
-//    atol (velocity_verlet and the symplectic RKN do not apply: f depends on q').
+// Methods: CEODE G5_TOP on the implicit path (Newton, dense, analytic df/dq'), h = 1e-2 ...
+// 1e-5, with the paper's zero start (its Table 7) and the consistent start; G5_TOP, G6_O6 and
+// G8_O8 with CE_IMPLICIT_AUTO; G5_TOP Newton with df/dv every step at a Newton tolerance of
+// 1e-8. ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8); ERKStep adaptive,
+// CVODE Adams and BDF at rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol; the peers (not the
+// symplectic ones: f depends on q').
 //
 // Usage: wp_spinning_top [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, the zero-start G5_TOP errors at
@@ -43,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "top_model.h"
 #include "wp_common.h"
 #ifdef CEODE_BENCH_PEERS
 #include "peers.h"
@@ -50,29 +41,9 @@
 
 namespace {
 
-struct Top {
-  double I1 = 5e-5, I3 = 2e-4, m = 0.02, l = 0.05, g = 9.81;
-  double e0 = 0;  // energy at t = 0
-};
-
-double Energy(const Top& p, const double* q, const double* w) {
-  const double s = std::sin(q[1]), c = std::cos(q[1]);
-  const double w3 = w[2] + w[0] * c;
-  return 0.5 * p.I1 * (w[1] * w[1] + w[0] * w[0] * s * s) + 0.5 * p.I3 * w3 * w3 +
-         p.m * p.g * p.l * c;
-}
-
-// Accelerations (psi'', theta'', phi'') from angles q and rates w.
-int Accel(double, const double* q, const double* w, double* a, void* user) {
-  const Top& p = *static_cast<Top*>(user);
-  const double s = std::sin(q[1]), c = std::cos(q[1]);
-  const double w3 = w[2] + w[0] * c;
-  const double psi_dd = w[1] * (p.I3 * w3 - 2 * p.I1 * w[0] * c) / (p.I1 * s);
-  a[1] = w[0] * w[0] * s * c - (p.I3 / p.I1) * w3 * w[0] * s + (p.m * p.g * p.l / p.I1) * s;
-  a[0] = psi_dd;
-  a[2] = -psi_dd * c + w[0] * w[1] * s;
-  return 0;
-}
+using top::Accel;
+using top::Energy;
+using top::Top;
 
 // d(accel)/d(rates): the Newton matrix of a step is I - kappa J.
 int VelJac(sunrealtype, N_Vector x, N_Vector v, N_Vector, SUNMatrix J, void* user, N_Vector,

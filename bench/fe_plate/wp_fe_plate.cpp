@@ -1,44 +1,17 @@
 // -----------------------------------------------------------------------------
-// wp_fe_plate: the structural engineer's scene (issue 11). A linear elastic
-// cantilever plate of bilinear Q4 elements in plane stress (bench/fe_plate_model.h:
-// K assembled once in CSR, row-sum lumped M, f = -M^{-1} K x in one pass over K).
-//
-// Part 1, the stable step. On a small mesh the exact omega_max (Eigen, dense,
-// on M^{-1/2} K M^{-1/2}) against the guard's Lanczos estimate
-// (CEodeGetStableStep), the Gershgorin bound (CEodeGetFrequencyBound) and the
-// element-by-element bound of explicit FE codes (largest frequency of one
-// element with its lumped mass). Criterion: estimate within 2 % of the exact
-// limit, both bounds never below omega_max. On the work-precision mesh the same
-// three without the dense solve.
-//
-// Part 2, work-precision at equal error. Reference solution: the plate starts on
-// its two lowest modes, x0 = phi_1 + 0.3 phi_2, v0 = 0, so x(t) = phi_1
-// cos(w_1 t) + 0.3 phi_2 cos(w_2 t) exactly (the modes by subspace iteration with
-// a sparse LDL^T of K, residual checked); one period of mode 1, error = max over
-// 20 output instants of ||x - x_exact||_2 / ||x0||_2 (relative position error).
-// Every solver integrates to those instants in its normal mode (no per-step
-// output). Against:
-//  * CEODE-hand: a hand-written central-differences (leapfrog) loop calling the
-//    same f, the practical limit (solver "CEODE-hand", as scripts/ratios.py reads);
-//  * CEODE G3_CD, G4_A34 and G5_O4 (order 4, 98.5 % of G3_CD's stable step) at fractions
-//    of the guard's stable step, and G5 (weakly unstable) as an untimed probe;
-//  * ARKODE ERKStep adaptive, orders 3, 4, 5; CVODE Adams (fixed point); CVODE
-//    BDF with SPGMR (no preconditioner) and with KLU (sparse Jacobian);
-//    ARKODE ARKStep DIRK with SPGMR (linear implicit part declared).
-// The judged ratios (issue 11) are printed at 1e-4 and 1e-6: CEODE over the best
-// SUNDIALS curve, CEODE over the hand loop.
-//
-// Part 3, scaling: time per step and DOF of the hand loop and CEODE G3_CD,
-// G4_A34, G5_O4 from N = 10^4 to 10^6 (quick: 10^4, 3 10^4), the log-log slope of
-// time per step against N, written to <csv>_scaling.csv beside the main CSV.
-//
-// Runners (CEODE, SUNDIALS) and the equal-error table: bench/fe_scene.h, shared with the plate
-// variants. Timing, rows, CSV: bench/wp_common.h (one clock, one median rule).
+// wp_fe_plate: the linear Q4 cantilever plate (README.md of this family).
+// Part 1, the stable step: the exact omega_max (Eigen, dense, on M^{-1/2} K M^{-1/2}) against the
+// guard's Lanczos estimate, the Gershgorin bound and the element-by-element bound of explicit FE
+// codes; the estimate within 2 % of the exact limit, both bounds never below omega_max.
+// Part 2, work-precision at equal error against the exact two-mode solution: the hand loop,
+// CEODE G3_CD, G4_A34, G5_O4 at fractions of the stable step (G5, weakly unstable, as an untimed
+// probe), ARKODE ERK 3/4/5, CVODE Adams, CVODE BDF + SPGMR / + KLU, ARKStep DIRK + SPGMR.
+// Part 3, scaling: time per step and DOF of the hand loop and CEODE from 10^4 to 10^6 DOF and the
+// log-log slope, written to <csv>_scaling.csv.
 // Usage: wp_fe_plate [--csv FILE] [--quick]
 //        wp_fe_plate --count SOLVER NY STEPS (one untimed run, for callgrind: see CountMain)
-// Exit code 0 when the modes converged, the stable-step criteria hold, the hand
-// loop reproduces CEODE G3_CD, G3_CD converges at order 2, and every run
-// succeeded. Never on a timing.
+// Exit code 0 when the modes converged, the stable-step criteria hold, the hand loop reproduces
+// CEODE G3_CD, G3_CD converges at order 2, and every run succeeded. Never on a timing.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode_stability.h>
 

@@ -13,15 +13,9 @@
 //    (explicit path: f does not depend on theta');
 //  * the same G5 and G3_CD steps as a hand-written loop on raw doubles: the
 //    floor for per-step overhead (its errors must equal CEODE's);
-//  * ARKODE ERKStep with Kutta's RK3 (the paper's comparison) at the same h on
-//    the first-order system (theta, theta');
-//  * ARKODE ERKStep adaptive (default order 4) and CVODE Adams (fixed-point
-//    iteration), rtol = 1e-3 ... 1e-12, atol = rtol, energy error at every
-//    internal step (one-step mode);
-//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
-//    and Boost): odeint runge_kutta4, velocity_verlet and
-//    symplectic_rkn_sb3a_mclachlan at the same h, odeint rkf78, dopri5,
-//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances.
+//  * ARKODE ERKStep with Kutta's RK3 (the paper's comparison) at the same h; ERKStep adaptive
+//    and CVODE Adams at rtol = atol = 1e-3 ... 1e-12; the peers (bench/peers.h), the
+//    symplectic ones too (f depends on theta only).
 //
 // Usage: wp_pendulum_ode [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, ARKODE's RK3 is Kutta's method (checked

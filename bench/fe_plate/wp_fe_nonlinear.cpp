@@ -1,37 +1,16 @@
 // -----------------------------------------------------------------------------
-// wp_fe_nonlinear: the FE plate with a nonlinear force (issue 11, scene 2).
-//
-// The Q4 cantilever of bench/fe_plate_model.h (linear K, lumped M) carries a
-// large-deflection truss on the same mesh: one axial spring along every horizontal
-// and vertical element edge, force k_t (l - L) along the current edge direction
-// (l = |X_B - X_A + u_B - u_A|, exact geometry, no small-rotation approximation).
-// The truss's linear stiffness is assembled into K (same CSR pattern), so
-// f(x) = -M^{-1} (K x + N(x)) with N(x) = F_truss(x) - K_t x = O(|x|^2) the purely
-// nonlinear remainder (stress stiffening, rotating spring directions); f does not
-// depend on x'. Start x0 = 0, v0 = A (w_1 phi_1 + 0.3 w_2 phi_2), phi_j the two lowest
-// modes of the linearised K (tip deflection A = 0.15 on a 4 x 1 plate): at small A that
-// is the two-mode motion A (phi_1 sin w_1 t + 0.3 phi_2 sin w_2 t), at A the nonlinear
-// force rises from zero and feeds the other modes smoothly. One period of mode 1, 20
-// output instants; errors relative to ||A (phi_1 + 0.3 phi_2)||_2.
-//
-// Reference: CEODE G7_O7 (order 7) at 0.1 of its stable step, checked by its own
-// convergence: the runs at 0.4, 0.2 and 0.1 give the differences d(0.4, 0.2) and
-// d(0.2, 0.1), the observed order p = log2 of their ratio, and the reference error
-// estimate d(0.2, 0.1) / (2^p - 1) (d(0.2, 0.1) itself when p < 1): it must be at
-// most 1e-8, 1 % of the finest level judged. Nonlinearity check: the same reference
-// at amplitude A 1e-3, scaled back, differs from the A run by more than 1e-3 (f is
-// not linear at the error levels compared).
-//
-// Curves (error = max over the outputs of ||x - x_ref||_2 / ||x0||_2):
-//  * CEODE-hand: the leapfrog loop a user writes, same f (must equal CEODE G3_CD);
-//  * CEODE G3_CD, G4_A34, G5_O4, G7_O7 at fractions of each set's stable step (guard at x0);
-//  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
-//    ARKStep IMEX + SPGMR (x' = v, v' = -M^{-1} K x implicit and linear, the nonlinear
-//    remainder -M^{-1} N(x) explicit); ARKStep DIRK + SPGMR (all implicit).
-// Usage: wp_fe_nonlinear [--csv FILE] [--quick]
-// Exit code 0 when the modes and the reference converged, f is nonlinear, the hand
-// loop equals CEODE G3_CD, G3_CD converges at order 2, and every run succeeded.
-// Never on a timing.
+// wp_fe_nonlinear: the Q4 cantilever with a large-deflection truss (README.md of this family).
+// One axial spring along every element edge, force k_t (l - L) along the current edge direction;
+// its linear stiffness is assembled into K, so f(x) = -M^{-1} (K x + N(x)) with N(x) = O(|x|^2).
+// Start x0 = 0, v0 = A (w_1 phi_1 + 0.3 w_2 phi_2) (tip deflection A = 0.15); one period of
+// mode 1, 20 outputs, errors relative to ||A (phi_1 + 0.3 phi_2)||_2.
+// Reference: CEODE G7_O7 at 0.1 of its stable step, checked by its own convergence (runs at 0.4,
+// 0.2, 0.1: observed order p and the error estimate d(0.2, 0.1) / (2^p - 1) <= 1e-8); the same
+// run at amplitude 1e-3 A, scaled back, must differ by more than 1e-3 (f is nonlinear there).
+// Curves: the hand loop (equal to CEODE G3_CD), CEODE G3_CD, G4_A34, G5_O4, G7_O7; ARKODE ERK
+// 3/4/5, CVODE Adams, CVODE BDF + SPGMR, ARKStep IMEX (K x implicit) and DIRK + SPGMR.
+// Usage: wp_fe_nonlinear [--csv FILE] [--quick]. Exit code 0 when the modes and the reference
+// converged, f is nonlinear, the hand loop equals G3_CD, G3_CD has order 2, every run succeeded.
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>

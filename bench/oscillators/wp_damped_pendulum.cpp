@@ -1,36 +1,16 @@
 // -----------------------------------------------------------------------------
-// wp_damped_pendulum: work-precision scene for the damped driven pendulum, the
-// 1-DOF velocity-dependent (implicit) case, every solver timed side by side in
-// one run (bench/wp_common.h; peers from bench/peers.h).
-//
-// Problem: theta'' = -(g/L) cos(theta) - 0.5 theta' + sin(2t), g/L = 9.81,
-// theta(0) = theta'(0) = 0, t in [0, 10]. Error = |theta(10) - ref| (global
-// error at the end; the error functions return 0 before t = 10).
-// Reference: classical RK4 in long double, Richardson-extrapolated, twice:
-// R1 from 1e5 and 2e5 steps, R2 from 2e5 and 4e5 steps; ref = R2, and the
-// scene checks |R1 - R2| < 1e-14 (the reference's own convergence) and, when
-// GSL is built in, |rk8pd at tol 1e-14 - ref| < 1e-11 (an independent method).
-//
-// Methods:
-//  * CEODE G3_CD, G4_A34, G5, G5_TOP, G5_ONES, G6_O5, G6_O6, G7_O7, G8_O8 at
-//    fixed h = 10/N, velocity dependence declared (CEodeSetVelocityDependence),
-//    Newton (the default) with SUNLinSol_Dense and the analytic df/dtheta' =
-//    -0.5, consistent start, stability guard off; a set's sweep stops at the
-//    first h whose error is below 3e-14 (smaller h only measure round-off);
-//  * ARKODE ERKStep with Kutta's RK3 at the same h; ARKODE ERKStep adaptive,
-//    CVODE Adams (fixed point) and CVODE BDF (Newton, dense), rtol = 1e-3 ...
-//    1e-13, atol = rtol;
-//  * the peers (bench/peers.h): odeint runge_kutta4 at the same h; odeint
-//    rkf78, dopri5, bulirsch_stoer and GSL rk8pd, rkf45, msadams over the same
-//    tolerances (velocity_verlet and the symplectic RKN do not apply: f depends
-//    on theta').
-//
-// Usage: wp_damped_pendulum [--csv FILE] [--quick]
-// Prints the table, the time at equal error (best CEODE, best SUNDIALS, best
-// peer) and CEODE's best time over odeint RK4's at 1e-6 and 1e-9 (issue 10's
-// target, measured, not a check). Exit code 0 when every run succeeded, the
-// reference checks passed and every peer's curve converges at its order
-// (peers::CheckPeerOrders).
+// wp_damped_pendulum: the damped driven pendulum, the 1-DOF velocity-dependent (implicit) case.
+// theta'' = -9.81 cos(theta) - 0.5 theta' + sin(2t), theta(0) = theta'(0) = 0, t in [0, 10];
+// error = |theta(10) - ref|. Reference: classical RK4 in long double, Richardson-extrapolated
+// from 1e5/2e5 and from 2e5/4e5 steps (they must agree to 1e-14), and GSL rk8pd at tol 1e-14
+// (within 1e-11).
+// Methods: CEODE's sets at h = 10/N, velocity dependence declared, Newton (dense, analytic
+// df/dtheta') and AUTO; a set's sweep stops below an error of 3e-14. ARKODE ERKStep with Kutta's
+// RK3 at the same h; ERKStep adaptive, CVODE Adams and BDF at rtol = atol = 1e-3 ... 1e-13; the
+// peers (not the symplectic ones: f depends on theta').
+// Usage: wp_damped_pendulum [--csv FILE] [--quick]. Prints CEODE's best time over odeint RK4's at
+// 1e-6 and 1e-9 (not a check). Exit code 0 when every run succeeded, the reference checks
+// passed and every peer converges at its order (peers::CheckPeerOrders).
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>
@@ -119,7 +99,7 @@ bool CrossCheck(const wp::Problem& p) {
   return ok;
 }
 
-// CEODE's best curve over odeint RK4's at one error level (issue 10's target).
+// CEODE's best curve over odeint RK4's at one error level (the target).
 void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& sets, double e) {
   double tc = -1;
   std::string best = "not reached";
