@@ -1,32 +1,15 @@
 // -----------------------------------------------------------------------------
-// wp_chain_dae: work-precision of the planar chain of N = 8 pendulums (the
-// model of chain_model.h, n = 16, nc = 8), t in [0, 2] s: the chain falls,
-// swings through the bottom and whips; its fastest transverse mode, about
-// 2 N sqrt(g/L) ~ 50 rad/s at rest, stiffens with the link tension. CEODE side
-// by side with ARKODE and IDA on the harness of wp_common.h (docs/theory.md
-// section 8; the chain is the N-body version of wp_pendulum_dae).
-//
-// Solvers:
-//  - CEODE, index 3, no index reduction, fixed h = 6e-3 ... 2e-5 s (1e-5 with
-//    --full): G3_CD, G4_A34 and G5_ONES with the consistent start, the 24 x 24
-//    CSR saddle-point matrix [[I, G^T], [G, 0]] factored by KLU; G5_ONES also
-//    with SUNLinSol_Dense. (G5_ONES at h = 1e-2 stops with CE_CONV_FAILURE near
-//    t = 1.98 s, so the steps start at 6e-3.)
-//  - ARKODE ERKStep, Kutta's RK3 (wp::KuttaRk3), same steps, on the index-1
-//    form: G a = -(dG/dt) v with ((dG/dt) v)_i = 2 |v_i - v_{i-1}|^2, the saddle
-//    system solved at every stage by KLU (once more with SUNLinSol_Dense);
-//    "RK3+proj" moves the positions to the nearest point of Phi = 0 after every
-//    step (minimum-norm Newton through the same saddle matrix, to round-off).
-//  - ARKODE ERKStep adaptive (default 4th-order table), the same index-1
-//    right-hand side, rtol = atol = 1e-4 ... 1e-12 (1e-13 with --full).
-//  - IDA (BDF, rtol = atol = 1e-4 ... 1e-10) on the stabilised index-2 GGL form
-//    q' = v + G^T mu, v' + G^T lambda = f, Phi(q) = 0, G(q) v = 0 (48 unknowns;
-//    lambda, mu algebraic), analytic dense iteration matrix, first step 1e-5 s.
-//    At 1e-11 IDA fails in its first steps, so its curve stops at 1e-10.
-//
-// Checks (exit code): every run succeeds; every CEODE and RK3+proj run has
-// drift <= 1e-10 l^2; every fixed-step RK3 run took 3 f evaluations per step
-// (plus ARKODE's initial one). --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6.
+// wp_chain_dae: the planar chain of N = 8 pendulums (chain_model.h, n = 16, nc = 8), t in
+// [0, 2] s: it falls, swings through the bottom and whips; its fastest transverse mode stiffens
+// with the link tension. The N-body version of wp_pendulum_dae.
+// Solvers: CEODE G3_CD, G4_A34, G5_ONES (index 3, consistent start) at h = 6e-3 ... 2e-5 (1e-5
+// with --full; G5_ONES stops with CE_CONV_FAILURE at 1e-2), the CSR saddle matrix factored by
+// KLU, G5_ONES also dense; ARKODE RK3 on the index-1 form (the saddle system solved at every
+// stage by KLU or dense), with and without a projection after every step; ERKStep adaptive,
+// rtol = atol = 1e-4 ... 1e-12; IDA on the GGL form (48 unknowns), 1e-4 ... 1e-10 (at 1e-11 it
+// fails in its first steps).
+// Checks (exit code): every run succeeds; every CEODE and RK3+proj run has drift <= 1e-10 l^2;
+// every fixed-step RK3 run takes 3 f per step. --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6.
 // -----------------------------------------------------------------------------
 #include "chain_model.h"
 

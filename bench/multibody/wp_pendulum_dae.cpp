@@ -1,43 +1,18 @@
 // -----------------------------------------------------------------------------
-// wp_pendulum_dae: work-precision of the pendulum as an index-3 multibody DAE
-// (docs/theory.md sections 8 and 11): CEODE side by side with ARKODE (RK3 on
-// the index-1 form, with and without projection) and IDA (GGL), timed in one
-// run on the harness of wp_common.h.
-//
-// Problem: the IFToMM simple pendulum (m = 1 kg point mass, massless rod
-// L = 1 m, g = 9.81) in the coordinates of its centre of mass q = (x, y, theta):
+// wp_pendulum_dae: the IFToMM pendulum as an index-3 multibody DAE (docs/theory.md sections 8
+// and 11) in the coordinates of its centre of mass q = (x, y, theta):
 //     M q'' + G(q)^T lambda = f,   M = diag(m, m, I_zz = 0),  f = (0, -m g, 0),
 //     Phi(q) = (x - L sin theta, y + L cos theta) = 0,  G = dPhi/dq,
-// released at rest from theta = 90 deg (x = L, y = 0), t in [0, 10] s. M is
-// singular; only the saddle-point matrix [[M, G^T], [G, 0]] is regular.
-//     error = max |E - E0|,  E = 1/2 m (x'^2 + y'^2) + 1/2 I_zz theta'^2 + m g y,
-//     drift = max |x^2 + y^2 - L^2|    (the paper's "assembly error"),
-// taken after every step, where the solver has q and q' at the same instant.
-//
-// Solvers:
-//  - CEODE, index 3, no index reduction: G5_ONES (paper's zero start, the
-//    configuration of its Table 11, and the consistent start), G4_A34, G3_CD;
-//    fixed h = 1e-2 ... 1e-4 (1e-5 with --full); a constant mass function and
-//    the 5 x 5 saddle matrix factored by SUNLinSol_Dense (attached explicitly;
-//    with constraints and no solver CEODE would build the same one itself).
-//  - ARKODE ERKStep, Kutta's RK3 (wp::KuttaRk3), same steps, on the index-1
-//    form (constraints differentiated twice, the 5 x 5 saddle system solved by
-//    Gaussian elimination at every stage): "RK3" unstabilised, "RK3+proj" with
-//    the positions moved to the nearest point of Phi = 0 after every step
-//    (minimum-norm Newton, ERKStepSetPostprocessStepFn; the paper's Tables 9
-//    and 10). Both take 3 f evaluations per step plus ARKODE's initial one.
-//  - IDA (BDF, rtol = atol = 1e-4 ... 1e-10, 1e-11 with --full) on the
-//    stabilised index-2 GGL form q' = v + G^T mu, M v' + G^T lambda = f,
-//    Phi(q) = 0, G(q) v = 0, with lambda, mu and theta' algebraic (IDASetId +
-//    IDASetSuppressAlg), analytic iteration matrix, first step 1e-5 s (IDA's own
-//    estimate ~ tol/|y'| is so small that the index-2 Newton iteration, which
-//    amplifies round-off by 1/h, does not converge).
-//
-// Checks (exit code): RK3 reproduces the paper's Table 9 error and drift,
-// RK3+proj Table 10's error, CEODE G5_ONES (zero start) Table 11's error, all
-// within 10 % at h = 1e-2 and 1e-3; G5_ONES (zero start) reaches <= 2e-12 at
-// 1e-4 and has drift <= 1e-14 at every step size. --quick (the ctest test):
-// every check, with ARKODE's RK3 only at 1e-2 and 1e-3 and IDA only to 1e-6.
+// released at rest from theta = 90 deg, t in [0, 10] s; M is singular, only the saddle-point
+// matrix [[M, G^T], [G, 0]] is regular. error = max |E - E0|, drift = max |x^2 + y^2 - L^2|.
+// Solvers: CEODE G5_ONES (zero and consistent start), G4_A34, G3_CD at h = 1e-2 ... 1e-4 (1e-5
+// with --full), dense saddle matrix; ARKODE RK3 on the index-1 form, with and without a
+// projection onto Phi = 0 after every step (the paper's Tables 9 and 10); IDA on the GGL form
+// (lambda, mu and theta' algebraic, analytic iteration matrix, first step 1e-5 s: IDA's own
+// estimate is too small for the index-2 Newton iteration), rtol = atol = 1e-4 ... 1e-10.
+// Checks (exit code): RK3, RK3+proj and G5_ONES (zero start) reproduce the paper's Tables 9-11
+// within 10 % at h = 1e-2 and 1e-3; G5_ONES reaches <= 2e-12 at 1e-4 with drift <= 1e-14.
+// --quick: ARKODE only at 1e-2 and 1e-3, IDA only to 1e-6.
 // -----------------------------------------------------------------------------
 #include <array>
 #include <cmath>

@@ -1,26 +1,12 @@
 // -----------------------------------------------------------------------------
-// wp_forced_vibration: work-precision scene for a stability-limited problem,
-// the one-DOF forced vibration of docs/theory.md section 11 with a slow forcing.
-//
-// Problem: x'' + w^2 x = sin(wb t), w = 1, wb = 0.01 (w / wb = 100), t in
-// [0, 1000] s, x(0) = 0, x'(0) = wb / (w^2 - wb^2).
-// Reference solution: that start puts the system exactly on the particular
-// solution x(t) = sin(wb t) / (w^2 - wb^2) (no free vibration), so error =
-// max |x - x_exact| over every step is exact. The answer is slow (period 628 s)
-// but the free frequency w = 1 bounds every explicit step: h w <= Omega_max.
-//
-// Methods:
-//  * CEODE G3_CD, G3_A43, G3_A2, G4_A14, G4_A34, G5 at fixed h = f * Omega_max / w
-//    for f = 0.95, 0.5, 0.2, ... (Omega_max from CEodeStabilityLimit, the
-//    library's own analysis), and once at f = 1.05 to show the limit is real;
-//    a set the analysis finds unstable for every h (G5) runs at h = 0.5 ... 0.005;
-//  * ARKODE ERKStep adaptive (default order 4), CVODE Adams (fixed point),
-//    CVODE BDF (Newton, dense) and ARKODE ARKStep DIRK (Newton, dense), rtol =
-//    1e-3 ... 1e-12, atol = rtol (|x| <= 1).
-//
-// Usage: wp_forced_vibration [--csv FILE] [--quick]
-// Exit code 0 when every run inside the stability limits succeeded and every
-// CEODE set went unstable (or lost all accuracy) just beyond its limit.
+// wp_forced_vibration: a stability-limited problem, x'' + x = sin(0.01 t) on [0, 1000] s, started
+// on the particular solution x = sin(wb t) / (w^2 - wb^2) (exact error after every step): the
+// answer is slow, but the free frequency w = 1 bounds every explicit step, h w <= Omega_max.
+// CEODE G3_CD, G3_A43, G3_A2, G4_A14, G4_A34, G5 at h = f Omega_max / w (the library's own
+// CEodeStabilityLimit; G5, unstable for every h, at h = 0.5 ... 0.005), and at f = 1.05 to show
+// the limit is real; ERKStep adaptive, CVODE Adams and BDF, ARKStep DIRK at rtol = atol.
+// Usage: wp_forced_vibration [--csv FILE] [--quick]. Exit code 0 when every run inside the limits
+// succeeded and every set went unstable (or lost all accuracy) just beyond its limit.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode_stability.h>
 
