@@ -1,6 +1,6 @@
 // -----------------------------------------------------------------------------
 // peers.h: the integrators users pick outside SUNDIALS, as curves of the
-// work-precision scenes (bench/wp_*.cpp), driven and timed like every other
+// work-precision scenes (bench/*/wp_*.cpp), driven and timed like every other
 // curve (wp_common.h: one clock, one median rule, one equal-error routine).
 //
 //  * Boost.Odeint (header-only, Debian libboost-dev): runge_kutta4 (fixed h),

@@ -1,5 +1,5 @@
 // -----------------------------------------------------------------------------
-// wp_common.h: the harness of the work-precision scenes (bench/wp_*.cpp).
+// wp_common.h: the harness of the work-precision scenes (bench/*/wp_*.cpp).
 //
 //  * One problem description (Problem): a second-order problem x'' = a(t, x, x') written once,
 //    with its start, error and drift functions; Lift<A>() derives CEODE's right-hand side and the
@@ -928,16 +928,7 @@ inline int IdaRun(SUNContext ctx, const Problem& p, double tol, Outcome* out) {
 // The row of one configuration: its numbers from an Outcome, its time per run.
 inline Row OutcomeRow(const std::string& solver, const std::string& config, double h_or_tol,
                       const Outcome& o, double seconds) {
-  Row r;
-  r.solver = solver;
-  r.config = config;
-  r.h_or_tol = h_or_tol;
-  r.error = o.error;
-  r.drift = o.drift;
-  r.steps = o.steps;
-  r.rhs_evals = o.rhs_evals;
-  r.seconds = seconds;
-  return r;
+  return Row{solver, config, h_or_tol, o.error, o.drift, o.steps, o.rhs_evals, seconds};
 }
 
 // Runs once for the numbers, then times the same call; adds a row or a failure.

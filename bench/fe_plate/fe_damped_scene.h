@@ -1,7 +1,7 @@
 // -----------------------------------------------------------------------------
 // fe_damped_scene.h: the Rayleigh-damped FE plate, shared by
-// bench/wp_fe_damped_mass.cpp (C = a M: mass-proportional) and
-// bench/wp_fe_damped_stiff.cpp (C = b K: stiffness-proportional).
+// wp_fe_damped_mass.cpp (C = a M: mass-proportional) and wp_fe_damped_stiff.cpp (C = b K:
+// stiffness-proportional).
 //
 // The Q4 cantilever of bench/fe_plate_model.h, f = -M^{-1} (K x + C v), C = a M + b K,
 // lumped M. Start x0 = phi_1 + 0.3 phi_2, v0 = 0; Rayleigh damping keeps the modes

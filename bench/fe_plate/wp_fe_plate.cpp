@@ -400,7 +400,7 @@ int ScalingPart(SUNContext ctx, const wp::Args& args, double h_cd, double dx_ref
 // ------------------------------------------------------- instruction counts
 // wp_fe_plate --count SOLVER NY STEPS: SOLVER (hand, G3_CD, G4_A34 or G5_O4) integrates the scaling
 // scene on the 4 NY x NY mesh for STEPS steps, untimed, and prints its step count. Under callgrind
-// (bench/fe_plate_instructions.sh) two step counts give instructions and simulated cache misses per
+// (bench/step_cost/instructions.sh fe-plate) two step counts give instructions and simulated cache misses per
 // step, counts that do not move with the machine's load. The step is 0.9 x 2 / (largest element
 // frequency), inside G3_CD's limit since that bound is above omega_max (part 1).
 int CountMain(int argc, char** argv) {
