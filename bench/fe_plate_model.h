@@ -1,6 +1,6 @@
 // -----------------------------------------------------------------------------
 // fe_plate_model.h: a 2-D linear elastic finite-element cantilever for the
-// structural scenes (bench/wp_fe_plate.cpp, test/test_frequency_bound.cpp).
+// structural scenes (bench/fe_plate/, bench/mpi/, test/test_frequency_bound.cpp).
 //
 // A plate Lx x Ly of thickness t in plane stress (E, nu, rho), meshed by nx x ny
 // equal bilinear (Q4) elements, clamped along x = 0. The element stiffness is

@@ -1,4 +1,4 @@
-// The Q4 cantilever plate of bench/fe_plate_model.h (issue 11's linear FE scene) partitioned over
+// The Q4 cantilever plate of bench/fe_plate_model.h (the linear FE scene) partitioned over
 // MPI ranks (docs/mpi.md), with the interface of bench/mpi_membrane_model.h so that
 // bench/mpi_membrane.cpp drives either (built as mpi_fe_plate with CEODE_MPI_FE_PLATE).
 //

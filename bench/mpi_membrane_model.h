@@ -1,4 +1,4 @@
-// The membrane of issue 11 partitioned over MPI ranks (docs/mpi.md): a 5-point Laplacian on an
+// The membrane partitioned over MPI ranks (docs/mpi.md): a 5-point Laplacian on an
 // nx x ny grid (spacing 1/(nx+1) in both directions, fixed edges, lumped unit masses), the grid
 // rows split into contiguous strips, one strip per rank, each strip one NVECTOR_PARALLEL local
 // block (row-major). f exchanges one halo row with each neighbour strip (non-blocking, overlapped

@@ -1,6 +1,6 @@
 // -----------------------------------------------------------------------------
 // peers.h: the integrators users pick outside SUNDIALS, as curves of the
-// work-precision scenes (bench/wp_*.cpp), driven and timed like every other
+// work-precision scenes (bench/*/wp_*.cpp), driven and timed like every other
 // curve (wp_common.h: one clock, one median rule, one equal-error routine).
 //
 //  * Boost.Odeint (header-only, Debian libboost-dev): runge_kutta4 (fixed h),
@@ -10,10 +10,10 @@
 //  * GSL (Debian libgsl-dev, gsl_odeiv2): rk8pd, rkf45, msadams, through one
 //    gsl_odeiv2_driver (the standard y-control: eps_abs + eps_rel |y|).
 //
-// Every peer works from one second-order description x'' = acc(t, x, x')
-// (Problem): the first-order peers integrate y = (x, x'). Each run is the whole
-// user-visible job (allocate, integrate step by step, the scene's error
-// function after every step, free), as CeodeOnce / SundialsOnce. Odeint's state
+// Every peer works from the scene's one problem description (wp::Problem: its acceleration
+// a(t, x, x'), start, error function, separable, h0); the first-order peers integrate
+// y = (x, x'). Each run is the whole user-visible job (allocate, integrate step by step, the
+// scene's error function after every step, free), as wp::CeodeRun. Odeint's state
 // is a std::array whose size is fixed at compile time (template argument N,
 // the number of degrees of freedom), the fastest state type odeint offers for
 // small systems. Adaptive peers use eps_rel = tol, eps_abs = atol_factor * tol.
@@ -53,20 +53,7 @@
 
 namespace peers {
 
-// x'' = acc(t, x, v): writes the n accelerations to a.
-using AccFn = void (*)(double t, const double* x, const double* v, double* a, void* user);
-
-struct Problem {
-  int n = 0;  // degrees of freedom (must equal the template argument N)
-  AccFn acc = nullptr;
-  void* user = nullptr;
-  double t0 = 0, tend = 0;
-  std::vector<double> x0, v0;
-  wp::ErrFn2 err = nullptr;  // called after every step, as for CEODE
-  bool separable = false;    // acc depends on x only (not t, not v; v is passed as
-                             // nullptr): the symplectic peers apply
-  double h0 = 1e-3;          // first trial step of the adaptive peers
-};
+using wp::Problem;
 
 enum class Kind {
   kRk4,

@@ -1,25 +1,25 @@
 // -----------------------------------------------------------------------------
-// wp_common.h: shared pieces of the work-precision scenes (bench/wp_*.cpp).
+// wp_common.h: the harness of the work-precision scenes (bench/*/wp_*.cpp).
 //
-//  * Timing: every configuration is run back to back until one repetition has
-//    lasted >= 50 ms, and the per-run time is the median of 5 repetitions (3 for
-//    runs of >= 0.5 s, one run of >= 2 s is its own measurement). The FE scenes
-//    (issue 11) time the same repetitions in interleaved rounds (Rounds).
-//    Each timed run is the whole user-visible cost: create, init, integrate in
-//    one-step mode with the error measured after every step, free. The clock
-//    is the process CPU time (see Now).
+//  * One problem description (Problem): a second-order problem x'' = a(t, x, x') written once,
+//    with its start, error and drift functions; Lift<A>() derives CEODE's right-hand side and the
+//    first-order form y = (x, x') of ARKODE, CVODE and the peers (bench/peers.h), and a DAE
+//    scene adds its residual form for IDA.
+//  * One runner family: CeodeRun (second-order form, optionally a mass matrix, index-3
+//    constraints, the implicit step), SundialsRun (ARKODE ERKStep with a fixed Butcher table or
+//    adaptive, ARKStep DIRK / IMEX, CVODE Adams / BDF with a dense, SPGMR or KLU solver), IdaRun
+//    (residual form), each in one of two modes: one step at a time with the error measured
+//    after every step, or (Problem::nout > 0) to nout output instants in the normal mode.
+//    Every solver of a scene is driven, observed and timed the same way in the same process.
+//  * Timing: every configuration is run back to back until one repetition has lasted >= 50 ms,
+//    and the per-run time is the median of 5 repetitions (3 for runs of >= 0.5 s; a run of
+//    >= 2 s is its own measurement), either configuration by configuration (Measure) or in
+//    interleaved rounds (Rounds). A timed run is the whole user-visible cost: create, init,
+//    integrate, free. The clock is the process CPU time (Now).
 //  * Rows in the common CSV schema
 //      scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds
-//    printed as a table while the scene runs.
-//  * Runners for CEODE (second-order form, optionally with a mass matrix and
-//    index-3 constraints), for ARKODE ERKStep (fixed Butcher table or
-//    adaptive, optionally with a projection after every step), ARKODE ARKStep
-//    DIRK and CVODE (Adams / BDF) on the equivalent first-order system, and
-//    for IDA on a residual form, so that every solver of a scene is driven,
-//    observed and timed the same way in the same process.
-//  * One RK3 (Kutta's, with the one workaround for SUNDIALS 6.4's FSAL rule)
-//    and one equal-error rule (TimeAtError, the cheapest time at which a curve
-//    reaches a given error, as scripts/wp_curves.py computes it).
+//    printed as a table while the scene runs, and one equal-error rule (TimeAtError, the
+//    cheapest time at which a curve reaches a given error, as scripts/wp_curves.py computes it).
 // -----------------------------------------------------------------------------
 #ifndef CEODE_BENCH_WP_COMMON_H_
 #define CEODE_BENCH_WP_COMMON_H_
@@ -35,6 +35,7 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
@@ -47,8 +48,10 @@
 #include <cstring>
 #include <ctime>
 #include <functional>
+#include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
@@ -89,10 +92,9 @@ inline bool Failed(int flag, const char* call) {
 }
 
 // ------------------------------------------------------------------- timing
-// CPU time of this (single-threaded) process: on an idle machine it equals the
-// wall time; on a shared one (the 2 cores of the development box were shared
-// with other builds) it is not inflated by waiting for a core, so solvers timed
-// minutes apart stay comparable.
+// CPU time of this (single-threaded) process: on an idle machine it equals the wall time; on a
+// shared one it is not inflated by waiting for a core, so solvers timed minutes apart stay
+// comparable.
 inline double Now() {
   timespec ts;
   if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0) {
@@ -104,9 +106,9 @@ inline double Now() {
 
 constexpr double kMinRepSeconds = 0.05;
 constexpr int kReps = 5;
-// Runs this long are far past every equal-error comparison (the FE scenes' implicit SUNDIALS
-// curves take 5-17 s a point); six of each made wp_fe_damped_mass last 9 minutes. A run of
-// >= kFewRepSeconds is repeated 3 times, one of >= kOneRunSeconds is measured once.
+// Long runs are far past every equal-error comparison (the FE scenes' implicit SUNDIALS curves
+// take seconds a point): a run of >= kFewRepSeconds is repeated 3 times, one of
+// >= kOneRunSeconds is measured once.
 constexpr double kFewRepSeconds = 0.5;
 constexpr double kOneRunSeconds = 2.0;
 
@@ -255,149 +257,263 @@ inline double TimeAtError(const std::vector<Row>& rows, const std::string& solve
   return best;
 }
 
-// The integrators users pick outside SUNDIALS (bench/peers.h writes these
-// solver names): a third side in PrintEqualError and scripts/ratios.py.
+// The integrators users pick outside SUNDIALS (bench/peers.h writes these solver names).
 inline bool IsPeerSolver(const std::string& solver) {
   return solver == "odeint" || solver == "GSL";
 }
 
-// Best curve of one side at error e: its time (< 0: not reached) and name.
-template <class Pick>
-double BestAtError(const Table& table,
-                   const std::vector<std::pair<std::string, std::string>>& curves, double e,
-                   Pick pick, std::string* name) {
-  double best = -1;
-  *name = "not reached";
-  for (const auto& k : curves) {
-    if (!pick(k.first)) continue;
-    const double t = TimeAtError(table.rows(), k.first, k.second, e);
-    if (t > 0 && (best < 0 || t < best)) {
-      best = t;
-      *name = k.first + " " + k.second;
-    }
-  }
-  return best;
+// The side of a curve in the equal-error table: 0 CEODE, 1 SUNDIALS, 2 hand loop, 3 peer.
+inline int SideOf(const std::string& solver) {
+  return solver == "CEODE" ? 0 : solver == "CEODE-hand" ? 2 : IsPeerSolver(solver) ? 3 : 1;
 }
 
-// Prints, at each error level, the best CEODE curve and the best other curve of
-// the table and their time ratio (< 1: CEODE faster). When the table has peer
-// curves (IsPeerSolver), "other" is SUNDIALS only (no peer, no hand loop) and
-// the best peer gets its own columns and ratio.
+// Prints, at each error level, the best curve of each side present in the table (CEODE,
+// SUNDIALS, the hand loop, the peers) and CEODE's time ratio to each (< 1: CEODE faster).
 inline void PrintEqualError(const Table& table, const std::vector<double>& levels) {
+  static const char* const kSide[4] = {"CEODE", "SUNDIALS", "hand", "peer"};
   std::vector<std::pair<std::string, std::string>> curves;
-  bool peers = false;
+  bool present[4] = {false, false, false, false};
   for (const Row& r : table.rows()) {
     const auto key = std::make_pair(r.solver, r.config);
     if (std::find(curves.begin(), curves.end(), key) == curves.end()) curves.push_back(key);
-    peers |= IsPeerSolver(r.solver);
+    present[SideOf(r.solver)] = true;
   }
-  std::printf("\ntime at equal error (best curve per side):\n%9s %-30s %11s %-30s %11s %8s",
-              "error", "best CEODE", "seconds", peers ? "best SUNDIALS" : "best other", "seconds",
-              "ratio");
-  std::printf(peers ? " %-30s %11s %8s\n" : "\n", "best peer", "seconds", "ratio");
+  std::printf("\ntime at equal error (best curve per side; ratio CEODE / side):\n%9s", "error");
+  for (int s = 0; s < 4; ++s) {
+    if (present[s]) std::printf(" %-30s %11s%s", (std::string("best ") + kSide[s]).c_str(),
+                                "seconds", s > 0 ? "    ratio" : "");
+  }
+  std::printf("\n");
   for (double e : levels) {
-    std::string nc, no, np;
-    const double tc = BestAtError(
-        table, curves, e, [](const std::string& s) { return s == "CEODE"; }, &nc);
-    const double to = BestAtError(
-        table, curves, e,
-        [peers](const std::string& s) {
-          return s != "CEODE" && !(peers && (IsPeerSolver(s) || s == "CEODE-hand"));
-        },
-        &no);
-    const double tp = BestAtError(table, curves, e, IsPeerSolver, &np);
-    if (tc < 0 && to < 0 && tp < 0) continue;
-    std::printf("%9.0e %-30s %11.3e %-30s %11.3e %8.3f", e, nc.c_str(), tc, no.c_str(), to,
-                tc > 0 && to > 0 ? tc / to : 0.0);
-    if (peers) {
-      std::printf(" %-30s %11.3e %8.3f", np.c_str(), tp, tc > 0 && tp > 0 ? tc / tp : 0.0);
+    double best[4] = {-1, -1, -1, -1};
+    std::string name[4] = {"not reached", "not reached", "not reached", "not reached"};
+    for (const auto& k : curves) {
+      const int s = SideOf(k.first);
+      const double t = TimeAtError(table.rows(), k.first, k.second, e);
+      if (t > 0 && (best[s] < 0 || t < best[s])) best[s] = t, name[s] = k.first + " " + k.second;
+    }
+    if (best[0] < 0 && best[1] < 0 && best[2] < 0 && best[3] < 0) continue;
+    std::printf("%9.0e", e);
+    for (int s = 0; s < 4; ++s) {
+      if (!present[s]) continue;
+      std::printf(" %-30s %11.3e", name[s].c_str(), best[s]);
+      if (s > 0) std::printf(" %8.3f", best[0] > 0 && best[s] > 0 ? best[0] / best[s] : 0.0);
     }
     std::printf("\n");
   }
 }
 
-// ------------------------------------------------------- problem descriptions
-// Error of the state at one output instant; runners keep the maximum.
-using ErrFn1 = double (*)(double t, const double* y, void* user);                   // first order
-using ErrFn2 = double (*)(double t, const double* x, const double* v, void* user);  // second order
+// Observed order of one fixed-step curve from its last three rows (h_or_tol is the step).
+inline double CurveOrder(const Table& table, const std::string& solver, const std::string& config) {
+  std::vector<const Row*> c;
+  for (const Row& r : table.rows()) {
+    if (r.solver == solver && r.config == config) c.push_back(&r);
+  }
+  if (c.size() < 2) return 0;
+  const Row* a = c.size() >= 3 ? c[c.size() - 3] : c[0];
+  return std::log(a->error / c.back()->error) / std::log(a->h_or_tol / c.back()->h_or_tol);
+}
 
-struct FirstOrder {
-  int n = 0;  // length of y = (x, v)
-  ARKRhsFn f = nullptr;
-  void* user = nullptr;
-  double t0 = 0, tend = 0;
-  std::vector<double> y0;
-  ErrFn1 err = nullptr;
-  ErrFn1 drift = nullptr;  // constraint drift (nullptr: not tracked)
-  // ERKStep only: called by ARKODE on y after every step (e.g. a projection
-  // onto the constraints, ERKStepSetPostprocessStepFn); ARKODE then evaluates
-  // f on the changed state for the next step's first stage.
-  ARKPostProcessFn post_step = nullptr;
-};
+// The rows of two curves at the same steps agree (one method written twice); returns mismatches.
+inline int CheckSameMethod(const Table& table, const std::string& s1, const std::string& c1,
+                           const std::string& s2, const std::string& c2, double rel) {
+  std::vector<const Row*> a, b;
+  for (const Row& r : table.rows()) {
+    if (r.solver == s1 && r.config == c1) a.push_back(&r);
+    if (r.solver == s2 && r.config == c2) b.push_back(&r);
+  }
+  int bad = 0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) {
+    if (std::fabs(a[i]->error - b[i]->error) <= rel * a[i]->error + 1e-14) continue;
+    std::printf("%s %s vs %s %s at h = %.4e: error %.6e vs %.6e -- MISMATCH\n", s1.c_str(),
+                c1.c_str(), s2.c_str(), c2.c_str(), a[i]->h_or_tol, a[i]->error, b[i]->error);
+    ++bad;
+  }
+  return bad;
+}
 
-// A residual form F(t, y, y') = 0 for IDA, with a consistent (y0, yp0); id
-// marks the differential components (1) and the algebraic ones (0), which are
-// left out of the error test. err and drift see y, whose leading entries are
-// the positions and velocities as in FirstOrder.
-struct Residual {
-  int n = 0;
-  IDAResFn res = nullptr;
-  IDALsJacFn jac = nullptr;  // dense iteration matrix (nullptr: difference quotients)
-  void* user = nullptr;
-  double t0 = 0, tend = 0, init_step = 0;  // init_step 0: IDA's own estimate
-  std::vector<double> y0, yp0, id;
-  ErrFn1 err = nullptr, drift = nullptr;
-};
+// ------------------------------------------------------- the problem description
+// One second-order problem x'' = a(t, x, x') (a force when a mass matrix is given), written once
+// on raw doubles. Lift<A>() derives CEODE's right-hand side and the first-order form
+// y = (x, x'), y' = (x', a) of ARKODE, CVODE and the peers; a scene with another formulation of
+// the same model (an index-1 DAE, an IMEX split) sets those forms itself.
+using AccFn = int (*)(double t, const double* x, const double* v, double* a, void* user);
+// Error or constraint drift of the state at one instant; runners keep the maximum.
+using ErrFn = double (*)(double t, const double* x, const double* v, void* user);
+using Vec = std::vector<double>;
 
-struct SecondOrder {
+template <AccFn A>
+int CeodeRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* user) {
+  return A(t, N_VGetArrayPointer(x), N_VGetArrayPointer(v), N_VGetArrayPointer(a), user);
+}
+
+template <AccFn A>
+int FirstOrderRhs(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
+  const sunindextype n = N_VGetLength(y) / 2;
+  const double* Y = N_VGetArrayPointer(y);
+  double* D = N_VGetArrayPointer(yd);
+  std::copy(Y + n, Y + 2 * n, D);
+  return A(t, Y, Y + n, D + n, user);
+}
+
+struct Problem {
   int n = 0;  // length of x
-  CEodeRhsFn f = nullptr;
+  AccFn acc = nullptr;
   void* user = nullptr;
   double t0 = 0, tend = 0;
-  std::vector<double> x0, v0;
-  ErrFn2 err = nullptr;
-  bool vel_dependent = false;
-  CEodeVelJacFn vjac = nullptr;            // nullptr: CEODE's difference quotients
-  int max_nonlin_iters = 0;                // 0: CEODE's default
-  int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode (PC or AUTO: docs/theory.md 4.3)
-  // -- implicit-step options (bench/wp_spinning_top.cpp): 0 keeps CEODE's default --
-  double nls_reltol = 0;       // CEodeSetNonlinTolerances(reltol, 0)
-  long msbj = 0;               // CEodeSetJacEvalFrequency
-  int pc_corrections = 0;      // CEodeSetPCCorrections
-  ErrFn2 drift = nullptr;      // constraint drift (nullptr: not tracked)
-  CEodeMassFn mass = nullptr;  // constant mass matrix (nullptr: M = I)
-  // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G) and the
-  // saddle-point matrix [[M, G^T], [G, 0]]: dense (saddle_nnz = 0) or CSR with
-  // room for saddle_nnz entries, factored by KLU.
+  Vec x0, v0;
+  ErrFn err = nullptr;
+  ErrFn drift = nullptr;  // constraint drift (nullptr: not tracked)
+
+  // -- the lifted forms (Lift) --
+  CEodeRhsFn f2 = nullptr;  // CEODE
+  ARKRhsFn f1 = nullptr;    // y' = (v, a) on y = (x, v)
+  // -- the first-order form's extras --
+  ARKRhsFn fe = nullptr, fi = nullptr;  // IMEX split of f1 (fi stiff, implicit)
+  bool fi_linear = false, f1_linear = false;  // ARKStepSetLinear
+  CVLsJacFn jac1 = nullptr;                   // CSR Jacobian of f1 (CVODE BDF + KLU)
+  long jac_nnz = 0;
+  // ERKStep: called on y after every step (e.g. a projection onto the constraints).
+  ARKPostProcessFn post_step = nullptr;
+  // -- CEODE's extras --
+  CEodeVelJacFn vjac = nullptr;  // df/dv (nullptr: difference quotients)
+  CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
+  Vec lumped_mass;               // the guard's inner product (CEodeSetGuardMass)
+  // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G); the saddle-point matrix
+  // [[M, G^T], [G, 0]] dense (saddle_nnz = 0) or CSR with saddle_nnz entries, factored by KLU.
   int nc = 0;
   CEodeConstrFn phi = nullptr;
   CEodeConstrJacFn G = nullptr;
   long saddle_nnz = 0;
+  // -- the residual form F(t, y, y') = 0 of IDA (a DAE scene's own formulation): a consistent
+  // (y0, yp0), id 1 on the differential components; y starts with x and v as in f1. --
+  int ny = 0;
+  IDAResFn res = nullptr;
+  IDALsJacFn res_jac = nullptr;  // dense iteration matrix (nullptr: difference quotients)
+  double init_step = 0;          // 0: IDA's own estimate
+  Vec y0, yp0, id;
+  // -- the peers --
+  bool separable = false;  // a depends on x only (not t, not v: v may be nullptr)
+  double h0 = 1e-3;        // first trial step of the adaptive peers
+  // -- output mode: nout > 0 integrates to the nout instants t0 + (tend - t0) k / nout in each
+  // solver's normal mode, error ||x - ref[k-1]||_2 / x0norm there (else one step at a time with
+  // err after every step) --
+  int nout = 0;
+  std::vector<Vec> ref;
+  double x0norm = 1;
+
+  template <AccFn A>
+  void Lift() {
+    acc = A;
+    f2 = CeodeRhs<A>;
+    f1 = FirstOrderRhs<A>;
+  }
+  std::vector<double> FirstOrderStart() const {
+    Vec y(x0);
+    y.insert(y.end(), v0.begin(), v0.end());
+    return y;
+  }
 };
 
-// One integration's outcome (the timing is added by TimeMedian).
+inline double OutputTime(const Problem& p, int k) { return p.t0 + (p.tend - p.t0) * k / p.nout; }
+
+inline double RelError(const Problem& p, int k, const double* x) {
+  if (p.ref.empty()) return 0;
+  const Vec& r = p.ref[k - 1];
+  double e2 = 0;
+  for (int i = 0; i < p.n; ++i) e2 += (x[i] - r[i]) * (x[i] - r[i]);
+  return std::sqrt(e2) / p.x0norm;
+}
+
+inline double Norm2(const Vec& x) {
+  double s = 0;
+  for (double q : x) s += q * q;
+  return std::sqrt(s);
+}
+
+// Output mode's fixed steps: h = (tend / nout) / m with the smallest m that keeps h <= h_req, so
+// every output instant is a step point.
+inline long StepsPerOutput(const Problem& p, double h_req) {
+  return static_cast<long>(std::ceil(p.tend / p.nout / h_req - 1e-9));
+}
+inline double FixedStep(const Problem& p, double h_req) {
+  return p.tend / p.nout / static_cast<double>(StepsPerOutput(p, h_req));
+}
+
+// One integration's outcome (the timing is added by Measure).
 struct Outcome {
   double error = 0, drift = 0;
   long steps = 0, rhs_evals = 0;
-  long jac_evals = 0, lin_setups = 0;  // CEODE only: iteration-matrix evaluations, factorisations
+  long jac_evals = 0, lin_setups = 0;  // CEODE: iteration-matrix evaluations, factorisations
 };
 
-// ----------------------------------------------------------- CEODE (2nd order)
+// Keeps the largest error and drift over the instants a runner observes.
+struct Track {
+  const Problem& p;
+  double emax = 0, dmax = 0;
+  explicit Track(const Problem& pr) : p(pr) {}
+  void Step(double t, const double* x, const double* v) {
+    const double e = p.err(t, x, v, p.user);
+    if (!(e <= emax)) emax = e;  // also catches NaN
+    const double d = p.drift != nullptr ? p.drift(t, x, v, p.user) : 0.0;
+    if (!(d <= dmax)) dmax = d;
+  }
+  void Output(int k, const double* x) {
+    const double e = RelError(p, k, x);
+    if (!(e <= emax)) emax = e;
+  }
+  int Finish(bool bad, Outcome* out) const {
+    out->error = emax;
+    out->drift = dmax;
+    return bad || !std::isfinite(emax) ? 1 : 0;
+  }
+};
+
+// ---------------------------------------------------------------------- CEODE
+// How CEODE solves the step. vel declares f's velocity dependence (the implicit step); ls is
+// the Newton iteration's linear solver (kNone: CEODE's own choice).
+struct CeodeOpts {
+  explicit CeodeOpts(const char* set = "G3_CD") : method(set) {}
+  const char* method;  // a name CEodeSetMethodByName knows (a literal: runs may be queued)
+  bool zero_start = false;  // one-step mode only
+  bool vel = false;
+  enum Ls { kDense, kSpgmr, kNone } ls = kDense;
+  int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode
+  double nls_rtol = 0, nls_atol = 0;       // CEodeSetNonlinTolerances (rtol 0: the default)
+  long msbj = 0;                           // CEodeSetJacEvalFrequency (0: the default)
+  int pc_corrections = 0;                  // CEodeSetPCCorrections (0: the set's default)
+  int max_nonlin_iters = 0;                // CEodeSetMaxNonlinIters (0: the default)
+  int maxl = 20;                           // SPGMR's Krylov dimension
+};
+
+struct CeodeStats {
+  long nni = 0, npc = 0, nnls = 0;
+  double coupling = 0;
+};
+
 // The objects of one CEODE run, freed together.
 struct CeodeObjects {
-  N_Vector x = nullptr, v = nullptr, phi = nullptr, b = nullptr;
+  N_Vector x = nullptr, v = nullptr, phi = nullptr, b = nullptr, m = nullptr;
   SUNMatrix M = nullptr, A = nullptr;
   SUNLinearSolver LS = nullptr;
   void* mem = nullptr;
-  CeodeObjects(SUNContext ctx, int n) : x(N_VNew_Serial(n, ctx)), v(N_VNew_Serial(n, ctx)) {
+  // x and v from the problem's start; false when an allocation failed.
+  bool Create(SUNContext ctx, const Problem& p) {
+    x = N_VNew_Serial(p.n, ctx);
+    v = N_VNew_Serial(p.n, ctx);
     mem = CEodeCreate(ctx);
+    if (x == nullptr || v == nullptr || mem == nullptr) return false;
+    std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(x));
+    std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(v));
+    return true;
   }
+  CeodeObjects() = default;
   ~CeodeObjects() {
     CEodeFree(&mem);
     if (LS != nullptr) SUNLinSolFree(LS);
     if (A != nullptr) SUNMatDestroy(A);
     if (M != nullptr) SUNMatDestroy(M);
-    for (N_Vector w : {x, v, phi, b}) {
+    for (N_Vector w : {x, v, phi, b, m}) {
       if (w != nullptr) N_VDestroy(w);
     }
   }
@@ -405,24 +521,39 @@ struct CeodeObjects {
   CeodeObjects& operator=(const CeodeObjects&) = delete;
 };
 
-// Linear solver, mass matrix and constraints of p; returns true on failure.
-inline bool CeodeAttach(SUNContext ctx, const SecondOrder& p, CeodeObjects* o) {
+// Velocity dependence, linear solver, mass matrix and constraints; true on failure. One-step
+// mode leaves an undeclared velocity dependence to CEODE; output mode declares it either way.
+inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, CeodeObjects* o) {
   void* mem = o->mem;
-  if (p.vel_dependent) {
-    o->A = SUNDenseMatrix(p.n, p.n, ctx);
-    o->LS = SUNLinSol_Dense(o->x, o->A, ctx);
-    return o->A == nullptr || o->LS == nullptr ||
-           Failed(CEodeSetVelocityDependence(mem, SUNTRUE), "CEodeSetVelocityDependence") ||
-           Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver") ||
-           (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
-           Failed(CEodeSetImplicitMode(mem, p.implicit_mode), "CEodeSetImplicitMode") ||
-           (p.nls_reltol > 0 &&
-            Failed(CEodeSetNonlinTolerances(mem, p.nls_reltol, 0), "CEodeSetNonlinTolerances")) ||
-           (p.msbj > 0 &&
-            Failed(CEodeSetJacEvalFrequency(mem, p.msbj), "CEodeSetJacEvalFrequency")) ||
-           Failed(CEodeSetPCCorrections(mem, p.pc_corrections), "CEodeSetPCCorrections") ||
-           (p.max_nonlin_iters > 0 &&
-            Failed(CEodeSetMaxNonlinIters(mem, p.max_nonlin_iters), "CEodeSetMaxNonlinIters"));
+  if (c.vel || p.nout > 0) {
+    if (Failed(CEodeSetVelocityDependence(mem, c.vel ? SUNTRUE : SUNFALSE),
+               "CEodeSetVelocityDependence")) {
+      return true;
+    }
+  }
+  if (c.vel) {
+    if (c.ls == CeodeOpts::kDense) {
+      o->A = SUNDenseMatrix(p.n, p.n, ctx);
+      o->LS = o->A != nullptr ? SUNLinSol_Dense(o->x, o->A, ctx) : nullptr;
+    } else if (c.ls == CeodeOpts::kSpgmr) {
+      // Restarts: without them an unpreconditioned SPGMR stalls on M + kappa b K.
+      o->LS = SUNLinSol_SPGMR(o->x, SUN_PREC_NONE, c.maxl, ctx);
+      if (o->LS != nullptr && SUNLinSol_SPGMRSetMaxRestarts(o->LS, 5) != 0) return true;
+    }
+    if ((c.ls != CeodeOpts::kNone &&
+         (o->LS == nullptr ||
+          Failed(CEodeSetLinearSolver(mem, o->LS, o->A), "CEodeSetLinearSolver"))) ||
+        (p.vjac != nullptr && Failed(CEodeSetVelJacFn(mem, p.vjac), "CEodeSetVelJacFn")) ||
+        Failed(CEodeSetImplicitMode(mem, c.implicit_mode), "CEodeSetImplicitMode") ||
+        (c.nls_rtol > 0 && Failed(CEodeSetNonlinTolerances(mem, c.nls_rtol, c.nls_atol),
+                                  "CEodeSetNonlinTolerances")) ||
+        (c.msbj > 0 && Failed(CEodeSetJacEvalFrequency(mem, c.msbj), "CEodeSetJacEvalFrequency")) ||
+        (c.pc_corrections > 0 &&
+         Failed(CEodeSetPCCorrections(mem, c.pc_corrections), "CEodeSetPCCorrections")) ||
+        (c.max_nonlin_iters > 0 &&
+         Failed(CEodeSetMaxNonlinIters(mem, c.max_nonlin_iters), "CEodeSetMaxNonlinIters"))) {
+      return true;
+    }
   }
   if (p.mass != nullptr) {
     o->M = SUNDenseMatrix(p.n, p.n, ctx);
@@ -447,79 +578,148 @@ inline bool CeodeAttach(SUNContext ctx, const SecondOrder& p, CeodeObjects* o) {
          Failed(CEodeSetConstraints(mem, o->phi, p.phi, p.G), "CEodeSetConstraints");
 }
 
-inline int CeodeOnce(SUNContext ctx, const SecondOrder& p, const char* method, double h,
-                     bool zero_start, Outcome* out) {
-  CeodeObjects o(ctx, p.n);
-  if (o.x == nullptr || o.v == nullptr || o.mem == nullptr) return 1;
+// One CEODE run at fixed step h, the stability guard off (runs past a stability limit are part
+// of the picture). One-step mode observes every step; output mode rounds h down to divide the
+// output interval (FixedStep) and appends x at every output instant to *xs (if given).
+inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double h, Outcome* out,
+                    CeodeStats* st = nullptr, std::vector<Vec>* xs = nullptr) {
+  CeodeObjects o;
+  if (!o.Create(ctx, p)) return 1;
+  const bool outputs = p.nout > 0;
+  if (outputs) h = FixedStep(p, h);
   void* mem = o.mem;
-  std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(o.x));
-  std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(o.v));
-  bool bad = Failed(CEodeInit(mem, p.f, p.t0, o.x, o.v), "CEodeInit") ||
+  bool bad = Failed(CEodeInit(mem, p.f2, p.t0, o.x, o.v), "CEodeInit") ||
              Failed(CEodeSetUserData(mem, p.user), "CEodeSetUserData") ||
-             Failed(CEodeSetMethodByName(mem, method), "CEodeSetMethodByName") ||
+             Failed(CEodeSetMethodByName(mem, c.method), "CEodeSetMethodByName") ||
              Failed(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep") ||
-             Failed(CEodeSetZeroStart(mem, zero_start ? SUNTRUE : SUNFALSE), "CEodeSetZeroStart") ||
-             // Runs past a stability limit are part of the picture: let them blow up.
+             (!outputs && Failed(CEodeSetZeroStart(mem, c.zero_start ? SUNTRUE : SUNFALSE),
+                                 "CEodeSetZeroStart")) ||
              Failed(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard") ||
              Failed(CEodeSetMaxNumSteps(mem, 100000000L), "CEodeSetMaxNumSteps") ||
-             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") || CeodeAttach(ctx, p, &o);
-  double t = p.t0, emax = 0, dmax = 0;
+             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") ||
+             CeodeAttach(ctx, p, c, &o);
+  Track tr(p);
+  double t = p.t0;
   const double* xd = N_VGetArrayPointer(o.x);
   const double* vd = N_VGetArrayPointer(o.v);
-  while (!bad && t < p.tend - 0.5 * h) {
-    // One step at a time: x and x' are then known at the same instant.
-    if (Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve")) {
-      bad = true;
-      break;
+  if (outputs) {
+    for (int k = 1; k <= p.nout && !bad; ++k) {
+      bad = Failed(CEodeEvolve(mem, OutputTime(p, k), o.x, o.v, &t, CE_NORMAL), "CEodeEvolve");
+      if (!bad) tr.Output(k, xd);
+      if (!bad && xs != nullptr) xs->emplace_back(xd, xd + p.n);
     }
-    const double e = p.err(t, xd, vd, p.user);
-    if (!(e <= emax)) emax = e;  // also catches NaN
-    const double d = p.drift != nullptr ? p.drift(t, xd, vd, p.user) : 0.0;
-    if (!(d <= dmax)) dmax = d;
   }
-  long nfe = 0, nfe_dq = 0;
-  if (!bad) {
-    bad = Failed(CEodeGetNumSteps(mem, &out->steps), "CEodeGetNumSteps") ||
-          Failed(CEodeGetNumRhsEvals(mem, &nfe), "CEodeGetNumRhsEvals") ||
-          Failed(CEodeGetNumRhsEvalsJacDQ(mem, &nfe_dq), "CEodeGetNumRhsEvalsJacDQ") ||
-          Failed(CEodeGetNumJacEvals(mem, &out->jac_evals), "CEodeGetNumJacEvals") ||
-          Failed(CEodeGetNumLinSolvSetups(mem, &out->lin_setups), "CEodeGetNumLinSolvSetups");
+  while (!outputs && !bad && t < p.tend - 0.5 * h) {
+    // One step at a time: x and x' are then known at the same instant.
+    bad = Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve");
+    if (!bad) tr.Step(t, xd, vd);
   }
+  long nfe = 0, nfe_dq = 0, nfc = 0;
+  bad = bad || Failed(CEodeGetNumSteps(mem, &out->steps), "CEodeGetNumSteps") ||
+        Failed(CEodeGetNumRhsEvals(mem, &nfe), "CEodeGetNumRhsEvals") ||
+        Failed(CEodeGetNumRhsEvalsJacDQ(mem, &nfe_dq), "CEodeGetNumRhsEvalsJacDQ") ||
+        Failed(CEodeGetNumJacEvals(mem, &out->jac_evals), "CEodeGetNumJacEvals") ||
+        Failed(CEodeGetNumLinSolvSetups(mem, &out->lin_setups), "CEodeGetNumLinSolvSetups") ||
+        (st != nullptr &&
+         (Failed(CEodeGetNumNonlinSolvIters(mem, &st->nni), "CEodeGetNumNonlinSolvIters") ||
+          Failed(CEodeGetImplicitStats(mem, &st->npc, &st->nnls, &nfc, &st->coupling),
+                 "CEodeGetImplicitStats")));
   out->rhs_evals = nfe + nfe_dq;
-  out->error = emax;
-  out->drift = dmax;
-  return bad || !std::isfinite(emax) ? 1 : 0;
+  return tr.Finish(bad, out);
 }
 
-// -------------------------------------------------- SUNDIALS (1st-order form)
-enum class Sun { kErkFixed, kErkAdaptive, kCvodeAdams, kCvodeBdf, kArkDirk };
+// The same for a set by name with every other option at its default.
+inline int CeodeRun(SUNContext ctx, const Problem& p, const char* method, double h, Outcome* out,
+                    bool zero_start = false) {
+  CeodeOpts c(method);
+  c.zero_start = zero_start;
+  return CeodeRun(ctx, p, c, h, out);
+}
 
-inline const char* SunName(Sun s) {
-  switch (s) {
-    case Sun::kErkFixed:
-    case Sun::kErkAdaptive:
-      return "ARKODE-ERK";
-    case Sun::kCvodeAdams:
-      return "CVODE-Adams";
-    case Sun::kCvodeBdf:
-      return "CVODE-BDF";
-    case Sun::kArkDirk:
-      return "ARKODE-DIRK";
+// The stable step of a set from the guard (CEodeGetStableStep, safety 1) at the start, in the
+// lumped-mass inner product when the problem has one; 0 on failure. *guard_fe (if given): the
+// guard's f evaluations.
+inline double GuardStep(SUNContext ctx, const Problem& p, const char* method,
+                        long* guard_fe = nullptr) {
+  CeodeObjects o;
+  if (!o.Create(ctx, p)) return 0;
+  sunrealtype h = 0;
+  long nme = 0, nls = 0, nfe = 0;
+  if (!p.lumped_mass.empty()) {
+    o.m = N_VNew_Serial(p.n, ctx);
+    if (o.m == nullptr) return 0;
+    std::copy(p.lumped_mass.begin(), p.lumped_mass.end(), N_VGetArrayPointer(o.m));
   }
-  return "?";
+  if (Failed(CEodeInit(o.mem, p.f2, p.t0, o.x, o.v), "CEodeInit") ||
+      Failed(CEodeSetUserData(o.mem, p.user), "CEodeSetUserData") ||
+      Failed(CEodeSetMethodByName(o.mem, method), "CEodeSetMethodByName") ||
+      Failed(CEodeSetVelocityDependence(o.mem, SUNFALSE), "CEodeSetVelocityDependence") ||
+      (o.m != nullptr && Failed(CEodeSetGuardMass(o.mem, o.m), "CEodeSetGuardMass")) ||
+      Failed(CEodeGetStableStep(o.mem, 1, &h), "CEodeGetStableStep") ||
+      Failed(CEodeGetGuardStats(o.mem, &nfe, &nme, &nls), "CEodeGetGuardStats")) {
+    return 0;
+  }
+  if (guard_fe != nullptr) *guard_fe = nfe;
+  return h;
 }
 
-// Kutta's classic third-order method, the paper's "RK3" (docs/theory.md
-// section 11), with the one workaround for SUNDIALS' FSAL rule: c3 is
-// 1 - 1e-8, not 1. SUNDIALS before 6.7.0 (Debian's is 6.4.1) takes any ERKStep
-// table with c_s = 1 to be first-same-as-last and reuses the last stage's f as
-// the next step's first stage, which for Kutta's table (b != last row of A)
-// silently runs a different method with 2 f calls per step. Measured: after 5
-// steps of h = 0.1 on the pendulum ARKODE gave theta = -1.16642 against
-// -1.16874 by hand. With c3 != 1 ARKODE evaluates f(t_n+1, y_n+1) properly (3
-// calls per step, matching the hand-written method to the last digit); c only
-// moves the time argument, so on autonomous problems this is exactly Kutta's
-// method.
+// Leapfrog, the loop explicit FE codes write (solver "CEODE-hand", the same method as CEODE
+// G3_CD) in output mode: v_{n+1/2} = v_{n-1/2} + h a_n, x_{n+1} = x_n + h v_{n+1/2}, one
+// accel(x, a) call and one fused update pass per step.
+template <class Accel>
+int LeapfrogRun(const Problem& pr, double h_req, const Accel& accel, Outcome* out) {
+  const int n = pr.n;
+  const long m = StepsPerOutput(pr, h_req);
+  const double h = FixedStep(pr, h_req);
+  Vec x(pr.x0), v(n), a(n);
+  accel(x.data(), a.data());
+  for (int k = 0; k < n; ++k) {
+    v[k] = pr.v0[k] + 0.5 * h * a[k];
+    x[k] += h * v[k];
+  }
+  Track tr(pr);
+  long steps = 1;
+  for (int o = 1; o <= pr.nout; ++o) {
+    for (long j = (o == 1 ? 1 : 0); j < m; ++j, ++steps) {
+      accel(x.data(), a.data());
+      for (int k = 0; k < n; ++k) {
+        v[k] += h * a[k];
+        x[k] += h * v[k];
+      }
+    }
+    tr.Output(o, x.data());
+  }
+  out->steps = steps;
+  out->rhs_evals = steps;
+  return tr.Finish(false, out);
+}
+
+// ------------------------------------------------- SUNDIALS (first-order form)
+enum class Sun {
+  kErkFixed,    // ERKStep, a fixed Butcher table
+  kErk,         // ERKStep adaptive (order 0: ARKODE's default table)
+  kCvodeAdams,  // fixed-point iteration
+  kCvodeBdf,    // dense Newton
+  kBdfSpgmr,    // CVODE BDF, matrix-free SPGMR
+  kBdfKlu,      // CVODE BDF, the problem's sparse Jacobian and KLU
+  kArkDirk,     // ARKStep DIRK, dense
+  kDirkSpgmr,   // ARKStep DIRK, SPGMR
+  kImexSpgmr    // ARKStep IMEX (fe explicit, fi implicit), SPGMR
+};
+
+struct SunOpts {
+  Sun kind = Sun::kErk;
+  int order = 0;                        // ERK adaptive: ERKStepSetOrder (0: default)
+  ARKodeButcherTable table = nullptr;  // kErkFixed
+  double atol_factor = 1;              // atol = atol_factor * rtol
+};
+
+// Kutta's classic third-order method, the paper's "RK3" (docs/theory.md section 11), with c3 =
+// 1 - 1e-8: SUNDIALS before 6.7.0 takes any ERKStep table with c_s = 1 to be
+// first-same-as-last and reuses the last stage's f as the next step's first stage, which for
+// Kutta's table (b != last row of A) runs a different method with 2 f calls per step. With
+// c3 != 1 ARKODE evaluates f(t_n+1, y_n+1) (3 calls per step, the hand-written method to the
+// last digit); c only moves the time argument, so on autonomous problems this is Kutta's method.
 inline ARKodeButcherTable KuttaRk3() {
   sunrealtype c[3] = {0.0, 0.5, 1.0 - 1e-8};
   sunrealtype A[9] = {0.0, 0.0, 0.0, 0.5, 0.0, 0.0, -1.0, 2.0, 0.0};
@@ -527,132 +727,163 @@ inline ARKodeButcherTable KuttaRk3() {
   return ARKodeButcherTable_Create(3, 3, 0, c, A, b, nullptr);
 }
 
-// One integration with a SUNDIALS integrator in one-step mode. For kErkFixed,
-// `h_or_rtol` is the step and `table` the Butcher table; otherwise it is the
-// relative tolerance and atol = atol_factor * rtol.
-inline int SundialsOnce(SUNContext ctx, const FirstOrder& p, Sun kind, double h_or_rtol,
-                        double atol_factor, ARKodeButcherTable table, Outcome* out) {
-  N_Vector y = N_VNew_Serial(p.n, ctx);
-  if (y == nullptr) return 1;
-  std::copy(p.y0.begin(), p.y0.end(), N_VGetArrayPointer(y));
-  SUNMatrix A = nullptr;
+// The objects of one SUNDIALS run, freed together.
+struct SunObjects {
+  Sun kind;
+  N_Vector y = nullptr;
+  SUNMatrix J = nullptr;
   SUNLinearSolver LS = nullptr;
   SUNNonlinearSolver NLS = nullptr;
   void* mem = nullptr;
-  const double rtol = h_or_rtol, atol = atol_factor * h_or_rtol;
-  bool bad = false;
-  const bool is_cvode = kind == Sun::kCvodeAdams || kind == Sun::kCvodeBdf;
-  switch (kind) {
-    case Sun::kErkFixed:
-    case Sun::kErkAdaptive:
-      mem = ERKStepCreate(p.f, p.t0, y, ctx);
-      bad = mem == nullptr || Failed(ERKStepSetUserData(mem, p.user), "ERKStepSetUserData") ||
-            Failed(ERKStepSetMaxNumSteps(mem, 100000000L), "ERKStepSetMaxNumSteps") ||
-            Failed(ERKStepSetStopTime(mem, p.tend), "ERKStepSetStopTime") ||
-            (p.post_step != nullptr &&
-             Failed(ERKStepSetPostprocessStepFn(mem, p.post_step), "ERKStepSetPostprocessStepFn"));
-      if (!bad && kind == Sun::kErkFixed) {
-        bad = Failed(ERKStepSetTable(mem, table), "ERKStepSetTable") ||
-              Failed(ERKStepSetFixedStep(mem, h_or_rtol), "ERKStepSetFixedStep");
-      } else if (!bad) {
-        bad = Failed(ERKStepSStolerances(mem, rtol, atol), "ERKStepSStolerances");
-      }
-      break;
-    case Sun::kArkDirk:
-      mem = ARKStepCreate(nullptr, p.f, p.t0, y, ctx);
-      A = SUNDenseMatrix(p.n, p.n, ctx);
-      LS = SUNLinSol_Dense(y, A, ctx);
-      bad = mem == nullptr || A == nullptr || LS == nullptr ||
-            Failed(ARKStepSetUserData(mem, p.user), "ARKStepSetUserData") ||
-            Failed(ARKStepSetMaxNumSteps(mem, 100000000L), "ARKStepSetMaxNumSteps") ||
-            Failed(ARKStepSetStopTime(mem, p.tend), "ARKStepSetStopTime") ||
-            Failed(ARKStepSStolerances(mem, rtol, atol), "ARKStepSStolerances") ||
-            Failed(ARKStepSetLinearSolver(mem, LS, A), "ARKStepSetLinearSolver");
-      break;
-    case Sun::kCvodeAdams:
-    case Sun::kCvodeBdf:
-      mem = CVodeCreate(kind == Sun::kCvodeAdams ? CV_ADAMS : CV_BDF, ctx);
-      bad = mem == nullptr || Failed(CVodeInit(mem, p.f, p.t0, y), "CVodeInit") ||
-            Failed(CVodeSetUserData(mem, p.user), "CVodeSetUserData") ||
-            Failed(CVodeSetMaxNumSteps(mem, 100000000L), "CVodeSetMaxNumSteps") ||
-            Failed(CVodeSetStopTime(mem, p.tend), "CVodeSetStopTime") ||
-            Failed(CVodeSStolerances(mem, rtol, atol), "CVodeSStolerances");
-      if (!bad && kind == Sun::kCvodeAdams) {
-        // Adams is the non-stiff choice: functional (fixed-point) iteration.
-        NLS = SUNNonlinSol_FixedPoint(y, 0, ctx);
-        bad =
-            NLS == nullptr || Failed(CVodeSetNonlinearSolver(mem, NLS), "CVodeSetNonlinearSolver");
-      } else if (!bad) {
-        A = SUNDenseMatrix(p.n, p.n, ctx);
-        LS = SUNLinSol_Dense(y, A, ctx);
-        bad = A == nullptr || LS == nullptr ||
-              Failed(CVodeSetLinearSolver(mem, LS, A), "CVodeSetLinearSolver");
-      }
-      break;
+  explicit SunObjects(Sun k) : kind(k) {}
+  bool Erk() const { return kind == Sun::kErkFixed || kind == Sun::kErk; }
+  bool Ark() const {
+    return kind == Sun::kArkDirk || kind == Sun::kDirkSpgmr || kind == Sun::kImexSpgmr;
   }
-  double t = p.t0, emax = 0, dmax = 0;
-  const double* yd = N_VGetArrayPointer(y);
-  // Fixed steps end half a step before tend (as CeodeOnce), adaptive ones at tend.
-  const double margin =
-      kind == Sun::kErkFixed ? 0.5 * h_or_rtol : 1e-12 * std::max(1.0, std::fabs(p.tend));
-  while (!bad && t < p.tend - margin) {
-    int flag;
-    if (is_cvode) {
-      flag = CVode(mem, p.tend, y, &t, CV_ONE_STEP);
-    } else if (kind == Sun::kArkDirk) {
-      flag = ARKStepEvolve(mem, p.tend, y, &t, ARK_ONE_STEP);
+  ~SunObjects() {
+    if (Erk()) {
+      ERKStepFree(&mem);
+    } else if (Ark()) {
+      ARKStepFree(&mem);
     } else {
-      flag = ERKStepEvolve(mem, p.tend, y, &t, ARK_ONE_STEP);
+      CVodeFree(&mem);
     }
-    if (Failed(flag, "Evolve")) {
-      bad = true;
-      break;
-    }
-    const double e = p.err(t, yd, p.user);
-    if (!(e <= emax)) emax = e;
-    const double d = p.drift != nullptr ? p.drift(t, yd, p.user) : 0.0;
-    if (!(d <= dmax)) dmax = d;
+    if (NLS != nullptr) SUNNonlinSolFree(NLS);
+    if (LS != nullptr) SUNLinSolFree(LS);
+    if (J != nullptr) SUNMatDestroy(J);
+    if (y != nullptr) N_VDestroy(y);
   }
-  long nfe = 0, nfi = 0, nfe_ls = 0;
-  if (!bad) {
-    if (is_cvode) {
-      bad = Failed(CVodeGetNumSteps(mem, &out->steps), "CVodeGetNumSteps") ||
-            Failed(CVodeGetNumRhsEvals(mem, &nfe), "CVodeGetNumRhsEvals") ||
-            (kind == Sun::kCvodeBdf &&
-             Failed(CVodeGetNumLinRhsEvals(mem, &nfe_ls), "CVodeGetNumLinRhsEvals"));
-    } else if (kind == Sun::kArkDirk) {
-      bad = Failed(ARKStepGetNumSteps(mem, &out->steps), "ARKStepGetNumSteps") ||
-            Failed(ARKStepGetNumRhsEvals(mem, &nfe, &nfi), "ARKStepGetNumRhsEvals") ||
-            Failed(ARKStepGetNumLinRhsEvals(mem, &nfe_ls), "ARKStepGetNumLinRhsEvals");
-    } else {
-      bad = Failed(ERKStepGetNumSteps(mem, &out->steps), "ERKStepGetNumSteps") ||
-            Failed(ERKStepGetNumRhsEvals(mem, &nfe), "ERKStepGetNumRhsEvals");
-    }
+  SunObjects(const SunObjects&) = delete;
+  SunObjects& operator=(const SunObjects&) = delete;
+};
+
+// The linear solver of an implicit kind: dense, SPGMR (no preconditioner) or KLU.
+inline SUNLinearSolver SunLinSol(SUNContext ctx, const Problem& p, SunObjects* o) {
+  const int m = 2 * p.n;
+  if (o->kind == Sun::kCvodeBdf || o->kind == Sun::kArkDirk) {
+    o->J = SUNDenseMatrix(m, m, ctx);
+    return o->J != nullptr ? SUNLinSol_Dense(o->y, o->J, ctx) : nullptr;
   }
-  out->rhs_evals = nfe + nfi + nfe_ls;
-  out->error = emax;
-  out->drift = dmax;
-  if (is_cvode) {
-    CVodeFree(&mem);
-  } else if (kind == Sun::kArkDirk) {
-    ARKStepFree(&mem);
+  if (o->kind == Sun::kBdfKlu) {
+    o->J = SUNSparseMatrix(m, m, p.jac_nnz, CSR_MAT, ctx);
+    return o->J != nullptr && p.jac1 != nullptr ? SUNLinSol_KLU(o->y, o->J, ctx) : nullptr;
+  }
+  // Krylov dimension 20: the default 5 stalls on I - gamma J at large gamma omega_max.
+  return SUNLinSol_SPGMR(o->y, SUN_PREC_NONE, 20, ctx);
+}
+
+// Creates and configures the integrator; true on failure. One-step mode stops at tend.
+inline bool SunSetup(SUNContext ctx, const Problem& p, const SunOpts& c, double h_or_rtol,
+                     SunObjects* o) {
+  const double rtol = h_or_rtol, atol = c.atol_factor * h_or_rtol;
+  const bool stop = p.nout == 0;
+  if (o->Erk()) {
+    void* mem = o->mem = ERKStepCreate(p.f1, p.t0, o->y, ctx);
+    return mem == nullptr || Failed(ERKStepSetUserData(mem, p.user), "ERKStepSetUserData") ||
+           (c.order > 0 && Failed(ERKStepSetOrder(mem, c.order), "ERKStepSetOrder")) ||
+           Failed(ERKStepSetMaxNumSteps(mem, 100000000L), "ERKStepSetMaxNumSteps") ||
+           (stop && Failed(ERKStepSetStopTime(mem, p.tend), "ERKStepSetStopTime")) ||
+           (p.post_step != nullptr &&
+            Failed(ERKStepSetPostprocessStepFn(mem, p.post_step), "ERKStepSetPostprocessStepFn")) ||
+           (c.kind == Sun::kErkFixed
+                ? Failed(ERKStepSetTable(mem, c.table), "ERKStepSetTable") ||
+                      Failed(ERKStepSetFixedStep(mem, h_or_rtol), "ERKStepSetFixedStep")
+                : Failed(ERKStepSStolerances(mem, rtol, atol), "ERKStepSStolerances"));
+  }
+  o->LS = c.kind == Sun::kCvodeAdams ? nullptr : SunLinSol(ctx, p, o);
+  if (c.kind != Sun::kCvodeAdams && o->LS == nullptr) return true;
+  if (o->Ark()) {
+    const bool imex = c.kind == Sun::kImexSpgmr;
+    void* mem = o->mem = imex ? ARKStepCreate(p.fe, p.fi, p.t0, o->y, ctx)
+                              : ARKStepCreate(nullptr, p.f1, p.t0, o->y, ctx);
+    return mem == nullptr || Failed(ARKStepSetUserData(mem, p.user), "ARKStepSetUserData") ||
+           Failed(ARKStepSetMaxNumSteps(mem, 100000000L), "ARKStepSetMaxNumSteps") ||
+           (stop && Failed(ARKStepSetStopTime(mem, p.tend), "ARKStepSetStopTime")) ||
+           Failed(ARKStepSStolerances(mem, rtol, atol), "ARKStepSStolerances") ||
+           Failed(ARKStepSetLinearSolver(mem, o->LS, o->J), "ARKStepSetLinearSolver") ||
+           ((imex ? p.fi_linear : p.f1_linear) &&
+            Failed(ARKStepSetLinear(mem, 0), "ARKStepSetLinear"));
+  }
+  void* mem = o->mem = CVodeCreate(c.kind == Sun::kCvodeAdams ? CV_ADAMS : CV_BDF, ctx);
+  if (mem == nullptr || Failed(CVodeInit(mem, p.f1, p.t0, o->y), "CVodeInit") ||
+      Failed(CVodeSetUserData(mem, p.user), "CVodeSetUserData") ||
+      Failed(CVodeSetMaxNumSteps(mem, 100000000L), "CVodeSetMaxNumSteps") ||
+      (stop && Failed(CVodeSetStopTime(mem, p.tend), "CVodeSetStopTime")) ||
+      Failed(CVodeSStolerances(mem, rtol, atol), "CVodeSStolerances")) {
+    return true;
+  }
+  if (c.kind == Sun::kCvodeAdams) {  // the non-stiff choice: functional (fixed-point) iteration
+    o->NLS = SUNNonlinSol_FixedPoint(o->y, 0, ctx);
+    return o->NLS == nullptr ||
+           Failed(CVodeSetNonlinearSolver(mem, o->NLS), "CVodeSetNonlinearSolver");
+  }
+  return Failed(CVodeSetLinearSolver(mem, o->LS, o->J), "CVodeSetLinearSolver") ||
+         (c.kind == Sun::kBdfKlu && Failed(CVodeSetJacFn(mem, p.jac1), "CVodeSetJacFn"));
+}
+
+inline int SunEvolve(const SunObjects& o, double tout, double* t, bool one_step) {
+  if (o.Erk()) return ERKStepEvolve(o.mem, tout, o.y, t, one_step ? ARK_ONE_STEP : ARK_NORMAL);
+  if (o.Ark()) return ARKStepEvolve(o.mem, tout, o.y, t, one_step ? ARK_ONE_STEP : ARK_NORMAL);
+  return CVode(o.mem, tout, o.y, t, one_step ? CV_ONE_STEP : CV_NORMAL);
+}
+
+// Steps and f evaluations of every kind (explicit, implicit, the Krylov and difference-quotient
+// Jacobians' evaluations); true on failure.
+inline bool SunCounters(const SunObjects& o, Outcome* out) {
+  long nfe = 0, nfi = 0, nfls = 0;
+  bool bad;
+  if (o.Erk()) {
+    bad = Failed(ERKStepGetNumSteps(o.mem, &out->steps), "ERKStepGetNumSteps") ||
+          Failed(ERKStepGetNumRhsEvals(o.mem, &nfe), "ERKStepGetNumRhsEvals");
+  } else if (o.Ark()) {
+    bad = Failed(ARKStepGetNumSteps(o.mem, &out->steps), "ARKStepGetNumSteps") ||
+          Failed(ARKStepGetNumRhsEvals(o.mem, &nfe, &nfi), "ARKStepGetNumRhsEvals") ||
+          Failed(ARKStepGetNumLinRhsEvals(o.mem, &nfls), "ARKStepGetNumLinRhsEvals");
   } else {
-    ERKStepFree(&mem);
+    bad = Failed(CVodeGetNumSteps(o.mem, &out->steps), "CVodeGetNumSteps") ||
+          Failed(CVodeGetNumRhsEvals(o.mem, &nfe), "CVodeGetNumRhsEvals") ||
+          (o.kind != Sun::kCvodeAdams &&
+           Failed(CVodeGetNumLinRhsEvals(o.mem, &nfls), "CVodeGetNumLinRhsEvals"));
   }
-  if (NLS != nullptr) SUNNonlinSolFree(NLS);
-  if (LS != nullptr) SUNLinSolFree(LS);
-  if (A != nullptr) SUNMatDestroy(A);
-  N_VDestroy(y);
-  return bad || !std::isfinite(emax) ? 1 : 0;
+  out->rhs_evals = nfe + nfi + nfls;
+  return bad;
+}
+
+// One integration of the first-order form. kErkFixed: h_or_rtol is the step; otherwise the
+// relative tolerance. One-step mode observes every step; output mode every output instant.
+inline int SundialsRun(SUNContext ctx, const Problem& p, const SunOpts& c, double h_or_rtol,
+                       Outcome* out) {
+  SunObjects o(c.kind);
+  o.y = N_VNew_Serial(2 * p.n, ctx);
+  if (o.y == nullptr) return 1;
+  const Vec y0 = p.FirstOrderStart();
+  double* Y = N_VGetArrayPointer(o.y);
+  std::copy(y0.begin(), y0.end(), Y);
+  bool bad = SunSetup(ctx, p, c, h_or_rtol, &o);
+  Track tr(p);
+  double t = p.t0;
+  for (int k = 1; k <= p.nout && !bad; ++k) {
+    bad = Failed(SunEvolve(o, OutputTime(p, k), &t, false), "Evolve");
+    if (!bad) tr.Output(k, Y);
+  }
+  // Fixed steps end half a step before tend (as CeodeRun), adaptive ones at tend.
+  const double margin = c.kind == Sun::kErkFixed ? 0.5 * h_or_rtol
+                                                 : 1e-12 * std::max(1.0, std::fabs(p.tend));
+  while (p.nout == 0 && !bad && t < p.tend - margin) {
+    bad = Failed(SunEvolve(o, p.tend, &t, true), "Evolve");
+    if (!bad) tr.Step(t, Y, Y + p.n);
+  }
+  bad = bad || SunCounters(o, out);
+  return tr.Finish(bad, out);
 }
 
 // ------------------------------------------------------------------------ IDA
-// One integration of a residual form with IDA (variable-order BDF, dense
-// iteration matrix) in one-step mode at rtol = atol = tol.
-inline int IdaOnce(SUNContext ctx, const Residual& p, double tol, Outcome* out) {
-  N_Vector yy = N_VNew_Serial(p.n, ctx), yp = N_VNew_Serial(p.n, ctx);
-  N_Vector id = N_VNew_Serial(p.n, ctx);
-  SUNMatrix J = SUNDenseMatrix(p.n, p.n, ctx);
+// One integration of the residual form with IDA (variable-order BDF, dense iteration matrix) in
+// one-step mode at rtol = atol = tol.
+inline int IdaRun(SUNContext ctx, const Problem& p, double tol, Outcome* out) {
+  const int m = p.ny;
+  N_Vector yy = N_VNew_Serial(m, ctx), yp = N_VNew_Serial(m, ctx), id = N_VNew_Serial(m, ctx);
+  SUNMatrix J = SUNDenseMatrix(m, m, ctx);
   SUNLinearSolver LS = yy != nullptr && J != nullptr ? SUNLinSol_Dense(yy, J, ctx) : nullptr;
   void* mem = IDACreate(ctx);
   bool bad = yp == nullptr || id == nullptr || LS == nullptr || mem == nullptr;
@@ -669,20 +900,15 @@ inline int IdaOnce(SUNContext ctx, const Residual& p, double tol, Outcome* out) 
           Failed(IDASetMaxNumSteps(mem, 100000000L), "IDASetMaxNumSteps") ||
           (p.init_step > 0 && Failed(IDASetInitStep(mem, p.init_step), "IDASetInitStep")) ||
           Failed(IDASetLinearSolver(mem, LS, J), "IDASetLinearSolver") ||
-          (p.jac != nullptr && Failed(IDASetJacFn(mem, p.jac), "IDASetJacFn"));
+          (p.res_jac != nullptr && Failed(IDASetJacFn(mem, p.res_jac), "IDASetJacFn"));
   }
-  double t = p.t0, emax = 0, dmax = 0;
+  Track tr(p);
+  double t = p.t0;
   const double* Y = bad ? nullptr : N_VGetArrayPointer(yy);
   while (!bad && t < p.tend) {
     const int flag = IDASolve(mem, p.tend, &t, yy, yp, IDA_ONE_STEP);
-    if (Failed(flag, "IDASolve")) {
-      bad = true;
-      break;
-    }
-    const double e = p.err(t, Y, p.user);
-    if (!(e <= emax)) emax = e;
-    const double d = p.drift != nullptr ? p.drift(t, Y, p.user) : 0.0;
-    if (!(d <= dmax)) dmax = d;
+    bad = Failed(flag, "IDASolve");
+    if (!bad) tr.Step(t, Y, Y + p.n);
     if (flag == IDA_TSTOP_RETURN) break;
   }
   long nre = 0, nre_ls = 0;
@@ -690,31 +916,19 @@ inline int IdaOnce(SUNContext ctx, const Residual& p, double tol, Outcome* out) 
         Failed(IDAGetNumResEvals(mem, &nre), "IDAGetNumResEvals") ||
         Failed(IDAGetNumLinResEvals(mem, &nre_ls), "IDAGetNumLinResEvals");
   out->rhs_evals = nre + nre_ls;
-  out->error = emax;
-  out->drift = dmax;
   IDAFree(&mem);
   if (LS != nullptr) SUNLinSolFree(LS);
   if (J != nullptr) SUNMatDestroy(J);
   for (N_Vector w : {yy, yp, id}) {
     if (w != nullptr) N_VDestroy(w);
   }
-  return bad || !std::isfinite(emax) ? 1 : 0;
+  return tr.Finish(bad, out);
 }
-
 // ------------------------------------------------------- measured + timed rows
 // The row of one configuration: its numbers from an Outcome, its time per run.
 inline Row OutcomeRow(const std::string& solver, const std::string& config, double h_or_tol,
                       const Outcome& o, double seconds) {
-  Row r;
-  r.solver = solver;
-  r.config = config;
-  r.h_or_tol = h_or_tol;
-  r.error = o.error;
-  r.drift = o.drift;
-  r.steps = o.steps;
-  r.rhs_evals = o.rhs_evals;
-  r.seconds = seconds;
-  return r;
+  return Row{solver, config, h_or_tol, o.error, o.drift, o.steps, o.rhs_evals, seconds};
 }
 
 // Runs once for the numbers, then times the same call; adds a row or a failure.
@@ -739,8 +953,8 @@ bool Measure(Table* table, const std::string& solver, const std::string& config,
 }
 
 // Measure's interleaved form, for the scenes whose equal-error ratios are judged (the FE
-// scenes, issue 11). Timing the configurations one after the other puts a burst of load on
-// this shared machine on one solver's curve; here every configuration is first run once for
+// plate family). Timing the configurations one after the other puts a burst of load on a
+// shared machine on one solver's curve; here every configuration is first run once for
 // its numbers (and to plan its repetitions, as TimeMedian does), then Run() times repetition r
 // of every configuration in round r, in a shuffled order, and each one's median over the rounds
 // is its time. The rows are added by Run(), in the order the configurations were queued.
@@ -812,18 +1026,61 @@ class Rounds {
   std::vector<Entry> entries_;
 };
 
-inline bool MeasureCeode(Table* table, SUNContext ctx, const SecondOrder& p, const char* method,
-                         double h, bool zero_start, const std::string& config,
-                         Outcome* got = nullptr) {
+// One CEODE configuration at step h (one-step mode: h as given; output mode: FixedStep(h)).
+inline bool MeasureCeode(Table* table, SUNContext ctx, const Problem& p, const CeodeOpts& c,
+                         double h, const std::string& config, Outcome* got = nullptr) {
   return Measure(
-      table, "CEODE", config, h,
-      [&](Outcome* o) { return CeodeOnce(ctx, p, method, h, zero_start, o); }, got);
+      table, "CEODE", config, p.nout > 0 ? FixedStep(p, h) : h,
+      [&](Outcome* o) { return CeodeRun(ctx, p, c, h, o); }, got);
 }
 
-// The constrained step's iteration-matrix reuse (issue 10's criterion: Jacobian evaluations at
-// most steps/10): evaluations of the saddle-point matrix's Jacobian (G(x), or df/dv when f depends
-// on v) and factorisations per step. Printed, not checked: at the coarsest steps the stale matrix
-// contracts too slowly and is refreshed more often (test_constraints checks h = 1e-3).
+// The same for a set by name with the scene's other options at their defaults.
+inline bool MeasureCeode(Table* table, SUNContext ctx, const Problem& p, const char* method,
+                         double h, bool zero_start, const std::string& config,
+                         Outcome* got = nullptr) {
+  CeodeOpts c(method);
+  c.zero_start = zero_start;
+  return MeasureCeode(table, ctx, p, c, h, config, got);
+}
+
+inline const char* SunName(Sun s) {
+  switch (s) {
+    case Sun::kErkFixed:
+    case Sun::kErk:
+      return "ARKODE-ERK";
+    case Sun::kCvodeAdams:
+      return "CVODE-Adams";
+    case Sun::kCvodeBdf:
+    case Sun::kBdfSpgmr:
+    case Sun::kBdfKlu:
+      return "CVODE-BDF";
+    case Sun::kArkDirk:
+    case Sun::kDirkSpgmr:
+      return "ARKODE-DIRK";
+    case Sun::kImexSpgmr:
+      return "ARKODE-IMEX";
+  }
+  return "?";
+}
+
+inline bool MeasureSundials(Table* table, SUNContext ctx, const Problem& p, const SunOpts& c,
+                            double h_or_rtol, const std::string& config,
+                            const char* solver = nullptr, Outcome* got = nullptr) {
+  return Measure(
+      table, solver != nullptr ? solver : SunName(c.kind), config, h_or_rtol,
+      [&](Outcome* o) { return SundialsRun(ctx, p, c, h_or_rtol, o); }, got);
+}
+
+inline bool MeasureIda(Table* table, SUNContext ctx, const Problem& p, double tol,
+                       const std::string& config, Outcome* got = nullptr) {
+  return Measure(
+      table, "IDA", config, tol, [&](Outcome* o) { return IdaRun(ctx, p, tol, o); }, got);
+}
+
+// The constrained step's iteration-matrix reuse: evaluations of the saddle-point matrix's
+// Jacobian (G(x), or df/dv when f depends on v) and factorisations per step. Printed, not
+// checked: at the coarsest steps the stale matrix contracts too slowly and is refreshed more
+// often (test_constraints checks h = 1e-3).
 inline void PrintMatrixReuse(const std::string& config, double h, const Outcome& o) {
   const double per_step = o.steps > 0 ? static_cast<double>(o.jac_evals) / o.steps : 0.0;
   std::printf("  matrix reuse %s h = %g: %ld Jacobian evals, %ld setups, %ld steps (%.4f/step)%s\n",
@@ -831,19 +1088,103 @@ inline void PrintMatrixReuse(const std::string& config, double h, const Outcome&
               10 * o.jac_evals <= o.steps ? "" : "  (above steps/10)");
 }
 
-inline bool MeasureSundials(Table* table, SUNContext ctx, const FirstOrder& p, Sun kind,
-                            double h_or_rtol, double atol_factor, ARKodeButcherTable tab,
-                            const std::string& config, const char* solver = nullptr,
-                            Outcome* got = nullptr) {
-  return Measure(
-      table, solver != nullptr ? solver : SunName(kind), config, h_or_rtol,
-      [&](Outcome* o) { return SundialsOnce(ctx, p, kind, h_or_rtol, atol_factor, tab, o); }, got);
+// A SUNDIALS curve per configuration over the tolerances in interleaved rounds (output mode);
+// a curve stops after the first run that costs more than max_seconds (it is past every CEODE
+// point by then) or fails.
+struct SunCurve {
+  SunOpts opts;
+  const char* solver;
+  const char* config;
+};
+
+inline void SundialsCurves(SUNContext ctx, const Problem* p, const std::vector<SunCurve>& curves,
+                           const std::vector<double>& tols, double max_seconds, Rounds* rounds) {
+  for (const SunCurve& c : curves) {
+    for (double tol : tols) {
+      const double first = rounds->Measure(
+          c.solver, c.config, tol,
+          [ctx, p, c, tol](Outcome* o) { return SundialsRun(ctx, *p, c.opts, tol, o); });
+      if (first < 0 || first > max_seconds) break;
+    }
+  }
 }
 
-inline bool MeasureIda(Table* table, SUNContext ctx, const Residual& p, double tol,
-                       const std::string& config, Outcome* got = nullptr) {
-  return Measure(
-      table, "IDA", config, tol, [&](Outcome* o) { return IdaOnce(ctx, p, tol, o); }, got);
+// A curve stops after the first tolerance whose run costs more than this (CPU s; that run is
+// kept): the output-mode scenes' implicit SUNDIALS curves take seconds a point.
+constexpr double kSundialsCutoff = 1.5;
+
+// The tolerances of the FE plate variants.
+inline std::vector<double> FeTols(bool quick) {
+  return quick ? std::vector<double>{1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
+}
+
+// The first-order configurations every FE plate scene is compared with: ARKODE ERK orders 3, 4,
+// 5, CVODE Adams (fixed point), CVODE BDF + SPGMR, `extra` (CVODE BDF + KLU or ARKStep IMEX +
+// SPGMR), ARKStep DIRK + SPGMR.
+inline void FeSundialsCurves(SUNContext ctx, const Problem* p, Sun extra,
+                             const std::vector<double>& tols, double max_seconds, Rounds* rounds) {
+  const std::vector<SunCurve> curves = {
+      {{Sun::kErk, 3}, "ARKODE-ERK", "order3"},
+      {{Sun::kErk, 4}, "ARKODE-ERK", "order4"},
+      {{Sun::kErk, 5}, "ARKODE-ERK", "order5"},
+      {{Sun::kCvodeAdams}, "CVODE-Adams", "fixedpoint"},
+      {{Sun::kBdfSpgmr}, "CVODE-BDF", "SPGMR"},
+      {{extra}, SunName(extra), extra == Sun::kBdfKlu ? "KLU" : "SPGMR"},
+      {{Sun::kDirkSpgmr}, "ARKODE-DIRK", "SPGMR"}};
+  SundialsCurves(ctx, p, curves, tols, max_seconds, rounds);
+}
+
+// CEODE curves in output mode at fractions of each set's own stable step (GuardStep), queued in
+// rounds; `hand` (if given) runs the hand loop beside the "G3_CD" curve at the same steps.
+// Prints the implicit step's figures of the numbers run of every curve with vel declared.
+// Returns the stable step of the first curve.
+struct FracCurve {
+  std::string label;
+  CeodeOpts opts;
+  std::vector<double> frac;
+};
+
+inline double FractionCurves(SUNContext ctx, const Problem* p, const std::vector<FracCurve>& curves,
+                             Rounds* rounds,
+                             const std::function<int(double, Outcome*)>& hand = nullptr) {
+  double first = 0;
+  for (const FracCurve& c : curves) {
+    const double hs = GuardStep(ctx, *p, c.opts.method);
+    if (first == 0) first = hs;
+    for (double f : c.frac) {
+      const double hr = f * hs, h = FixedStep(*p, hr);
+      auto st = std::make_shared<CeodeStats>();  // the numbers run's; the timed calls overwrite it
+      const CeodeOpts opts = c.opts;
+      Outcome got;
+      const bool ok = rounds->Measure(
+                          "CEODE", c.label, h,
+                          [ctx, p, opts, hr, st](Outcome* o) {
+                            return CeodeRun(ctx, *p, opts, hr, o, st.get());
+                          },
+                          &got) >= 0;
+      if (ok && opts.vel) {
+        std::printf(
+            "    %s h = %.3e: %.3f f/step, %.3f nonlinear iters/step, %ld PC steps, "
+            "%ld NLS steps, coupling kappa |df/dv| = %.3e\n",
+            c.label.c_str(), h, static_cast<double>(got.rhs_evals) / got.steps,
+            static_cast<double>(st->nni) / got.steps, st->npc, st->nnls, st->coupling);
+      }
+      if (hand && c.label == "G3_CD") {
+        rounds->Measure("CEODE-hand", "G3_CD", h, [hand, hr](Outcome* o) { return hand(hr, o); });
+      }
+    }
+  }
+  return first;
+}
+
+// A second-order CEODE curve's observed order from its last three steps is in (1.8, 2.3);
+// prints it, returns 1 when it is not.
+inline int CheckSecondOrder(const Table& table, const std::string& config) {
+  const double p = CurveOrder(table, "CEODE", config);
+  const bool ok = p > 1.8 && p < 2.3;
+  std::printf("CEODE %s order from the last three steps: %.3f %s\n", config.c_str(), p,
+              ok ? "ok" : "-- OFF");
+  return ok ? 0 : 1;
 }
 
 }  // namespace wp

@@ -60,11 +60,11 @@ rm -f "$BUILD.configure.log"
 # Only what the job runs: the bench programs (the unit tests and the examples
 # are scripts/test.sh's business).
 targets=()
-for src in bench/wp_*.cpp; do
+for src in bench/*/wp_*.cpp; do
   [ -e "$src" ] && targets+=("$(basename "${src%.*}")")
 done
 targets+=(chain_scaling)
-[ -e bench/bench_step.cpp ] && targets+=(bench_step)
+[ -e bench/step_cost/bench_step.cpp ] && targets+=(bench_step)
 step "build (${targets[*]})"
 if ! cmake --build "$BUILD" -j"$JOBS" --target "${targets[@]}" > "$BUILD/main_job_build.log" 2>&1; then
   tail -40 "$BUILD/main_job_build.log"

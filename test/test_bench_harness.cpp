@@ -1,8 +1,9 @@
-// The benchmark harness's rules (bench/wp_common.h), on which every ratio in docs/results.md
-// rests: the equal-error rule (TimeAtError: log time interpolated linearly in log error), the
-// repetition plan and median of TimeMedian, and the interleaved rounds of the FE scenes
-// (wp::Rounds). The timed functions spin on the harness's own clock (process CPU time) for a
-// set time, so the number of calls each rule makes is known in advance.
+// The benchmark harness (bench/wp_common.h), on which every ratio in docs/results.md rests: the
+// equal-error rule (TimeAtError: log time interpolated linearly in log error), the repetition
+// plan and median of TimeMedian, the interleaved rounds of the FE scenes (wp::Rounds), and the
+// one problem description: its lifts to CEODE's and the first-order form, and the runners'
+// two modes on x'' = -x. The timed functions spin on the harness's own clock (process CPU time)
+// for a set time, so the number of calls each rule makes is known in advance.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -141,6 +142,96 @@ TEST(Rounds, ReportsAFailedNumbersRunAndAFailureWhileTimingAsFailuresNotRows) {
   rounds.Run();
   EXPECT_TRUE(table.rows().empty());
   EXPECT_EQ(table.failures(), 2);
+}
+
+// ---- the problem description and the runners, on x'' = -x, x(0) = 1, x'(0) = 0 ----
+int Spring(double, const double* x, const double*, double* a, void* calls) {
+  ++*static_cast<int*>(calls);
+  a[0] = -x[0];
+  return 0;
+}
+
+double SpringError(double t, const double* x, const double*, void*) {
+  return std::fabs(x[0] - std::cos(t));
+}
+
+class SpringProblem : public testing::Test {
+ protected:
+  SpringProblem() {
+    SUNContext_Create(SUN_COMM_NULL, &ctx_);
+    p_.n = 1;
+    p_.Lift<Spring>();
+    p_.user = &calls_;
+    p_.tend = 1;
+    p_.x0 = {1};
+    p_.v0 = {0};
+    p_.err = SpringError;
+  }
+  ~SpringProblem() override { SUNContext_Free(&ctx_); }
+  SUNContext ctx_ = nullptr;
+  int calls_ = 0;
+  wp::Problem p_;
+};
+
+TEST_F(SpringProblem, FirstOrderLiftCopiesTheVelocitiesAndCallsTheAccelerationOnce) {
+  N_Vector y = N_VNew_Serial(2, ctx_), yd = N_VNew_Serial(2, ctx_);
+  NV_Ith_S(y, 0) = 0.5;
+  NV_Ith_S(y, 1) = -2.0;
+  ASSERT_EQ(p_.f1(0, y, yd, p_.user), 0);
+  EXPECT_EQ(NV_Ith_S(yd, 0), -2.0);
+  EXPECT_EQ(NV_Ith_S(yd, 1), -0.5);
+  EXPECT_EQ(calls_, 1);
+  EXPECT_EQ(p_.FirstOrderStart(), (std::vector<double>{1, 0}));
+  N_VDestroy(y);
+  N_VDestroy(yd);
+}
+
+TEST_F(SpringProblem, CeodeLiftWritesTheAccelerationOfThePositions) {
+  N_Vector x = N_VNew_Serial(1, ctx_), v = N_VNew_Serial(1, ctx_), a = N_VNew_Serial(1, ctx_);
+  NV_Ith_S(x, 0) = 0.25;
+  NV_Ith_S(v, 0) = 7.0;
+  ASSERT_EQ(p_.f2(0, x, v, a, p_.user), 0);
+  EXPECT_EQ(NV_Ith_S(a, 0), -0.25);
+  for (N_Vector w : {x, v, a}) N_VDestroy(w);
+}
+
+TEST_F(SpringProblem, CeodeRunTakesTheFixedStepsAndKeepsTheLargestErrorOfEveryStep) {
+  wp::Outcome o;
+  ASSERT_EQ(wp::CeodeRun(ctx_, p_, "G5", 0.01, &o), 0);
+  EXPECT_EQ(o.steps, 100);
+  EXPECT_GT(o.error, 0);
+  EXPECT_LT(o.error, 1e-8);
+  EXPECT_GE(o.rhs_evals, o.steps);
+}
+
+TEST_F(SpringProblem, SundialsRunReachesTheToleranceOnTheLiftedFirstOrderForm) {
+  for (wp::Sun kind : {wp::Sun::kErk, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf,
+                       wp::Sun::kArkDirk, wp::Sun::kBdfSpgmr}) {
+    wp::Outcome o;
+    ASSERT_EQ(wp::SundialsRun(ctx_, p_, {kind}, 1e-8, &o), 0) << wp::SunName(kind);
+    EXPECT_LT(o.error, 1e-5) << wp::SunName(kind);
+    EXPECT_GT(o.steps, 0) << wp::SunName(kind);
+  }
+}
+
+TEST_F(SpringProblem, OutputModeRoundsTheStepToDivideEachOutputInterval) {
+  p_.nout = 4;
+  p_.ref = {{std::cos(0.25)}, {std::cos(0.5)}, {std::cos(0.75)}, {std::cos(1.0)}};
+  EXPECT_EQ(wp::StepsPerOutput(p_, 0.1), 3);
+  EXPECT_DOUBLE_EQ(wp::FixedStep(p_, 0.1), 0.25 / 3);
+  wp::Outcome o;
+  ASSERT_EQ(wp::CeodeRun(ctx_, p_, "G3_CD", 0.1, &o), 0);
+  EXPECT_EQ(o.steps, 12);
+}
+
+TEST_F(SpringProblem, LeapfrogHandLoopIsCeodesCentralDifferencesInOutputMode) {
+  p_.nout = 4;
+  for (int k = 1; k <= 4; ++k) p_.ref.push_back({std::cos(0.25 * k)});
+  wp::Outcome ce, hand;
+  ASSERT_EQ(wp::CeodeRun(ctx_, p_, "G3_CD", 0.01, &ce), 0);
+  ASSERT_EQ(wp::LeapfrogRun(p_, 0.01, [](const double* x, double* a) { a[0] = -x[0]; }, &hand), 0);
+  EXPECT_EQ(hand.steps, ce.steps);
+  EXPECT_NEAR(hand.error, ce.error, 1e-6 * ce.error);
 }
 
 }  // namespace

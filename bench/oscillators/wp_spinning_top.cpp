@@ -16,22 +16,12 @@
 //   E = 1/2 I1 (theta'^2 + psi'^2 sin^2 theta) + 1/2 I3 w3^2 + m g l cos(theta)
 // is conserved; error = max |E - E0| over every step.
 //
-// Methods:
-//  * CEODE G5_TOP, implicit path (CEodeSetVelocityDependence(SUNTRUE), Newton
-//    with SUNLinSol_Dense, analytic dg/dq'), h = 1e-2 ... 1e-5, both with the
-//    paper's zero start (CEodeSetZeroStart: reproduces its Table 7) and with the
-//    default consistent start;
-//  * CEODE's other implicit-step choices (consistent start): G5_TOP-auto, G6_O6-auto
-//    and G8_O8-auto (the library's default CE_IMPLICIT_AUTO), G5_TOP-J1-nls8 (Newton, df/dv
-//    every step, Newton tolerance 1e-8);
-//  * ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8);
-//  * ARKODE ERKStep adaptive (default order 4), CVODE Adams (fixed point) and
-//    CVODE BDF (Newton, dense), rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol (angles
-//    ~ 1, rates ~ 10);
-//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
-//    and Boost): odeint runge_kutta4 at the same h, odeint rkf78, dopri5,
-//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances and
-//    atol (velocity_verlet and the symplectic RKN do not apply: f depends on q').
+// Methods: CEODE G5_TOP on the implicit path (Newton, dense, analytic df/dq'), h = 1e-2 ...
+// 1e-5, with the paper's zero start (its Table 7) and the consistent start; G5_TOP, G6_O6 and
+// G8_O8 with CE_IMPLICIT_AUTO; G5_TOP Newton with df/dv every step at a Newton tolerance of
+// 1e-8. ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8); ERKStep adaptive,
+// CVODE Adams and BDF at rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol; the peers (not the
+// symplectic ones: f depends on q').
 //
 // Usage: wp_spinning_top [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, the zero-start G5_TOP errors at
@@ -43,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "top_model.h"
 #include "wp_common.h"
 #ifdef CEODE_BENCH_PEERS
 #include "peers.h"
@@ -50,33 +41,9 @@
 
 namespace {
 
-struct Top {
-  double I1 = 5e-5, I3 = 2e-4, m = 0.02, l = 0.05, g = 9.81;
-  double e0 = 0;  // energy at t = 0
-};
-
-double Energy(const Top& p, const double* q, const double* w) {
-  const double s = std::sin(q[1]), c = std::cos(q[1]);
-  const double w3 = w[2] + w[0] * c;
-  return 0.5 * p.I1 * (w[1] * w[1] + w[0] * w[0] * s * s) + 0.5 * p.I3 * w3 * w3 +
-         p.m * p.g * p.l * c;
-}
-
-// Accelerations (psi'', theta'', phi'') from angles q and rates w.
-void Accel(const Top& p, const double* q, const double* w, double* a) {
-  const double s = std::sin(q[1]), c = std::cos(q[1]);
-  const double w3 = w[2] + w[0] * c;
-  const double psi_dd = w[1] * (p.I3 * w3 - 2 * p.I1 * w[0] * c) / (p.I1 * s);
-  a[1] = w[0] * w[0] * s * c - (p.I3 / p.I1) * w3 * w[0] * s + (p.m * p.g * p.l / p.I1) * s;
-  a[0] = psi_dd;
-  a[2] = -psi_dd * c + w[0] * w[1] * s;
-}
-
-int Rhs2(sunrealtype, N_Vector x, N_Vector v, N_Vector f, void* user) {
-  Accel(*static_cast<Top*>(user), N_VGetArrayPointer(x), N_VGetArrayPointer(v),
-        N_VGetArrayPointer(f));
-  return 0;
-}
+using top::Accel;
+using top::Energy;
+using top::Top;
 
 // d(accel)/d(rates): the Newton matrix of a step is I - kappa J.
 int VelJac(sunrealtype, N_Vector x, N_Vector v, N_Vector, SUNMatrix J, void* user, N_Vector,
@@ -102,30 +69,10 @@ int VelJac(sunrealtype, N_Vector x, N_Vector v, N_Vector, SUNMatrix J, void* use
   return 0;
 }
 
-int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
-  const double* yy = N_VGetArrayPointer(y);
-  double* d = N_VGetArrayPointer(yd);
-  d[0] = yy[3];
-  d[1] = yy[4];
-  d[2] = yy[5];
-  Accel(*static_cast<Top*>(user), yy, yy + 3, d + 3);
-  return 0;
-}
-
-double Err2(double, const double* x, const double* v, void* user) {
+double Err(double, const double* x, const double* v, void* user) {
   const Top& p = *static_cast<Top*>(user);
   return std::fabs(Energy(p, x, v) - p.e0);
 }
-double Err1(double, const double* y, void* user) {
-  const Top& p = *static_cast<Top*>(user);
-  return std::fabs(Energy(p, y, y + 3) - p.e0);
-}
-
-#ifdef CEODE_BENCH_PEERS
-void PeerAccel(double, const double* x, const double* v, double* a, void* user) {
-  Accel(*static_cast<Top*>(user), x, v, a);
-}
-#endif
 
 // Checks the analytic velocity Jacobian against central differences, so a
 // wrong derivation shows up as a failure rather than as slow Newton steps.
@@ -143,8 +90,8 @@ bool CheckVelJac(SUNContext ctx, Top* top) {
     const double d = 1e-6 * std::max(1.0, std::fabs(w[k]));
     wp[k] += d;
     wm[k] -= d;
-    Accel(*top, q, wp, ap);
-    Accel(*top, q, wm, am);
+    Accel(0, q, wp, ap, top);
+    Accel(0, q, wm, am, top);
     for (int i = 0; i < 3; ++i) {
       const double fd = (ap[i] - am[i]) / (2 * d);
       worst = std::max(worst, std::fabs(fd - SM_ELEMENT_D(J, i, k)) / (1 + std::fabs(fd)));
@@ -174,28 +121,21 @@ int main(int argc, char** argv) {
   std::printf("Spinning top (ZXZ angles), 10 s, error = max |E - E0| (J), E0 = %.6e\n", top.e0);
   wp::Table table("spinning_top", args.csv);
 
-  wp::SecondOrder p2;
-  p2.n = 3;
-  p2.f = Rhs2;
-  p2.user = &top;
-  p2.tend = 10.0;
-  p2.x0 = q0;
-  p2.v0 = w0;
-  p2.err = Err2;
-  p2.vel_dependent = true;
-  p2.vjac = VelJac;
-  // The zero start's first step at h = 1e-2 starts Newton from a poor predictor
-  // (the true initial jerk is not 0); the scene allows 10 iterations. With the
-  // default 6 that run also succeeds with the same error (measured: 2.2751e-5,
-  // 7412 f evaluations against 6890 with 10); 10 keeps the published rows.
-  p2.max_nonlin_iters = 10;
-  wp::FirstOrder p1;
-  p1.n = 6;
-  p1.f = Rhs1;
-  p1.user = &top;
-  p1.tend = 10.0;
-  p1.y0 = {q0[0], q0[1], q0[2], w0[0], w0[1], w0[2]};
-  p1.err = Err1;
+  wp::Problem p;
+  p.n = 3;
+  p.Lift<Accel>();
+  p.user = &top;
+  p.tend = 10.0;
+  p.x0 = q0;
+  p.v0 = w0;
+  p.err = Err;
+  p.vjac = VelJac;
+  wp::CeodeOpts c("G5_TOP");
+  c.vel = true;
+  // The zero start's first step at h = 1e-2 starts Newton from a poor predictor (the true
+  // initial jerk is not 0); the scene allows 10 iterations (with the default 6 that run also
+  // succeeds with the same error: 2.2751e-5, 7412 f evaluations against 6890 with 10).
+  c.max_nonlin_iters = 10;
 
   std::vector<double> steps = {1e-2, 1e-3, 1e-4, 1e-5};
   std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
@@ -203,8 +143,10 @@ int main(int argc, char** argv) {
     steps = {1e-2, 1e-3};
     tols = {1e-4, 1e-8};
   }
-  for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, true, "G5_TOP-zero");
-  for (double h : steps) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP");
+  c.zero_start = true;
+  for (double h : steps) wp::MeasureCeode(&table, ctx, p, c, h, "G5_TOP-zero");
+  c.zero_start = false;
+  for (double h : steps) wp::MeasureCeode(&table, ctx, p, c, h, "G5_TOP");
   // The curves a user would pick for the implicit step, at the library's default
   // CE_IMPLICIT_AUTO (docs/theory.md section 4.3): prediction-correction where the start's
   // estimate kappa ||df/dv|| is at most 0.2 and the corrections keep contracting by 5 per
@@ -214,54 +156,44 @@ int main(int argc, char** argv) {
   // forced PC), G8_O8 PC from 5e-3 (Newton does not converge for G6_O6 and G8_O8 at h >= 7e-3).
   // Newton with the analytic df/dv refreshed every step (CEodeSetJacEvalFrequency 1) and a
   // Newton tolerance of 1e-8 instead of 1e-12: 3 f per step at h = 1e-2 instead of 6.8.
-  p2.implicit_mode = CE_IMPLICIT_AUTO;
+  c.implicit_mode = CE_IMPLICIT_AUTO;
   std::vector<double> fine = {1e-2, 7e-3, 5e-3, 3e-3, 2e-3, 1e-3, 1e-4, 1e-5};
   std::vector<double> auto_o6 = {6e-3, 5e-3, 4e-3, 3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
   std::vector<double> tight = {5e-3, 4e-3, 3e-3, 2e-3, 1e-3, 5e-4, 1e-4};
   std::vector<double> coarse = {1e-2, 7e-3, 5e-3, 3e-3, 2e-3, 1e-3};
   if (args.quick) fine = auto_o6 = coarse = tight = {3e-3, 1e-3};
-  for (double h : fine) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP-auto");
-  for (double h : auto_o6) wp::MeasureCeode(&table, ctx, p2, "G6_O6", h, false, "G6_O6-auto");
-  for (double h : tight) wp::MeasureCeode(&table, ctx, p2, "G8_O8", h, false, "G8_O8-auto");
-  p2.implicit_mode = CE_IMPLICIT_NEWTON;
-  p2.msbj = 1;
-  p2.nls_reltol = 1e-8;
-  for (double h : coarse) wp::MeasureCeode(&table, ctx, p2, "G5_TOP", h, false, "G5_TOP-J1-nls8");
-  p2.msbj = 0;
-  p2.nls_reltol = 0;
+  for (double h : fine) wp::MeasureCeode(&table, ctx, p, c, h, "G5_TOP-auto");
+  c.method = "G6_O6";
+  for (double h : auto_o6) wp::MeasureCeode(&table, ctx, p, c, h, "G6_O6-auto");
+  c.method = "G8_O8";
+  for (double h : tight) wp::MeasureCeode(&table, ctx, p, c, h, "G8_O8-auto");
+  c.method = "G5_TOP";
+  c.implicit_mode = CE_IMPLICIT_NEWTON;
+  c.msbj = 1;
+  c.nls_rtol = 1e-8;
+  for (double h : coarse) wp::MeasureCeode(&table, ctx, p, c, h, "G5_TOP-J1-nls8");
+  c.msbj = 0;
+  c.nls_rtol = 0;
   ARKodeButcherTable rk3 = wp::KuttaRk3();
   if (rk3 == nullptr) return 1;
   for (double h : steps) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kErkFixed, h, 0, rk3, "RK3-Kutta");
+    wp::MeasureSundials(&table, ctx, p, {wp::Sun::kErkFixed, 0, rk3}, h, "RK3-Kutta");
   }
   ARKodeButcherTable_Free(rk3);
-  for (double tol : tols) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kErkAdaptive, tol, 1e-3, nullptr, "adaptive");
-  }
-  for (double tol : tols) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kCvodeAdams, tol, 1e-3, nullptr, "adaptive");
-  }
-  // An implicit multistep method for completeness: the top is not stiff, so BDF's
-  // Newton work per step is the price it pays here.
-  for (double tol : tols) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kCvodeBdf, tol, 1e-3, nullptr, "adaptive");
+  // BDF for completeness: the top is not stiff, so its Newton work per step is the price here.
+  for (wp::Sun kind : {wp::Sun::kErk, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
+    for (double tol : tols) {
+      wp::MeasureSundials(&table, ctx, p, {kind, 0, nullptr, 1e-3}, tol, "adaptive");
+    }
   }
 
 #ifdef CEODE_BENCH_PEERS
   // The peers (bench/peers.h); f depends on the rates: no symplectic peer.
   peers::Setup();
-  peers::Problem pp;
-  pp.n = 3;
-  pp.acc = PeerAccel;
-  pp.user = &top;
-  pp.tend = 10.0;
-  pp.x0 = q0;
-  pp.v0 = w0;
-  pp.err = Err2;
   // RK4 reaches round-off at h = 1e-4: a finer grid above it for its order fit.
   std::vector<double> peer_steps = {1e-2, 5e-3, 2e-3, 1e-3, 1e-4};
   if (args.quick) peer_steps = steps;
-  peers::MeasurePeers<3>(&table, pp, peer_steps, tols, 1e-3);
+  peers::MeasurePeers<3>(&table, p, peer_steps, tols, 1e-3);
   bad += peers::CheckPeerOrders(table, 1e-13, 1e-4);
 #else
   std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
@@ -272,7 +204,8 @@ int main(int argc, char** argv) {
   const double paper_h[2] = {1e-2, 1e-3}, paper_e[2] = {2.28e-5, 3.09e-9};
   for (int i = 0; i < 2; ++i) {
     wp::Outcome o;
-    const bool ran = wp::CeodeOnce(ctx, p2, "G5_TOP", paper_h[i], true, &o) == 0;
+    c.zero_start = true;
+    const bool ran = wp::CeodeRun(ctx, p, c, paper_h[i], &o) == 0;
     const bool ok = ran && o.error < 2 * paper_e[i] && o.error > paper_e[i] / 2;
     std::printf("Table 7, h = %.0e: %.3e (paper %.3e, ratio %.3f) %s\n", paper_h[i], o.error,
                 paper_e[i], o.error / paper_e[i], ok ? "ok" : "-- OFF");

@@ -34,9 +34,9 @@ struct Chain {
 // Entries of the CSR saddle-point matrix [[I, G^T], [G, 0]].
 inline long SaddleNnz(long N) { return 2 * N + 2 * (4 * N - 2); }
 
-inline int Rhs(sunrealtype, N_Vector, N_Vector, N_Vector f, void* data) {
+// The applied force (gravity); M = I.
+inline int Gravity(double, const double*, const double*, double* F, void* data) {
   const Chain* c = static_cast<const Chain*>(data);
-  double* F = N_VGetArrayPointer(f);
   for (long i = 0; i < c->N; ++i) {
     F[2 * i] = 0.0;
     F[2 * i + 1] = -kGrav;
@@ -143,7 +143,7 @@ inline Chain Make(long N) {
   return c;
 }
 
-// CEODE's figures on (x, x'), user data a Chain.
+// The error and drift on (x, x'), user data a Chain.
 inline double ErrXV(double, const double* x, const double* v, void* u) {
   const Chain* c = static_cast<const Chain*>(u);
   return std::fabs(Energy(c->N, x, v) - c->e0);
@@ -152,10 +152,11 @@ inline double DriftXV(double, const double* x, const double*, void* u) {
   return Drift(static_cast<const Chain*>(u), x);
 }
 
-// The CEODE description of the chain (KLU saddle matrix unless dense).
-inline wp::SecondOrder Problem(Chain* c, double tend, bool dense) {
-  wp::SecondOrder p;
-  p.n = static_cast<int>(2 * c->N), p.f = Rhs, p.user = c, p.tend = tend;
+// The description of the chain (KLU saddle matrix unless dense).
+inline wp::Problem Problem(Chain* c, double tend, bool dense) {
+  wp::Problem p;
+  p.n = static_cast<int>(2 * c->N), p.user = c, p.tend = tend;
+  p.Lift<Gravity>();
   p.x0.resize(p.n), p.v0.resize(p.n);
   InitialState(*c, p.x0.data(), p.v0.data());
   p.err = ErrXV, p.drift = DriftXV;

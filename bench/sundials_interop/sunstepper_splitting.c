@@ -29,7 +29,7 @@ int main(void) {
 #include <math.h>
 #include <nvector/nvector_serial.h>
 
-#include "../examples/mri_two_scale_model.h"
+#include "../../examples/mri_two_scale_model.h"
 
 #define OMEGA 10.0
 #define TEND 2.0

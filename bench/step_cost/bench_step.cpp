@@ -1,10 +1,10 @@
 // -----------------------------------------------------------------------------
 // bench_step: the per-step cost of CEODE's explicit step against the same method written by
-// hand on raw doubles (issue 11's floor), side by side in one run, with the ratios printed.
+// hand on raw doubles (the floor), side by side in one run, with the ratios printed.
 //
 // Problem: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n, x(0) = 1, v(0) = 0, h = 1e-3
 // (far inside every stability limit). Methods G3_CD and G4_A34 at n = 1, 10^4, 3*10^4, 10^5,
-// 3*10^5, 10^6 and G8_O8 at n = 1 (issue 14's pendulum is n = 1). Variants (one benchmark iteration
+// 3*10^5, 10^6 and G8_O8 at n = 1 (the high-order pendulum is n = 1). Variants (one benchmark iteration
 // = K steps; the time shown is per iteration, the ratios table is per step):
 //   ceode       CEodeEvolve(tout K steps ahead, CE_NORMAL): no output copy per step;
 //   ceode_1step CEodeEvolve(CE_ONE_STEP) K times: two output copies per step (the API's);
@@ -209,6 +209,13 @@ HandFn HandStepFn(int degree, bool fused) {
 }
 
 // ---- CEODE ----------------------------------------------------------------------------------
+// The update's test-only toggles (the fused one-pass kernel, in-place plans): the one place they
+// are set. Defaults: both on.
+bool SetUpdateToggles(void* mem, bool fused, bool in_place) {
+  return CEodeSetFusedKernel(mem, fused ? SUNTRUE : SUNFALSE) == CE_SUCCESS &&
+         CEodeSetInPlaceUpdate(mem, in_place ? SUNTRUE : SUNFALSE) == CE_SUCCESS;
+}
+
 struct CeodeRun {
   SUNContext ctx = nullptr;
   N_Vector x = nullptr, v = nullptr;
@@ -217,8 +224,10 @@ struct CeodeRun {
   double t = 0;
   bool ok = false;
 
-  // generic: the N_Vector reference update instead of the fused kernel (CEodeSetFusedKernel).
-  CeodeRun(const Method& m, long n, bool generic = false) : k(SpringConstants(n)) {
+  // generic: the N_Vector reference update instead of the fused kernel; two_buffers: no in-place
+  // plans.
+  CeodeRun(const Method& m, long n, bool generic = false, bool two_buffers = false)
+      : k(SpringConstants(n)) {
     if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return;
     x = N_VNew_Serial(n, ctx);
     v = N_VNew_Serial(n, ctx);
@@ -232,7 +241,7 @@ struct CeodeRun {
          CEodeSetFixedStep(mem, kStep) == CE_SUCCESS &&
          CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0) == CE_SUCCESS &&
          CEodeSetMaxNumSteps(mem, 1L << 40) == CE_SUCCESS &&
-         CEodeSetFusedKernel(mem, generic ? SUNFALSE : SUNTRUE) == CE_SUCCESS &&
+         SetUpdateToggles(mem, !generic, !two_buffers) &&
          CEodeEvolve(mem, 0.0, x, v, &t, CE_NORMAL) >= 0;  // the start, not a step
   }
   ~CeodeRun() {
@@ -374,7 +383,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
   std::map<std::string, double> per_step_;
 };
 
-// The cases of the issue: G3_CD and G4_A34 at every n, G8_O8 at n = 1.
+// The cases: G3_CD and G4_A34 at every n, G8_O8 at n = 1.
 std::vector<std::pair<const Method*, long>> Cases(bool quick) {
   std::vector<std::pair<const Method*, long>> out;
   for (const char* name : {"G3_CD", "G4_A34"}) {
@@ -399,9 +408,7 @@ int CountMode(int argc, char** argv) {
   if (m == nullptr || n < 1 || steps < 0) return 2;
   if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic" ||
       variant == "ceode_two_buffers") {
-    CeodeRun run(*m, n, variant == "ceode_generic");
-    if (variant == "ceode_two_buffers" && CEodeSetInPlaceUpdate(run.mem, SUNFALSE) != CE_SUCCESS)
-      return 1;
+    CeodeRun run(*m, n, variant == "ceode_generic", variant == "ceode_two_buffers");
     return run.ok && run.Steps(steps, variant == "ceode_1step") ? 0 : 1;
   }
   const Coeffs co = MakeCoeffs(*m, kStep);

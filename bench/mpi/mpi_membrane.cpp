@@ -1,4 +1,4 @@
-// CEODE on NVECTOR_PARALLEL (issue 11, docs/mpi.md): a partitioned model with a halo exchange
+// CEODE on NVECTOR_PARALLEL (docs/mpi.md): a partitioned model with a halo exchange
 // inside f, against the same problem on one NVECTOR_SERIAL vector. Two models, one driver:
 //   mpi_membrane  the membrane of bench/mpi_membrane_model.h (5-point Laplacian, lumped unit
 //                 masses, fixed edges; N = nx * ny DOF), one strip of grid rows per rank;
@@ -30,8 +30,6 @@
 //                                      [--csv FILE]
 //   mpiexec -n 2 mpi_membrane --quick        (N = 10^4, 100 steps, 1 repetition: ctest)
 //   ... --no-halo    (negative control: the P-rank run skips its halo exchanges; exit 1)
-//   ... --only serial|one|many|petsc           (that configuration alone, for a profiler; no
-//   checks)
 // Defaults: N = 10^6 (1000 x 1000), 300 steps, 3 repetitions, G3_CD at 0.9 of its limit.
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
@@ -81,7 +79,6 @@ struct Options {
   std::string csv;
   double h_factor = 0.9;
   bool quick = false;
-  std::string only;      // "serial", "one", "many" or "petsc": that alone (profiling, no checks)
   bool no_halo = false;  // negative control: the P-rank f never exchanges (the checks must fail)
 };
 
@@ -102,8 +99,6 @@ bool ParseArgs(int argc, char** argv, Options* o) {
       o->reps = std::atoi(argv[++i]);
     } else if (a == "--method" && more) {
       o->method = argv[++i];
-    } else if (a == "--only" && more) {
-      o->only = argv[++i];
     } else if (a == "--no-halo") {
       o->no_halo = true;
     } else if (a == "--csv" && more) {
@@ -112,9 +107,7 @@ bool ParseArgs(int argc, char** argv, Options* o) {
       return false;
     }
   }
-  const bool only_ok = o->only.empty() || o->only == "serial" || o->only == "one" ||
-                       o->only == "many" || o->only == "petsc";
-  return o->n >= 4 && o->steps >= 4 && o->reps >= 1 && only_ok;
+  return o->n >= 4 && o->steps >= 4 && o->reps >= 1;
 }
 
 // All ranks of comm meet here without spinning: a rank that waits for a long computation on
@@ -433,26 +426,25 @@ std::vector<Config> Measure(Problem* p, const Options& o, double h, int rank, in
     cfg[c].name = names[c];
     cfg[c].ranks = c == kMany || c == kHandMany || c == kPetscMany ? size : 1;
   }
-  const auto run = [&o](const char* name) { return o.only.empty() || o.only == name; };
-  const bool hand = o.method == "G3_CD" && o.only.empty();
+  const bool hand = o.method == "G3_CD";
   for (int r = 0; r < o.reps; ++r) {
-    if (rank == 0 && run("serial")) {
+    if (rank == 0) {
       Record(&cfg[kSerial], Integrate(p->xs, p->vs, &p->whole, o, h, MPI_COMM_SELF));
     }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (rank == 0 && run("one")) {
+    if (rank == 0) {
       Record(&cfg[kOne], Integrate(p->x1, p->v1, &p->self, o, h, MPI_COMM_SELF));
     }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (size > 1 && run("many")) {
+    if (size > 1) {
       Record(&cfg[kMany], Integrate(p->xp, p->vp, &p->world, o, h, MPI_COMM_WORLD));
     }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (rank == 0 && p->xq1 != nullptr && run("petsc")) {
+    if (rank == 0 && p->xq1 != nullptr) {
       Record(&cfg[kPetscOne], Integrate(p->xq1, p->vq1, &p->self, o, h, MPI_COMM_SELF));
     }
     SleepyBarrier(MPI_COMM_WORLD);
-    if (size > 1 && p->xqp != nullptr && run("petsc")) {
+    if (size > 1 && p->xqp != nullptr) {
       Record(&cfg[kPetscMany], Integrate(p->xqp, p->vqp, &p->world, o, h, MPI_COMM_WORLD));
     }
     if (rank == 0 && hand) {
@@ -614,18 +606,6 @@ void Report(const Options& o, const Problem& p, double h, const std::vector<Conf
   std::printf("checks: %s\n", v.ok ? "passed" : "FAILED");
 }
 
-// --only: the one configuration's figures (under a profiler), no comparison to check.
-void ReportOnly(const std::vector<Config>& cfg) {
-  for (const Config& c : cfg) {
-    if (c.per_step.empty()) continue;
-    std::printf(
-        "%s on %d rank(s) only: %.4f ms/step wall, %.4f CPU; %.3g MPI_Allreduce and %.3g "
-        "halo exchanges per step; checks skipped (--only)\n",
-        c.name.c_str(), c.ranks, c.Best() * 1e3, c.BestCpu() * 1e3, c.allreduces_per_step,
-        c.exchanges_per_step);
-  }
-}
-
 void WriteCsv(const Options& o, const Problem& p, double h, const std::vector<Config>& cfg) {
   FILE* f = std::fopen(o.csv.c_str(), "w");
   if (f == nullptr) return;
@@ -657,8 +637,7 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       std::fprintf(stderr,
                    "usage: mpiexec -n P mpi_membrane [--quick] [--n N] [--steps S] "
-                   "[--reps R] [--method NAME] [--csv FILE] [--only serial|one|many|petsc] "
-                   "[--no-halo]\n");
+                   "[--reps R] [--method NAME] [--csv FILE] [--no-halo]\n");
     }
     MPI_Finalize();
     return 2;
@@ -678,9 +657,7 @@ int main(int argc, char** argv) {
     double* q = p.xqp != nullptr ? AcquireArray(p.xqp) : nullptr;
     const std::vector<double> petsc_gathered = Gather(p, q, rank, size);
     if (q != nullptr) ReleaseArray(p.xqp, q);
-    if (rank == 0 && !o.only.empty()) {
-      ReportOnly(cfg);
-    } else if (rank == 0) {
+    if (rank == 0) {
       const Verdict v = Check(p, gathered, hand_gathered, petsc_gathered, o, h, cfg);
       Report(o, p, h, cfg, v, load0, size);
       if (!o.csv.empty()) WriteCsv(o, p, h, cfg);

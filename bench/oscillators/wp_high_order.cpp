@@ -15,10 +15,8 @@
 //
 //   wp_high_order [--csv FILE] [--quick]
 //   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
-//                                                     bench/high_order_instructions.sh)
+//                                                     bench/instructions.sh high-order)
 //   wp_high_order --count gsl_rk8pd TOL REPS         (the same for rk8pd at one tolerance)
-//   wp_high_order --interleave ROUNDS                (pendulum, G8_O8 and rk8pd at 1e-9 and 1e-11
-//                                                     only, alternating; see Interleave)
 // Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
 // (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
 // --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
@@ -33,14 +31,15 @@ namespace {
 
 constexpr int kChain = 16;
 
-// One problem: x'' = a(t, x), n degrees of freedom; counts its evaluations.
-struct Problem {
+// One model x'' = a(x) of n degrees of freedom (the user data of its wp::Problem, MakeProblem);
+// counts its evaluations.
+struct Model {
   const char* name;
   int n;
-  double tend;
   void (*accel)(const double* x, double* a, int n);
-  std::vector<double> x0, v0, ref;
+  std::vector<double> ref;
   mutable long evals = 0;
+  const wp::Problem* problem = nullptr;  // the problem it is the user data of
 };
 
 void PendulumAccel(const double* x, double* a, int /*n*/) { a[0] = -9.81 * std::cos(x[0]); }
@@ -57,7 +56,7 @@ void ChainAccelT(const T* x, T* a, int n) {
 void ChainAccel(const double* x, double* a, int n) { ChainAccelT(x, a, n); }
 
 // Long-double RK4 reference with Richardson extrapolation (see the header comment).
-std::vector<double> Reference(const Problem& p) {
+std::vector<double> Reference(const wp::Problem& p) {
   auto run = [&p](long steps) {
     const int n = p.n;
     std::vector<long double> x(p.x0.begin(), p.x0.end()), v(p.v0.begin(), p.v0.end());
@@ -95,10 +94,38 @@ std::vector<double> Reference(const Problem& p) {
   return r;
 }
 
-double ErrorOf(const Problem& p, const double* x) {
+const Model& M(const wp::Problem& p) { return *static_cast<const Model*>(p.user); }
+
+double ErrorOf(const wp::Problem& p, const double* x) {
   double e = 0;
-  for (int i = 0; i < p.n; ++i) e = std::max(e, std::fabs(x[i] - p.ref[i]));
+  for (int i = 0; i < p.n; ++i) e = std::max(e, std::fabs(x[i] - M(p).ref[i]));
   return e;
+}
+
+// a = accel(x), counted; lifted by the harness to CEODE's, ARKODE's and the peers' forms.
+int Acc(double, const double* x, const double*, double* a, void* user) {
+  const auto* m = static_cast<const Model*>(user);
+  ++m->evals;
+  m->accel(x, a, m->n);
+  return 0;
+}
+
+// Only theta(10) / x(10) counts: earlier instants report no error.
+double EndError(double t, const double* x, const double*, void* user) {
+  const wp::Problem* p = static_cast<const Model*>(user)->problem;
+  return t < p->tend - 1e-9 ? 0.0 : ErrorOf(*p, x);
+}
+
+wp::Problem MakeProblem(Model* m, std::vector<double> x0) {
+  wp::Problem p;
+  p.n = m->n;
+  p.Lift<Acc>();
+  p.user = m;
+  p.tend = 10;
+  p.x0 = std::move(x0);
+  p.v0.assign(m->n, 0.0);
+  p.err = EndError;
+  return p;
 }
 
 struct Result {
@@ -107,22 +134,15 @@ struct Result {
   long evals = 0;
 };
 
-// ---- CEODE -----------------------------------------------------------------
-int CeodeRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* data) {
-  const auto* p = static_cast<const Problem*>(data);
-  ++p->evals;
-  p->accel(N_VGetArrayPointer(x), N_VGetArrayPointer(f), p->n);
-  return 0;
-}
-
-int CeodeRun(SUNContext ctx, const Problem& p, const char* method, long steps, bool comp,
+// ---- CEODE: fixed steps (h divides t_end) in normal mode, one output at t_end ----------------
+int CeodeRun(SUNContext ctx, const wp::Problem& p, const char* method, long steps, bool comp,
              double* err) {
   N_Vector x = N_VNew_Serial(p.n, ctx), v = N_VNew_Serial(p.n, ctx);
   std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(x));
   std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(v));
   void* mem = CEodeCreate(ctx);
-  int flag = CEodeInit(mem, CeodeRhs, 0, x, v);
-  if (flag == 0) flag = CEodeSetUserData(mem, const_cast<Problem*>(&p));
+  int flag = CEodeInit(mem, p.f2, 0, x, v);
+  if (flag == 0) flag = CEodeSetUserData(mem, p.user);
   if (flag == 0) flag = CEodeSetMethodByName(mem, method);
   if (flag == 0) flag = CEodeSetFixedStep(mem, p.tend / steps);
   if (flag == 0) flag = CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0);
@@ -137,61 +157,23 @@ int CeodeRun(SUNContext ctx, const Problem& p, const char* method, long steps, b
   return flag < 0 ? 1 : 0;
 }
 
-// ---- the peers (bench/peers.h) --------------------------------------------------
-// x'' = accel(x) as peers::AccFn; counts the evaluations in the Problem.
-void PeerAccel(double /*t*/, const double* x, const double* /*v*/, double* a, void* user) {
-  const auto* p = static_cast<const Problem*>(user);
-  ++p->evals;
-  p->accel(x, a, p->n);
-}
-
-// Only theta(10) / x(10) counts: earlier instants report no error.
-double PeerEndError(double t, const double* x, const double* /*v*/, void* user) {
-  const auto* p = static_cast<const Problem*>(user);
-  return t < p->tend - 1e-9 ? 0.0 : ErrorOf(*p, x);
-}
-
-peers::Problem PeerProblem(const Problem& p) {
-  peers::Problem pp;
-  pp.n = p.n;
-  pp.acc = PeerAccel;
-  pp.user = const_cast<Problem*>(&p);
-  pp.tend = p.tend;
-  pp.x0 = p.x0;
-  pp.v0 = p.v0;
-  pp.err = PeerEndError;
-  return pp;
-}
-
-// eps_abs = eps_rel = tol, first trial step 1e-3 (peers::Problem::h0).
-int PeerRun(const peers::Problem& pp, peers::Kind k, double tol, double* err) {
+// ---- the peers (bench/peers.h): eps_abs = eps_rel = tol, first trial step 1e-3 ---------------
+int PeerRun(const wp::Problem& p, peers::Kind k, double tol, double* err) {
   wp::Outcome o;
   const peers::Info& info = peers::InfoOf(k);
-  const int rc = pp.n == 1 ? peers::PeerOnce<1>(pp, info, tol, 1.0, &o)
-                           : peers::PeerOnce<kChain>(pp, info, tol, 1.0, &o);
+  const int rc = p.n == 1 ? peers::PeerOnce<1>(p, info, tol, 1.0, &o)
+                          : peers::PeerOnce<kChain>(p, info, tol, 1.0, &o);
   *err = o.error;
   return rc;
 }
 
-// ---- ARKODE on the first-order form ------------------------------------------------
-void FirstOrder(const Problem& p, const double* y, double* dy) {
-  ++p.evals;
-  std::copy(y + p.n, y + 2 * p.n, dy);
-  p.accel(y, dy + p.n, p.n);
-}
-
-int ArkRhs(sunrealtype /*t*/, N_Vector y, N_Vector dy, void* data) {
-  FirstOrder(*static_cast<const Problem*>(data), N_VGetArrayPointer(y), N_VGetArrayPointer(dy));
-  return 0;
-}
-
-int ArkRun(SUNContext ctx, const Problem& p, double tol, double* err) {
+// ---- ARKODE ERKStep at order 8 on the first-order form, stop time at t_end ----------------
+int ArkRun(SUNContext ctx, const wp::Problem& p, double tol, double* err) {
   N_Vector y = N_VNew_Serial(2 * p.n, ctx);
-  double* yd = N_VGetArrayPointer(y);
-  std::copy(p.x0.begin(), p.x0.end(), yd);
-  std::copy(p.v0.begin(), p.v0.end(), yd + p.n);
-  void* mem = ERKStepCreate(ArkRhs, 0, y, ctx);
-  int flag = ERKStepSetUserData(mem, const_cast<Problem*>(&p));
+  const std::vector<double> y0 = p.FirstOrderStart();
+  std::copy(y0.begin(), y0.end(), N_VGetArrayPointer(y));
+  void* mem = ERKStepCreate(p.f1, 0, y, ctx);
+  int flag = ERKStepSetUserData(mem, p.user);
   if (flag == 0) flag = ERKStepSetTableNum(mem, ARKODE_FEHLBERG_13_7_8);
   if (flag == 0) flag = ERKStepSStolerances(mem, tol, tol);
   if (flag == 0) flag = ERKStepSetStopTime(mem, p.tend);
@@ -206,23 +188,22 @@ int ArkRun(SUNContext ctx, const Problem& p, double tol, double* err) {
 
 // Times run (returns 0 on success) and records error and evaluations of one call.
 template <class F>
-bool Measure(const Problem& p, const std::string& solver, double param, F run,
+bool Measure(const wp::Problem& p, const std::string& solver, double param, F run,
              std::vector<Result>* out) {
   double err = 0;
-  p.evals = 0;
+  M(p).evals = 0;
   if (run(&err) != 0) return false;
-  Result r{solver, param, err, 0, p.evals};
+  Result r{solver, param, err, 0, M(p).evals};
   double dummy = 0;
   r.seconds = wp::TimeMedian([&] { return run(&dummy); });
-  std::printf("%-10s %-14s %10.4g  error %.3e  f-evals %8ld  %.3e s\n", p.name, solver.c_str(),
-              param, r.error, r.evals, r.seconds);
+  std::printf("%-10s %-14s %10.4g  error %.3e  f-evals %8ld  %.3e s\n", M(p).name,
+              solver.c_str(), param, r.error, r.evals, r.seconds);
   out->push_back(r);
   return r.seconds >= 0;
 }
 
-// CPU time at a target error: wp::TimeAtError, the one equal-error rule of every scene
-// (measured points at or below the target, log-log interpolation on every segment of the
-// curve, in run order, that crosses it); < 0: the curve does not reach the target.
+// CPU time at a target error: wp::TimeAtError, the one equal-error rule of every scene;
+// < 0: the curve does not reach the target.
 double TimeAt(const std::vector<Result>& rs, double target) {
   std::vector<wp::Row> rows;
   for (const Result& r : rs) {
@@ -242,7 +223,7 @@ struct Plan {
 };
 
 // Every solver on one problem; *g8_best: G8_O8's smallest error (the quick check).
-bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<Result>* rs,
+bool RunSolvers(SUNContext ctx, const Plan& plan, const wp::Problem& p, std::vector<Result>* rs,
                 double* g8_best) {
   bool ok = true;
   for (const char* m : plan.sets) {
@@ -256,17 +237,15 @@ bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<
       }
     }
   }
-  const peers::Problem pp = PeerProblem(p);
+  const std::pair<const char*, peers::Kind> peer_runs[] = {
+      {"gsl_rk8pd", peers::Kind::kRk8pd},
+      {"odeint_rkf78", peers::Kind::kRkf78},
+      {"odeint_bs", peers::Kind::kBulirschStoer}};
   for (double tol : plan.tols) {
-    ok &= Measure(
-        p, "gsl_rk8pd", tol, [&](double* e) { return PeerRun(pp, peers::Kind::kRk8pd, tol, e); },
-        rs);
-    ok &= Measure(
-        p, "odeint_rkf78", tol, [&](double* e) { return PeerRun(pp, peers::Kind::kRkf78, tol, e); },
-        rs);
-    ok &= Measure(
-        p, "odeint_bs", tol,
-        [&](double* e) { return PeerRun(pp, peers::Kind::kBulirschStoer, tol, e); }, rs);
+    for (const auto& k : peer_runs) {
+      ok &= Measure(
+          p, k.first, tol, [&](double* e) { return PeerRun(p, k.second, tol, e); }, rs);
+    }
     ok &= Measure(
         p, "arkode_erk8", tol, [&](double* e) { return ArkRun(ctx, p, tol, e); }, rs);
   }
@@ -274,18 +253,19 @@ bool RunSolvers(SUNContext ctx, const Plan& plan, const Problem& p, std::vector<
 }
 
 // CSV rows and the summary table of one problem.
-void Summarise(const Problem& p, const std::vector<Result>& rs, FILE* csv) {
+void Summarise(const wp::Problem& p, const std::vector<Result>& rs, FILE* csv) {
   std::map<std::string, std::vector<Result>> by;
   for (const Result& r : rs) {
     by[r.solver].push_back(r);
     if (csv) {
-      std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", p.name, r.solver.c_str(),
+      std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", M(p).name, r.solver.c_str(),
                    r.solver.rfind("G", 0) == 0 ? "fixed h" : "adaptive tol", r.param, r.error,
                    r.evals, r.seconds);
     }
   }
   const double g9 = TimeAt(by["gsl_rk8pd"], 1e-9), g11 = TimeAt(by["gsl_rk8pd"], 1e-11);
-  std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n", p.name);
+  std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n",
+              M(p).name);
   for (const auto& kv : by) {
     const double t9 = TimeAt(kv.second, 1e-9), t11 = TimeAt(kv.second, 1e-11);
     double best = 1e300;
@@ -304,21 +284,21 @@ int CountRuns(int argc, char** argv) {
   }
   SUNContext ctx;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
-  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
+  Model pend{"pendulum", 1, PendulumAccel, {0}};
+  wp::Problem p = MakeProblem(&pend, {0});
+  pend.problem = &p;
   const long steps = std::atol(argv[3]);
   const int reps = std::atoi(argv[4]);
   const bool comp = argc > 5 && std::strcmp(argv[5], "comp") == 0;
   int rc = 0;
   double err = 0;
-  pend.ref = {0};
   if (std::strcmp(argv[2], "gsl_rk8pd") == 0) {  // STEPS is then the tolerance
     peers::Setup();
     const double tol = std::atof(argv[3]);
-    const peers::Problem pp = PeerProblem(pend);
-    for (int r = 0; r < reps && rc == 0; ++r) rc = PeerRun(pp, peers::Kind::kRk8pd, tol, &err);
+    for (int r = 0; r < reps && rc == 0; ++r) rc = PeerRun(p, peers::Kind::kRk8pd, tol, &err);
     std::printf("gsl_rk8pd tol %g x %d runs: |theta(10)| = %.17g\n", tol, reps, err);
   } else {
-    for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, pend, argv[2], steps, comp, &err);
+    for (int r = 0; r < reps && rc == 0; ++r) rc = CeodeRun(ctx, p, argv[2], steps, comp, &err);
     std::printf("%s %ld steps x %d runs%s: |theta(10)| = %.17g\n", argv[2], steps, reps,
                 comp ? " +comp" : "", err);
   }
@@ -326,78 +306,23 @@ int CountRuns(int argc, char** argv) {
   return rc;
 }
 
-// rk8pd's time at a target error: log-log between the two tolerances whose errors bracket it.
-double BracketTime(const Result& a, const Result& b, double target) {
-  const double f = std::log(a.error / target) / std::log(a.error / b.error);
-  return std::exp(std::log(a.seconds) + f * std::log(b.seconds / a.seconds));
-}
-
-// --interleave ROUNDS: the pendulum's equal-error comparison at 1e-9 and 1e-11 only, CEODE and
-// rk8pd alternating in every round (G8_O8 at 665 and 1100 steps: errors 9.8e-10, 9.9e-12;
-// rk8pd at tol 1e-9 ... 1e-12, its time at the target interpolated between the bracketing
-// tolerances), each point wp::TimeMedian as in the full run; prints every round and the
-// median ratios. For a loaded machine, where separate runs of the two sides drift apart.
-int Interleave(int argc, char** argv) {
-  const int rounds = argc > 2 ? std::atoi(argv[2]) : 5;
-  SUNContext ctx;
-  if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
-  peers::Setup();
-  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
-  pend.ref = Reference(pend);
-  std::printf("reference theta(10) = %.17g\n", pend.ref[0]);
-  const peers::Problem pp = PeerProblem(pend);
-  const long steps[2] = {665, 1100};
-  const double tols[4] = {1e-9, 1e-10, 1e-11, 1e-12};
-  std::vector<double> r9, r11;
-  bool ok = true;
-  for (int r = 0; r < rounds && ok; ++r) {
-    std::vector<Result> rs;
-    for (int i = 0; i < 4; ++i) {
-      if (i < 2) {
-        ok &= Measure(
-            pend, "G8_O8", pend.tend / steps[i],
-            [&](double* e) { return CeodeRun(ctx, pend, "G8_O8", steps[i], false, e); }, &rs);
-      }
-      ok &= Measure(
-          pend, "gsl_rk8pd", tols[i],
-          [&](double* e) { return PeerRun(pp, peers::Kind::kRk8pd, tols[i], e); }, &rs);
-    }
-    if (!ok) break;
-    // rs: G8_O8 665, rk8pd 1e-9, G8_O8 1100, rk8pd 1e-10, rk8pd 1e-11, rk8pd 1e-12.
-    r9.push_back(rs[0].seconds / BracketTime(rs[1], rs[3], 1e-9));
-    r11.push_back(rs[2].seconds / BracketTime(rs[4], rs[5], 1e-11));
-    std::printf("round %d: G8_O8 / rk8pd at 1e-9 %.3f, at 1e-11 %.3f\n", r + 1, r9.back(),
-                r11.back());
-  }
-  SUNContext_Free(&ctx);
-  if (!ok || r9.empty()) return 1;
-  std::sort(r9.begin(), r9.end());
-  std::sort(r11.begin(), r11.end());
-  std::printf(
-      "median of %zu rounds: G8_O8 / rk8pd at 1e-9 %.3f (%.3f .. %.3f), at 1e-11 %.3f "
-      "(%.3f .. %.3f)\n",
-      r9.size(), r9[r9.size() / 2], r9.front(), r9.back(), r11[r11.size() / 2], r11.front(),
-      r11.back());
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::strcmp(argv[1], "--count") == 0) return CountRuns(argc, argv);
-  if (argc > 1 && std::strcmp(argv[1], "--interleave") == 0) return Interleave(argc, argv);
   const wp::Args args = wp::ParseArgs(argc, argv);
   peers::Setup();
   SUNContext ctx;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
-  Problem pend{"pendulum", 1, 10, PendulumAccel, {0}, {0}, {}};
-  Problem chain{"fpu_chain", kChain, 10, ChainAccel, {}, std::vector<double>(kChain, 0), {}};
+  Model pend{"pendulum", 1, PendulumAccel, {}};
+  Model chain{"fpu_chain", kChain, ChainAccel, {}};
+  std::vector<double> chain_x0;
   for (int i = 0; i < kChain; ++i) {
     const double q = M_PI * (i + 1) / (kChain + 1);
-    chain.x0.push_back(std::sin(q) + 0.3 * std::sin(5 * q));
+    chain_x0.push_back(std::sin(q) + 0.3 * std::sin(5 * q));
   }
-  std::vector<Problem*> problems = {&pend};
-  if (!args.quick) problems.push_back(&chain);
+  std::vector<wp::Problem> problems = {MakeProblem(&pend, {0})};
+  if (!args.quick) problems.push_back(MakeProblem(&chain, chain_x0));
   Plan plan;
   if (args.quick) {
     plan = {{"G8_O8"}, {400, 1600}, {1e-10}};
@@ -408,16 +333,18 @@ int main(int argc, char** argv) {
     plan.tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
   }
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
-  if (csv) std::fprintf(csv, "scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds\n");
+  if (csv) std::fputs(wp::kCsvHeader, csv);
   bool ok = true;
   double quick_best = 1;
-  for (Problem* p : problems) {
-    p->ref = Reference(*p);
+  for (wp::Problem& p : problems) {
+    Model* m = static_cast<Model*>(p.user);
+    m->problem = &p;
+    m->ref = Reference(p);
     std::vector<Result> rs;
     double g8 = 1;
-    ok &= RunSolvers(ctx, plan, *p, &rs, &g8);
-    if (p == &pend) quick_best = g8;
-    Summarise(*p, rs, csv);
+    ok &= RunSolvers(ctx, plan, p, &rs, &g8);
+    if (m == &pend) quick_best = g8;
+    Summarise(p, rs, csv);
   }
   if (csv) std::fclose(csv);
   SUNContext_Free(&ctx);

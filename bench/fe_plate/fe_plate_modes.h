@@ -1,7 +1,7 @@
 // -----------------------------------------------------------------------------
 // fe_plate_modes.h: the lowest vibration modes of the FE plate (bench/fe_plate_model.h)
 // and the closed-form modal response with Rayleigh damping, for the reference
-// solutions of the plate scenes (bench/wp_fe_damped_*.cpp).
+// solutions of the plate scenes (bench/fe_plate/wp_fe_*.cpp).
 //
 // Modes: subspace iteration (block of 6, 60 sweeps) with a sparse LDL^T of K and
 // Rayleigh-Ritz on (K, M), M the lumped masses; the residual ||K phi - w^2 M phi|| /

@@ -1,7 +1,7 @@
 // -----------------------------------------------------------------------------
-// fe_damped_scene.h: the Rayleigh-damped FE plate (issue 11, scene 3), shared by
-// bench/wp_fe_damped_mass.cpp (C = a M: mass-proportional) and
-// bench/wp_fe_damped_stiff.cpp (C = b K: stiffness-proportional).
+// fe_damped_scene.h: the Rayleigh-damped FE plate, shared by
+// wp_fe_damped_mass.cpp (C = a M: mass-proportional) and wp_fe_damped_stiff.cpp (C = b K:
+// stiffness-proportional).
 //
 // The Q4 cantilever of bench/fe_plate_model.h, f = -M^{-1} (K x + C v), C = a M + b K,
 // lumped M. Start x0 = phi_1 + 0.3 phi_2, v0 = 0; Rayleigh damping keeps the modes
@@ -38,11 +38,11 @@
 
 #include "fe_plate_model.h"
 #include "fe_plate_modes.h"
-#include "fe_scene.h"
+#include "wp_common.h"
 
 namespace fed {
 
-using fes::Vec;
+using wp::Vec;
 
 enum class Damping { kMass, kStiffness };
 
@@ -50,22 +50,11 @@ struct Scene {
   fe::Plate plate;
   fe::Modes modes;
   double amp2 = 0.3;
-  fes::Problem prob;
+  wp::Problem prob;
 };
 
-inline int Rhs2(sunrealtype, N_Vector x, N_Vector v, N_Vector a, void* user) {
-  const auto* s = static_cast<const Scene*>(user);
-  fe::AccelDamped(s->plate, N_VGetArrayPointer(x), N_VGetArrayPointer(v), N_VGetArrayPointer(a));
-  return 0;
-}
-
-inline int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
-  const auto* s = static_cast<const Scene*>(user);
-  const int n = s->plate.n;
-  const double* Y = N_VGetArrayPointer(y);
-  double* D = N_VGetArrayPointer(yd);
-  std::copy(Y + n, Y + 2 * n, D);
-  fe::AccelDamped(s->plate, Y, Y + n, D + n);
+inline int Accel(double, const double* x, const double* v, double* a, void* user) {
+  fe::AccelDamped(static_cast<const Scene*>(user)->plate, x, v, a);
   return 0;
 }
 
@@ -102,19 +91,19 @@ inline void BuildScene(Scene* s, int ny) {
   s->plate = fe::MakePlate(4 * ny, ny);
   s->modes = fe::LowestModes(s->plate, 2);
   const double w1 = s->modes.w[0];
-  fes::Problem& p = s->prob;
+  wp::Problem& p = s->prob;
   p.n = s->plate.n;
   p.user = s;
-  p.f2 = Rhs2;
-  p.f1 = Rhs1;
+  p.Lift<Accel>();
+  p.nout = 20;
   p.fe = RhsExplicit;
   p.fi = RhsImplicit;
   p.fi_linear = true;
   p.x0.resize(p.n);
   for (int k = 0; k < p.n; ++k) p.x0[k] = s->modes.phi[0][k] + s->amp2 * s->modes.phi[1][k];
   p.v0.assign(p.n, 0.0);
-  p.mass = s->plate.mass;
-  p.x0norm = fes::Norm2(p.x0);
+  p.lumped_mass = s->plate.mass;
+  p.x0norm = wp::Norm2(p.x0);
   p.tend = 2 * M_PI / w1;
 }
 
@@ -127,12 +116,12 @@ inline void SetDamping(Scene* s, Damping kind, double omega_max) {
   } else {
     s->plate.damp_k = 2 * 2.0 / omega_max;
   }
-  fes::Problem& p = s->prob;
+  wp::Problem& p = s->prob;
   p.ref.clear();
   const double z1 = fe::RayleighZeta(s->plate, s->modes.w[0]);
   const double z2 = fe::RayleighZeta(s->plate, s->modes.w[1]);
   for (int k = 1; k <= p.nout; ++k) {
-    const double t = fes::OutputTime(p, k);
+    const double t = wp::OutputTime(p, k);
     const double q1 = fe::DampedModeResponse(s->modes.w[0], z1, t);
     const double q2 = s->amp2 * fe::DampedModeResponse(s->modes.w[1], z2, t);
     Vec x(p.n);
@@ -144,17 +133,17 @@ inline void SetDamping(Scene* s, Damping kind, double omega_max) {
 // The explicit central-difference loop with damping (see the header comment).
 inline int HandRun(Scene* s, double h_req, wp::Outcome* out) {
   const fe::Plate& p = s->plate;
-  const fes::Problem& pr = s->prob;
+  const wp::Problem& pr = s->prob;
   const int n = p.n;
-  const long m = fes::StepsPerOutput(pr, h_req);
-  const double h = fes::FixedStep(pr, h_req);
+  const long m = wp::StepsPerOutput(pr, h_req);
+  const double h = wp::FixedStep(pr, h_req);
   const double am = p.damp_m, bk = p.damp_k;
   const double c0 = (1 - 0.5 * am * h) / (1 + 0.5 * am * h), c1 = h / (1 + 0.5 * am * h);
   Vec x(pr.x0), v(n), a(n), w(n);
   fe::AccelDamped(p, x.data(), pr.v0.data(), a.data());
   for (int k = 0; k < n; ++k) v[k] = pr.v0[k] + 0.5 * h * a[k];  // v_{1/2}
   for (int k = 0; k < n; ++k) x[k] += h * v[k];
-  double emax = 0;
+  wp::Track tr(pr);
   long steps = 1;
   for (int o = 1; o <= pr.nout; ++o) {
     for (long j = (o == 1 ? 1 : 0); j < m; ++j, ++steps) {
@@ -169,54 +158,17 @@ inline int HandRun(Scene* s, double h_req, wp::Outcome* out) {
         x[k] += h * v[k];
       }
     }
-    const double e = fes::RelError(pr, o, x.data());
-    if (!(e <= emax)) emax = e;
+    tr.Output(o, x.data());
   }
   out->steps = steps;
   out->rhs_evals = steps;
-  out->error = emax;
-  return std::isfinite(emax) ? 0 : 1;
-}
-
-struct CeCurve {
-  std::string label;
-  fes::CeodeCfg cfg;
-  std::vector<double> frac;  // fractions of h_s
-};
-
-// Steps are fractions of each set's own (undamped) stable step from the guard.
-inline void CeodeCurves(SUNContext ctx, Scene* s, const std::vector<CeCurve>& curves,
-                        wp::Rounds* rounds) {
-  for (const CeCurve& c : curves) {
-    const double hs = fes::GuardStep(ctx, &s->prob, c.cfg.method);
-    for (double f : c.frac) {
-      const double hr = f * hs;
-      const double h = fes::FixedStep(s->prob, hr);
-      // The statistics of the numbers run (the first call); the timed calls overwrite them.
-      auto st = std::make_shared<fes::CeodeStats>();
-      wp::Outcome got;
-      const fes::CeodeCfg cfg = c.cfg;
-      const bool ok = rounds->Measure(
-                          "CEODE", c.label, h,
-                          [ctx, s, cfg, hr, st](wp::Outcome* o) {
-                            return fes::CeodeRun(ctx, &s->prob, cfg, hr, o, st.get());
-                          },
-                          &got) >= 0;
-      if (ok && c.cfg.vel) {
-        std::printf(
-            "    %s h = %.3e: %.3f f/step, %.3f nonlinear iters/step, %ld PC steps, "
-            "%ld NLS steps, coupling kappa |df/dv| = %.3e\n",
-            c.label.c_str(), h, static_cast<double>(got.rhs_evals) / got.steps,
-            static_cast<double>(st->nni) / got.steps, st->npc, st->nnls, st->coupling);
-      }
-    }
-  }
+  return tr.Finish(false, out);
 }
 
 inline void HandCurve(Scene* s, const std::vector<double>& frac, double hs, wp::Rounds* rounds) {
   for (double f : frac) {
     const double hr = f * hs;
-    const double h = fes::FixedStep(s->prob, hr);
+    const double h = wp::FixedStep(s->prob, hr);
     rounds->Measure("CEODE-hand", "CD-damped", h,
                     [s, hr](wp::Outcome* o) { return HandRun(s, hr, o); });
   }
@@ -230,20 +182,19 @@ inline double NsPerStep(const wp::Table& t, const std::string& solver, const std
   return 0;
 }
 
-// Fewer points for the costly curves: the main job's few minutes per scene.
-inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
+// Fewer points for the costly curves: a few minutes per scene.
+inline std::vector<wp::FracCurve> CeodeConfigs(Damping kind, bool quick) {
   using V = std::vector<double>;
   const V f_cd = quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4, 0.25, 0.12, 0.06};
   const V f_few = quick ? V{0.9, 0.45, 0.225} : V{0.9, 0.6, 0.4, 0.25};
-  fes::CeodeCfg pc, autom, newton;
+  wp::CeodeOpts pc, autom, newton;
   pc.vel = autom.vel = newton.vel = true;
-  pc.mode = CE_IMPLICIT_PC;
-  autom.mode = CE_IMPLICIT_AUTO;
-  autom.spgmr = newton.spgmr = true;
-  newton.mode = CE_IMPLICIT_NEWTON;
-  fes::CeodeCfg a34 = autom;
+  pc.implicit_mode = CE_IMPLICIT_PC;
+  pc.ls = wp::CeodeOpts::kNone;  // PC never solves; without a solver Newton is a fixed point
+  autom.implicit_mode = CE_IMPLICIT_AUTO;
+  autom.ls = newton.ls = wp::CeodeOpts::kSpgmr;  // matrix-free on M - kappa df/dv
+  wp::CeodeOpts a34 = autom, o4 = autom;
   a34.method = "G4_A34";
-  fes::CeodeCfg o4 = autom;
   o4.method = "G5_O4";
   if (kind == Damping::kMass) {
     return {{"G3_CD-AUTO", autom, f_cd},
@@ -253,12 +204,12 @@ inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
             {"G5_O4-AUTO", o4, quick ? V{0.9} : V{0.9, 0.6, 0.4}}};
   }
   // The Newton tolerance is CEODE's 1e-12 by default; a user at 1e-4 .. 1e-6 can loosen it.
-  fes::CeodeCfg loose = newton;
+  wp::CeodeOpts loose = newton;
   loose.nls_rtol = 1e-7;
-  fes::CeodeCfg lag;  // velocity dependence declared absent: f sees the lagged velocity
-  // G4_A34 diverges here at every step tried: G4Probe shows it, untimed.
-  // AUTO takes Newton here (kappa |df/dv| = 3.6 at 0.9 h_s): the same numbers as a forced Newton
-  // curve, which is therefore not run again (each point costs about 26 s at 3 360 DOF).
+  loose.nls_atol = 1e-2 * loose.nls_rtol;  // |a| ~ 1e-2
+  wp::CeodeOpts lag;  // velocity dependence declared absent: f sees the lagged velocity
+  // G4_A34 diverges here at every step tried: G4Probe shows it, untimed. AUTO takes Newton here
+  // (kappa |df/dv| = 3.6 at 0.9 h_s): the same numbers as a forced Newton curve, not run again.
   return {{"G3_CD-AUTO", autom, quick ? V{0.9} : V{0.9, 0.6}},
           {"G3_CD-Newton-SPGMR-rtol1e-7", loose, quick ? f_cd : V{0.9, 0.6, 0.4, 0.25, 0.12}},
           {"G3_CD-lagged", lag, quick ? V{0.1, 0.05} : V{0.1, 0.05, 0.025}}};
@@ -267,13 +218,13 @@ inline std::vector<CeCurve> CeodeConfigs(Damping kind, bool quick) {
 // G4_A34 with stiffness-proportional damping declared (zeta = 2 at the top): how far one
 // period gets at fractions of its undamped stable step. Shown, not timed, not a check.
 inline void G4Probe(SUNContext ctx, Scene* s) {
-  fes::CeodeCfg c;
-  c.method = "G4_A34";
-  c.vel = c.spgmr = true;
-  const double hs = fes::GuardStep(ctx, &s->prob, c.method);
+  wp::CeodeOpts c("G4_A34");
+  c.vel = true;
+  c.ls = wp::CeodeOpts::kSpgmr;
+  const double hs = wp::GuardStep(ctx, s->prob, c.method);
   for (double f : {0.45, 0.1, 0.02}) {
     wp::Outcome o;
-    const int rc = fes::CeodeRun(ctx, &s->prob, c, f * hs, &o);
+    const int rc = wp::CeodeRun(ctx, s->prob, c, f * hs, &o);
     std::printf("G4_A34 (Newton-SPGMR) at %.2f x its undamped stable step: %s (error %.3e)\n", f,
                 rc != 0 ? "stopped (CE_UNSTABLE)" : "ran", o.error);
   }
@@ -293,17 +244,12 @@ inline int Checks(const wp::Table& table, Damping kind) {
   if (kind == Damping::kMass) {
     // Newton solves the diagonal step exactly: the same method as the hand loop.
     bad +=
-        fes::CheckSameMethod(table, "CEODE", "G3_CD-Newton-SPGMR", "CEODE-hand", "CD-damped", 1e-6);
+        wp::CheckSameMethod(table, "CEODE", "G3_CD-Newton-SPGMR", "CEODE-hand", "CD-damped", 1e-6);
   }
   const std::vector<const char*> fitted =
       kind == Damping::kMass ? std::vector<const char*>{"G3_CD-AUTO", "G3_CD-Newton-SPGMR"}
                              : std::vector<const char*>{"G3_CD-Newton-SPGMR-rtol1e-7"};
-  for (const char* c : fitted) {
-    const double p = fes::CurveOrder(table, "CEODE", c);
-    const bool ok = p > 1.8 && p < 2.3;
-    std::printf("CEODE %s order from the last three steps: %.3f %s\n", c, p, ok ? "ok" : "-- OFF");
-    bad += !ok;
-  }
+  for (const char* c : fitted) bad += wp::CheckSecondOrder(table, c);
   return bad;
 }
 
@@ -315,7 +261,7 @@ inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
   {
     Scene s;
     BuildScene(&s, args.quick ? 4 : 20);                      // 160 or 3 360 DOF
-    const double hs = fes::GuardStep(ctx, &s.prob, "G3_CD");  // undamped: f ignores v here
+    const double hs = wp::GuardStep(ctx, s.prob, "G3_CD");  // undamped: f ignores v here
     const double omega_max = 2 / hs;
     SetDamping(&s, kind, omega_max);
     bad += s.modes.residual < 1e-9 ? 0 : 1;
@@ -331,12 +277,13 @@ inline int DampedMain(int argc, char** argv, Damping kind, const char* scene) {
     wp::Table table(scene, args.csv);
     wp::Rounds rounds(&table);
     HandCurve(&s, HandFractions(kind, args.quick), hs, &rounds);
-    CeodeCurves(ctx, &s, CeodeConfigs(kind, args.quick), &rounds);
-    fes::PeerCurves(ctx, &s.prob, args.quick, &rounds);
+    wp::FractionCurves(ctx, &s.prob, CeodeConfigs(kind, args.quick), &rounds);
+    wp::FeSundialsCurves(ctx, &s.prob, wp::Sun::kImexSpgmr, wp::FeTols(args.quick),
+                         args.quick ? 0.3 : wp::kSundialsCutoff, &rounds);
     rounds.Run();
     if (kind == Damping::kStiffness) G4Probe(ctx, &s);
     bad += Checks(table, kind);
-    fes::PrintJudged(table, {1e-3, 1e-4, 1e-6});
+    wp::PrintEqualError(table, {1e-3, 1e-4, 1e-6});
     const double hand = NsPerStep(table, "CEODE-hand", "CD-damped");
     std::printf("\nper-step time at the first row of each curve (ns/step; CPU clock, one run):\n");
     for (const char* c : {"G3_CD-AUTO", "G3_CD-PC", "G3_CD-Newton-SPGMR",

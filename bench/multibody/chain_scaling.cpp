@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   int bad = 0;
   for (long N : sizes) {
     chain::Chain c = chain::Make(N);
-    const wp::SecondOrder p = chain::Problem(&c, kH * static_cast<double>(kSteps), false);
+    const wp::Problem p = chain::Problem(&c, kH * static_cast<double>(kSteps), false);
     const std::string config = "N=" + std::to_string(N) + " G3_CD";
     wp::Outcome o;
     if (!wp::MeasureCeode(&table, ctx, p, "G3_CD", kH, false, config, &o)) {

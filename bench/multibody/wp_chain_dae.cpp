@@ -1,32 +1,15 @@
 // -----------------------------------------------------------------------------
-// wp_chain_dae: work-precision of the planar chain of N = 8 pendulums (the
-// model of chain_model.h, n = 16, nc = 8), t in [0, 2] s: the chain falls,
-// swings through the bottom and whips; its fastest transverse mode, about
-// 2 N sqrt(g/L) ~ 50 rad/s at rest, stiffens with the link tension. CEODE side
-// by side with ARKODE and IDA on the harness of wp_common.h (docs/theory.md
-// section 8; the chain is the N-body version of wp_pendulum_dae).
-//
-// Solvers:
-//  - CEODE, index 3, no index reduction, fixed h = 6e-3 ... 2e-5 s (1e-5 with
-//    --full): G3_CD, G4_A34 and G5_ONES with the consistent start, the 24 x 24
-//    CSR saddle-point matrix [[I, G^T], [G, 0]] factored by KLU; G5_ONES also
-//    with SUNLinSol_Dense. (G5_ONES at h = 1e-2 stops with CE_CONV_FAILURE near
-//    t = 1.98 s, so the steps start at 6e-3.)
-//  - ARKODE ERKStep, Kutta's RK3 (wp::KuttaRk3), same steps, on the index-1
-//    form: G a = -(dG/dt) v with ((dG/dt) v)_i = 2 |v_i - v_{i-1}|^2, the saddle
-//    system solved at every stage by KLU (once more with SUNLinSol_Dense);
-//    "RK3+proj" moves the positions to the nearest point of Phi = 0 after every
-//    step (minimum-norm Newton through the same saddle matrix, to round-off).
-//  - ARKODE ERKStep adaptive (default 4th-order table), the same index-1
-//    right-hand side, rtol = atol = 1e-4 ... 1e-12 (1e-13 with --full).
-//  - IDA (BDF, rtol = atol = 1e-4 ... 1e-10) on the stabilised index-2 GGL form
-//    q' = v + G^T mu, v' + G^T lambda = f, Phi(q) = 0, G(q) v = 0 (48 unknowns;
-//    lambda, mu algebraic), analytic dense iteration matrix, first step 1e-5 s.
-//    At 1e-11 IDA fails in its first steps, so its curve stops at 1e-10.
-//
-// Checks (exit code): every run succeeds; every CEODE and RK3+proj run has
-// drift <= 1e-10 l^2; every fixed-step RK3 run took 3 f evaluations per step
-// (plus ARKODE's initial one). --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6.
+// wp_chain_dae: the planar chain of N = 8 pendulums (chain_model.h, n = 16, nc = 8), t in
+// [0, 2] s: it falls, swings through the bottom and whips; its fastest transverse mode stiffens
+// with the link tension. The N-body version of wp_pendulum_dae.
+// Solvers: CEODE G3_CD, G4_A34, G5_ONES (index 3, consistent start) at h = 6e-3 ... 2e-5 (1e-5
+// with --full; G5_ONES stops with CE_CONV_FAILURE at 1e-2), the CSR saddle matrix factored by
+// KLU, G5_ONES also dense; ARKODE RK3 on the index-1 form (the saddle system solved at every
+// stage by KLU or dense), with and without a projection after every step; ERKStep adaptive,
+// rtol = atol = 1e-4 ... 1e-12; IDA on the GGL form (48 unknowns), 1e-4 ... 1e-10 (at 1e-11 it
+// fails in its first steps).
+// Checks (exit code): every run succeeds; every CEODE and RK3+proj run has drift <= 1e-10 l^2;
+// every fixed-step RK3 run takes 3 f per step. --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6.
 // -----------------------------------------------------------------------------
 #include "chain_model.h"
 
@@ -186,28 +169,16 @@ int ProjectPositions(sunrealtype, N_Vector y, void* data) {
   return 0;  // stagnated at round-off: as good as it gets
 }
 
-// y = (x, v): y' = (v, a(x, v))
-int ArkRhs(sunrealtype, N_Vector y, N_Vector ydot, void* data) {
-  Index1* s = static_cast<Index1*>(data);
-  const double* Y = N_VGetArrayPointer(y);
-  double* F = N_VGetArrayPointer(ydot);
-  const long n = 2 * s->c.N;
-  for (long i = 0; i < n; ++i) F[i] = Y[n + i];
-  return Index1Accel(s, Y, Y + n, F + n, nullptr) != 0 ? 1 : 0;
+// The index-1 acceleration a(x, v), lifted by the harness to ARKODE's first-order form.
+int Index1Acc(double, const double* x, const double* v, double* a, void* data) {
+  return Index1Accel(static_cast<Index1*>(data), x, v, a, nullptr) != 0 ? 1 : 0;
 }
 
-double ArkErr(double t, const double* y, void* u) {
-  Chain* c = &static_cast<Index1*>(u)->c;
-  return chain::ErrXV(t, y, y + 2 * c->N, c);
+double ArkErr(double t, const double* x, const double* v, void* u) {
+  return chain::ErrXV(t, x, v, &static_cast<Index1*>(u)->c);
 }
-double ArkDrift(double, const double* y, void* u) {
-  return chain::Drift(&static_cast<Index1*>(u)->c, y);
-}
-double IdaErr(double t, const double* y, void* u) {
-  return chain::ErrXV(t, y, y + 2 * static_cast<Chain*>(u)->N, u);
-}
-double IdaDrift(double, const double* y, void* u) {
-  return chain::Drift(static_cast<Chain*>(u), y);
+double ArkDrift(double, const double* x, const double*, void* u) {
+  return chain::Drift(&static_cast<Index1*>(u)->c, x);
 }
 
 // GGL residual, y = (q[n], v[n], lambda[nc], mu[nc]), rows in the same order.
@@ -319,7 +290,7 @@ struct Scene {
   SUNContext ctx = nullptr;
   wp::Table* table = nullptr;
   ARKodeButcherTable rk3 = nullptr;
-  wp::Residual ida;
+  wp::Problem ida;
   int bad = 0;
 };
 
@@ -327,14 +298,13 @@ struct Scene {
 int ArkOnce(Scene* sc, const Config& c, double h, wp::Outcome* o) {
   Index1 s(sc->ctx, !c.dense);
   if (s.LS == nullptr) return 1;
-  wp::FirstOrder p;
-  p.n = static_cast<int>(4 * kN), p.f = ArkRhs, p.user = &s, p.tend = kTend;
-  p.y0.resize(p.n);
-  chain::InitialState(s.c, p.y0.data(), p.y0.data() + 2 * kN);
+  wp::Problem p = chain::Problem(&s.c, kTend, false);
+  p.user = &s;
+  p.f1 = wp::FirstOrderRhs<Index1Acc>;
   p.err = ArkErr, p.drift = ArkDrift;
   p.post_step = c.kind == Config::kRk3Proj ? ProjectPositions : nullptr;
-  const wp::Sun kind = c.kind == Config::kErk ? wp::Sun::kErkAdaptive : wp::Sun::kErkFixed;
-  return wp::SundialsOnce(sc->ctx, p, kind, h, 1.0, sc->rk3, o);
+  const wp::Sun kind = c.kind == Config::kErk ? wp::Sun::kErk : wp::Sun::kErkFixed;
+  return wp::SundialsRun(sc->ctx, p, {kind, 0, sc->rk3}, h, o);
 }
 
 // ARKODE before 6.7.0 evaluates f once at the start of a non-FSAL table too; 6.7.0 and later
@@ -351,7 +321,7 @@ void RunPoint(Scene* sc, const Config& c, double h) {
   wp::Outcome o;
   bool ok = false;
   if (c.kind == Config::kCeode) {
-    const wp::SecondOrder p = chain::Problem(&ce_chain, kTend, c.dense);
+    const wp::Problem p = chain::Problem(&ce_chain, kTend, c.dense);
     ok = wp::MeasureCeode(sc->table, sc->ctx, p, c.method, h, false, c.name, &o);
     if (ok) wp::PrintMatrixReuse(c.name, h, o);
   } else if (c.kind == Config::kIda) {
@@ -375,12 +345,12 @@ void RunPoint(Scene* sc, const Config& c, double h) {
   }
 }
 
-// IDA's consistent start: q' = v = 0, v' and lambda from the index-1 saddle
-// system, mu = 0; lambda and mu algebraic.
-int IdaProblem(SUNContext ctx, Chain* c, wp::Residual* p) {
+// The chain with its GGL residual form. IDA's consistent start: q' = v = 0, v' and lambda from
+// the index-1 saddle system, mu = 0; lambda and mu algebraic.
+int IdaProblem(SUNContext ctx, Chain* c, wp::Problem* p) {
   const long n = 2 * kN, neq = 6 * kN;
-  p->n = static_cast<int>(neq), p->res = IdaRes, p->jac = IdaJac, p->user = c, p->tend = kTend;
-  p->init_step = 1e-5, p->err = IdaErr, p->drift = IdaDrift;
+  *p = chain::Problem(c, kTend, false);
+  p->ny = static_cast<int>(neq), p->res = IdaRes, p->res_jac = IdaJac, p->init_step = 1e-5;
   p->y0.assign(neq, 0.0), p->yp0.assign(neq, 0.0), p->id.assign(neq, 0.0);
   for (long i = 0; i < 2 * n; ++i) p->id[i] = 1.0;
   chain::InitialState(*c, p->y0.data(), p->y0.data() + n);

@@ -1,43 +1,18 @@
 // -----------------------------------------------------------------------------
-// wp_pendulum_dae: work-precision of the pendulum as an index-3 multibody DAE
-// (docs/theory.md sections 8 and 11): CEODE side by side with ARKODE (RK3 on
-// the index-1 form, with and without projection) and IDA (GGL), timed in one
-// run on the harness of wp_common.h.
-//
-// Problem: the IFToMM simple pendulum (m = 1 kg point mass, massless rod
-// L = 1 m, g = 9.81) in the coordinates of its centre of mass q = (x, y, theta):
+// wp_pendulum_dae: the IFToMM pendulum as an index-3 multibody DAE (docs/theory.md sections 8
+// and 11) in the coordinates of its centre of mass q = (x, y, theta):
 //     M q'' + G(q)^T lambda = f,   M = diag(m, m, I_zz = 0),  f = (0, -m g, 0),
 //     Phi(q) = (x - L sin theta, y + L cos theta) = 0,  G = dPhi/dq,
-// released at rest from theta = 90 deg (x = L, y = 0), t in [0, 10] s. M is
-// singular; only the saddle-point matrix [[M, G^T], [G, 0]] is regular.
-//     error = max |E - E0|,  E = 1/2 m (x'^2 + y'^2) + 1/2 I_zz theta'^2 + m g y,
-//     drift = max |x^2 + y^2 - L^2|    (the paper's "assembly error"),
-// taken after every step, where the solver has q and q' at the same instant.
-//
-// Solvers:
-//  - CEODE, index 3, no index reduction: G5_ONES (paper's zero start, the
-//    configuration of its Table 11, and the consistent start), G4_A34, G3_CD;
-//    fixed h = 1e-2 ... 1e-4 (1e-5 with --full); a constant mass function and
-//    the 5 x 5 saddle matrix factored by SUNLinSol_Dense (attached explicitly;
-//    with constraints and no solver CEODE would build the same one itself).
-//  - ARKODE ERKStep, Kutta's RK3 (wp::KuttaRk3), same steps, on the index-1
-//    form (constraints differentiated twice, the 5 x 5 saddle system solved by
-//    Gaussian elimination at every stage): "RK3" unstabilised, "RK3+proj" with
-//    the positions moved to the nearest point of Phi = 0 after every step
-//    (minimum-norm Newton, ERKStepSetPostprocessStepFn; the paper's Tables 9
-//    and 10). Both take 3 f evaluations per step plus ARKODE's initial one.
-//  - IDA (BDF, rtol = atol = 1e-4 ... 1e-10, 1e-11 with --full) on the
-//    stabilised index-2 GGL form q' = v + G^T mu, M v' + G^T lambda = f,
-//    Phi(q) = 0, G(q) v = 0, with lambda, mu and theta' algebraic (IDASetId +
-//    IDASetSuppressAlg), analytic iteration matrix, first step 1e-5 s (IDA's own
-//    estimate ~ tol/|y'| is so small that the index-2 Newton iteration, which
-//    amplifies round-off by 1/h, does not converge).
-//
-// Checks (exit code): RK3 reproduces the paper's Table 9 error and drift,
-// RK3+proj Table 10's error, CEODE G5_ONES (zero start) Table 11's error, all
-// within 10 % at h = 1e-2 and 1e-3; G5_ONES (zero start) reaches <= 2e-12 at
-// 1e-4 and has drift <= 1e-14 at every step size. --quick (the ctest test):
-// every check, with ARKODE's RK3 only at 1e-2 and 1e-3 and IDA only to 1e-6.
+// released at rest from theta = 90 deg, t in [0, 10] s; M is singular, only the saddle-point
+// matrix [[M, G^T], [G, 0]] is regular. error = max |E - E0|, drift = max |x^2 + y^2 - L^2|.
+// Solvers: CEODE G5_ONES (zero and consistent start), G4_A34, G3_CD at h = 1e-2 ... 1e-4 (1e-5
+// with --full), dense saddle matrix; ARKODE RK3 on the index-1 form, with and without a
+// projection onto Phi = 0 after every step (the paper's Tables 9 and 10); IDA on the GGL form
+// (lambda, mu and theta' algebraic, analytic iteration matrix, first step 1e-5 s: IDA's own
+// estimate is too small for the index-2 Newton iteration), rtol = atol = 1e-4 ... 1e-10.
+// Checks (exit code): RK3, RK3+proj and G5_ONES (zero start) reproduce the paper's Tables 9-11
+// within 10 % at h = 1e-2 and 1e-3; G5_ONES reaches <= 2e-12 at 1e-4 with drift <= 1e-14.
+// --quick: ARKODE only at 1e-2 and 1e-3, IDA only to 1e-6.
 // -----------------------------------------------------------------------------
 #include <array>
 #include <cmath>
@@ -57,16 +32,12 @@ double Energy(const double* q, const double* v) {
   return 0.5 * kMass * (v[0] * v[0] + v[1] * v[1]) + 0.5 * kIzz * v[2] * v[2] +
          kMass * kGrav * q[1];
 }
-double ErrY(double, const double* y, void* u) {
-  return std::fabs(Energy(y, y + 3) - static_cast<User*>(u)->e0);
-}
-double DriftY(double, const double* y, void*) {
-  return std::fabs(y[0] * y[0] + y[1] * y[1] - kLen * kLen);
-}
-double ErrXV(double, const double* x, const double* v, void* u) {
+double Err(double, const double* x, const double* v, void* u) {
   return std::fabs(Energy(x, v) - static_cast<User*>(u)->e0);
 }
-double DriftXV(double t, const double* x, const double*, void* u) { return DriftY(t, x, u); }
+double Drift(double, const double* x, const double*, void*) {
+  return std::fabs(x[0] * x[0] + x[1] * x[1] - kLen * kLen);
+}
 
 // Solves A z = b in place (row-major n x n, b overwritten by z) by Gaussian
 // elimination with partial pivoting; the index-1 form of a 5 x 5 system needs
@@ -131,11 +102,9 @@ int ProjectPositions(sunrealtype, N_Vector y, void*) {
   return 0;  // at round-off, or stagnated there: as good as it gets
 }
 
-int ArkRhs(sunrealtype, N_Vector y, N_Vector ydot, void*) {
-  const double* Y = N_VGetArrayPointer(y);
-  double* F = N_VGetArrayPointer(ydot);
-  for (int i = 0; i < 3; ++i) F[i] = Y[3 + i];
-  return Index1Accel(Y, Y + 3, F + 3, nullptr) != 0 ? -1 : 0;
+// The index-1 acceleration, lifted by the harness to ARKODE's first-order form.
+int Index1Acc(double, const double* q, const double* v, double* a, void*) {
+  return Index1Accel(q, v, a, nullptr) != 0 ? -1 : 0;
 }
 
 // GGL residual, y = (x, y, theta, vx, vy, vtheta, lambda1, lambda2, mu1, mu2).
@@ -269,32 +238,20 @@ void CheckRow(const char* config, double h, const wp::Outcome& o, Checks* ck) {
   ck->Expect(o.drift <= 1e-14, "drift above 1e-14", config, h);
 }
 
-// The three formulations of the pendulum, for CEODE, ARKODE and IDA.
-struct Problems {
-  User user;
-  wp::SecondOrder ce;
-  wp::FirstOrder ark;
-  wp::Residual ida;
-};
-
-// Returns false when IDA's consistent start cannot be computed.
-bool MakeProblems(Problems* p) {
-  const std::vector<double> q0 = {kLen, 0.0, kHalfPi}, v0 = {0.0, 0.0, 0.0};
-  p->user.e0 = Energy(q0.data(), v0.data());
-  wp::SecondOrder& ce = p->ce;
-  ce.n = 3, ce.f = CeForce, ce.user = &p->user, ce.tend = kTend, ce.x0 = q0, ce.v0 = v0;
-  ce.err = ErrXV, ce.drift = DriftXV, ce.mass = CeMass, ce.nc = 2, ce.phi = CePhi, ce.G = CeG;
-  wp::FirstOrder& ark = p->ark;
-  ark.n = 6, ark.f = ArkRhs, ark.user = &p->user, ark.tend = kTend;
-  ark.err = ErrY, ark.drift = DriftY;
-  ark.y0 = {kLen, 0.0, kHalfPi, 0.0, 0.0, 0.0};
-  wp::Residual& ida = p->ida;  // consistent start: v' and lambda from the index-1 system, mu = 0
-  ida.n = 10, ida.res = IdaRes, ida.jac = IdaJac, ida.user = &p->user, ida.tend = kTend;
-  ida.init_step = 1e-5, ida.err = ErrY, ida.drift = DriftY;
-  ida.y0.assign(10, 0.0), ida.yp0.assign(10, 0.0), ida.id.assign(10, 0.0);
-  std::copy(ark.y0.begin(), ark.y0.end(), ida.y0.begin());
-  for (int i = 0; i < 6; ++i) ida.id[i] = (i < 5 || kIzz > 0.0) ? 1.0 : 0.0;
-  return Index1Accel(ida.y0.data(), ida.y0.data() + 3, ida.yp0.data() + 3, ida.y0.data() + 6) == 0;
+// The pendulum's one description with its three formulations: index 3 with a mass matrix for
+// CEODE, index 1 for ARKODE, GGL for IDA. False when IDA's consistent start cannot be computed.
+bool MakeProblem(User* user, wp::Problem* p) {
+  p->n = 3, p->user = user, p->tend = kTend, p->x0 = {kLen, 0.0, kHalfPi}, p->v0 = {0, 0, 0};
+  user->e0 = Energy(p->x0.data(), p->v0.data());
+  p->err = Err, p->drift = Drift;
+  p->f2 = CeForce, p->mass = CeMass, p->nc = 2, p->phi = CePhi, p->G = CeG;
+  p->f1 = wp::FirstOrderRhs<Index1Acc>;
+  // IDA's consistent start: v' and lambda from the index-1 system, mu = 0.
+  p->ny = 10, p->res = IdaRes, p->res_jac = IdaJac, p->init_step = 1e-5;
+  p->y0.assign(10, 0.0), p->yp0.assign(10, 0.0), p->id.assign(10, 0.0);
+  std::copy(p->x0.begin(), p->x0.end(), p->y0.begin());
+  for (int i = 0; i < 6; ++i) p->id[i] = (i < 5 || kIzz > 0.0) ? 1.0 : 0.0;
+  return Index1Accel(p->y0.data(), p->y0.data() + 3, p->yp0.data() + 3, p->y0.data() + 6) == 0;
 }
 
 // Calls run(h) for h = hi, hi/10, ... down to lo.
@@ -311,7 +268,7 @@ struct Scene {
   double hmin = 1e-4, hmin_sundials = 1e-4, tolmin = 1e-10;
 };
 
-void RunCeode(Scene* sc, const Problems& p) {
+void RunCeode(Scene* sc, const wp::Problem& p) {
   struct CeConfig {
     const char *name, *method;
     bool zero_start;
@@ -323,7 +280,7 @@ void RunCeode(Scene* sc, const Problems& p) {
   for (const CeConfig& c : ces) {
     Decades(1e-2, sc->hmin, [&](double h) {
       wp::Outcome o;
-      if (!wp::MeasureCeode(sc->table, sc->ctx, p.ce, c.method, h, c.zero_start, c.name, &o)) {
+      if (!wp::MeasureCeode(sc->table, sc->ctx, p, c.method, h, c.zero_start, c.name, &o)) {
         ++sc->nfail;
         return;
       }
@@ -333,14 +290,14 @@ void RunCeode(Scene* sc, const Problems& p) {
   }
 }
 
-void RunSundials(Scene* sc, Problems* p) {
+void RunSundials(Scene* sc, wp::Problem* p) {
   ARKodeButcherTable rk3 = wp::KuttaRk3();
   for (bool project : {false, true}) {
-    p->ark.post_step = project ? ProjectPositions : nullptr;
+    p->post_step = project ? ProjectPositions : nullptr;
     const char* name = project ? "RK3+proj" : "RK3";
     Decades(1e-2, sc->hmin_sundials, [&](double h) {
       wp::Outcome o;
-      if (!wp::MeasureSundials(sc->table, sc->ctx, p->ark, wp::Sun::kErkFixed, h, 0, rk3, name,
+      if (!wp::MeasureSundials(sc->table, sc->ctx, *p, {wp::Sun::kErkFixed, 0, rk3}, h, name,
                                "ARKODE", &o)) {
         ++sc->nfail;
       } else {
@@ -350,7 +307,7 @@ void RunSundials(Scene* sc, Problems* p) {
   }
   ARKodeButcherTable_Free(rk3);
   Decades(1e-4, sc->tolmin, [&](double tol) {
-    if (!wp::MeasureIda(sc->table, sc->ctx, p->ida, tol, "BDF-GGL")) ++sc->nfail;
+    if (!wp::MeasureIda(sc->table, sc->ctx, *p, tol, "BDF-GGL")) ++sc->nfail;
   });
 }
 
@@ -359,8 +316,9 @@ void RunSundials(Scene* sc, Problems* p) {
 int main(int argc, char** argv) {
   const wp::Args args = wp::ParseArgs(argc, argv);
   Scene sc;
-  Problems p;
-  if (SUNContext_Create(SUN_COMM_NULL, &sc.ctx) != 0 || !MakeProblems(&p)) return 1;
+  User user;
+  wp::Problem p;
+  if (SUNContext_Create(SUN_COMM_NULL, &sc.ctx) != 0 || !MakeProblem(&user, &p)) return 1;
   std::printf("DAE pendulum (index 3, q = (x, y, theta), I_zz = 0), 10 s, from 90 deg at rest\n");
   std::printf("error = max |E - E0|, drift = max |x^2 + y^2 - L^2|\n\n");
   wp::Table table("pendulum_dae", args.csv);

@@ -1,44 +1,17 @@
 // -----------------------------------------------------------------------------
-// wp_fe_plate: the structural engineer's scene (issue 11). A linear elastic
-// cantilever plate of bilinear Q4 elements in plane stress (bench/fe_plate_model.h:
-// K assembled once in CSR, row-sum lumped M, f = -M^{-1} K x in one pass over K).
-//
-// Part 1, the stable step. On a small mesh the exact omega_max (Eigen, dense,
-// on M^{-1/2} K M^{-1/2}) against the guard's Lanczos estimate
-// (CEodeGetStableStep), the Gershgorin bound (CEodeGetFrequencyBound) and the
-// element-by-element bound of explicit FE codes (largest frequency of one
-// element with its lumped mass). Criterion: estimate within 2 % of the exact
-// limit, both bounds never below omega_max. On the work-precision mesh the same
-// three without the dense solve.
-//
-// Part 2, work-precision at equal error. Reference solution: the plate starts on
-// its two lowest modes, x0 = phi_1 + 0.3 phi_2, v0 = 0, so x(t) = phi_1
-// cos(w_1 t) + 0.3 phi_2 cos(w_2 t) exactly (the modes by subspace iteration with
-// a sparse LDL^T of K, residual checked); one period of mode 1, error = max over
-// 20 output instants of ||x - x_exact||_2 / ||x0||_2 (relative position error).
-// Every solver integrates to those instants in its normal mode (no per-step
-// output). Against:
-//  * CEODE-hand: a hand-written central-differences (leapfrog) loop calling the
-//    same f, the practical limit (solver "CEODE-hand", as scripts/ratios.py reads);
-//  * CEODE G3_CD, G4_A34 and G5_O4 (order 4, 98.5 % of G3_CD's stable step) at fractions
-//    of the guard's stable step, and G5 (weakly unstable) as an untimed probe;
-//  * ARKODE ERKStep adaptive, orders 3, 4, 5; CVODE Adams (fixed point); CVODE
-//    BDF with SPGMR (no preconditioner) and with KLU (sparse Jacobian);
-//    ARKODE ARKStep DIRK with SPGMR (linear implicit part declared).
-// The judged ratios (issue 11) are printed at 1e-4 and 1e-6: CEODE over the best
-// SUNDIALS curve, CEODE over the hand loop.
-//
-// Part 3, scaling: time per step and DOF of the hand loop and CEODE G3_CD,
-// G4_A34, G5_O4 from N = 10^4 to 10^6 (quick: 10^4, 3 10^4), the log-log slope of
-// time per step against N, written to <csv>_scaling.csv beside the main CSV.
-//
-// Runners (CEODE, SUNDIALS) and the equal-error table: bench/fe_scene.h, shared with the plate
-// variants. Timing, rows, CSV: bench/wp_common.h (one clock, one median rule).
+// wp_fe_plate: the linear Q4 cantilever plate (README.md of this family).
+// Part 1, the stable step: the exact omega_max (Eigen, dense, on M^{-1/2} K M^{-1/2}) against the
+// guard's Lanczos estimate, the Gershgorin bound and the element-by-element bound of explicit FE
+// codes; the estimate within 2 % of the exact limit, both bounds never below omega_max.
+// Part 2, work-precision at equal error against the exact two-mode solution: the hand loop,
+// CEODE G3_CD, G4_A34, G5_O4 at fractions of the stable step (G5, weakly unstable, as an untimed
+// probe), ARKODE ERK 3/4/5, CVODE Adams, CVODE BDF + SPGMR / + KLU, ARKStep DIRK + SPGMR.
+// Part 3, scaling: time per step and DOF of the hand loop and CEODE from 10^4 to 10^6 DOF and the
+// log-log slope, written to <csv>_scaling.csv.
 // Usage: wp_fe_plate [--csv FILE] [--quick]
 //        wp_fe_plate --count SOLVER NY STEPS (one untimed run, for callgrind: see CountMain)
-// Exit code 0 when the modes converged, the stable-step criteria hold, the hand
-// loop reproduces CEODE G3_CD, G3_CD converges at order 2, and every run
-// succeeded. Never on a timing.
+// Exit code 0 when the modes converged, the stable-step criteria hold, the hand loop reproduces
+// CEODE G3_CD, G3_CD converges at order 2, and every run succeeded. Never on a timing.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode_stability.h>
 
@@ -54,7 +27,7 @@
 
 #include "fe_plate_model.h"
 #include "fe_plate_modes.h"
-#include "fe_scene.h"
+#include "wp_common.h"
 
 namespace {
 
@@ -65,22 +38,11 @@ struct Scene {
   fe::Plate plate;
   double w1 = 0, w2 = 0, amp2 = 0.3;
   Vec phi1, phi2;  // M-normalised, then phi1 scaled to max |.| = 1 (phi2 alike)
-  fes::Problem p;  // what the runners see: f, start, outputs, reference
+  wp::Problem p;  // what the runners see: f, start, outputs, reference
 };
 
-int Rhs2(sunrealtype, N_Vector x, N_Vector, N_Vector f, void* user) {
-  const auto* s = static_cast<const Scene*>(user);
-  fe::Accel(s->plate, N_VGetArrayPointer(x), N_VGetArrayPointer(f));
-  return 0;
-}
-
-int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void* user) {
-  const auto* s = static_cast<const Scene*>(user);
-  const int n = s->plate.n;
-  const double* Y = N_VGetArrayPointer(y);
-  double* D = N_VGetArrayPointer(yd);
-  std::copy(Y + n, Y + 2 * static_cast<ptrdiff_t>(n), D);
-  fe::Accel(s->plate, Y, D + n);
+int Accel(double, const double* x, const double*, double* a, void* user) {
+  fe::Accel(static_cast<const Scene*>(user)->plate, x, a);
   return 0;
 }
 
@@ -136,24 +98,23 @@ double LowestModes(Scene* s) {
 // The runners' view of the scene (the modes known): one period of mode 1, 20 outputs with the
 // exact solution at each.
 void FillProblem(Scene* s) {
-  fes::Problem& q = s->p;
+  wp::Problem& q = s->p;
   const fe::Plate& p = s->plate;
   q.n = p.n;
   q.user = s;
-  q.f2 = Rhs2;
-  q.f1 = Rhs1;
+  q.Lift<Accel>();
   q.f1_linear = true;
   q.jac1 = Jac1;
   q.jac_nnz = p.n + static_cast<long>(p.val.size());
   q.x0.resize(p.n);
   InitialState(*s, q.x0.data());
   q.v0.assign(p.n, 0.0);
-  q.mass = p.mass;
+  q.lumped_mass = p.mass;
   q.tend = 2 * M_PI / s->w1;
   q.nout = 20;
   q.ref.clear();
-  for (int k = 1; k <= q.nout; ++k) q.ref.push_back(Exact(*s, fes::OutputTime(q, k)));
-  q.x0norm = fes::Norm2(q.x0);
+  for (int k = 1; k <= q.nout; ++k) q.ref.push_back(Exact(*s, wp::OutputTime(q, k)));
+  q.x0norm = wp::Norm2(q.x0);
 }
 
 // ------------------------------------------------------------ the stable step
@@ -185,10 +146,9 @@ double ExactOmegaMax(const fe::Plate& p) {
 // and the Gershgorin bound through the public API, on a CEODE memory of the scene.
 bool ApiFigures(SUNContext ctx, Scene* s, StepFigures* f) {
   const fe::Plate& p = s->plate;
-  wp::CeodeObjects o(ctx, p.n);
-  InitialState(*s, N_VGetArrayPointer(o.x));
-  N_VConst(0, o.v);
-  N_Vector m = N_VNew_Serial(p.n, ctx);
+  wp::CeodeObjects o;
+  if (!o.Create(ctx, s->p)) return false;
+  N_Vector m = o.m = N_VNew_Serial(p.n, ctx);
   SUNMatrix K = SUNSparseMatrix(p.n, p.n, static_cast<sunindextype>(p.val.size()), CSR_MAT, ctx);
   if (m == nullptr || K == nullptr) return false;
   std::copy(p.mass.begin(), p.mass.end(), N_VGetArrayPointer(m));
@@ -198,22 +158,20 @@ bool ApiFigures(SUNContext ctx, Scene* s, StepFigures* f) {
   sunrealtype hmax = 0, lim = 0;
   int deg = 0;
   sunrealtype par[8];
-  long int guard_me = 0, guard_setups = 0;
+  long nme = 0, nls = 0;
   const bool ok =
-      !wp::Failed(CEodeInit(o.mem, Rhs2, 0, o.x, o.v), "CEodeInit") &&
+      !wp::Failed(CEodeInit(o.mem, s->p.f2, 0, o.x, o.v), "CEodeInit") &&
       !wp::Failed(CEodeSetUserData(o.mem, s), "CEodeSetUserData") &&
       !wp::Failed(CEodeSetMethodByName(o.mem, "G3_CD"), "CEodeSetMethodByName") &&
       !wp::Failed(CEodeSetGuardMass(o.mem, m), "CEodeSetGuardMass") &&
       !wp::Failed(CEodeGetStableStep(o.mem, 1, &hmax), "CEodeGetStableStep") &&
-      !wp::Failed(CEodeGetGuardStats(o.mem, &f->guard_fe, &guard_me, &guard_setups),
-                  "CEodeGetGuardStats") &&
+      !wp::Failed(CEodeGetGuardStats(o.mem, &f->guard_fe, &nme, &nls), "CEodeGetGuardStats") &&
       !wp::Failed(CEodeGetFrequencyBound(o.mem, K, m, &f->gershgorin), "CEodeGetFrequencyBound") &&
       !wp::Failed(CEodeGetMethodParams("G3_CD", &deg, par, 8), "CEodeGetMethodParams") &&
       !wp::Failed(CEodeStabilityLimit(deg, par, 0, &lim), "CEodeStabilityLimit");
   f->estimate = ok && hmax > 0 ? lim / hmax : 0;
   f->element = ElementBound(p);
   SUNMatDestroy(K);
-  N_VDestroy(m);
   return ok;
 }
 
@@ -246,6 +204,7 @@ int StableStepPart(SUNContext ctx, bool quick, Scene* wp_scene) {
   Scene small;
   small.plate = quick ? fe::MakePlate(12, 3) : fe::MakePlate(40, 10);
   LowestModes(&small);
+  FillProblem(&small);
   StepFigures fs;
   fs.exact = ExactOmegaMax(small.plate);
   int bad = ApiFigures(ctx, &small, &fs) ? 0 : 1;
@@ -262,10 +221,10 @@ int StableStepPart(SUNContext ctx, bool quick, Scene* wp_scene) {
   return bad;
 }
 
-// The hand-written central-differences loop on the same f (fes::LeapfrogRun).
+// The hand-written central-differences loop on the same f (wp::LeapfrogRun).
 int HandRun(Scene* s, double h_req, wp::Outcome* out) {
   const fe::Plate& p = s->plate;
-  return fes::LeapfrogRun(
+  return wp::LeapfrogRun(
       s->p, h_req, [&p](const double* x, double* a) { fe::Accel(p, x, a); }, out);
 }
 
@@ -274,65 +233,27 @@ struct WpResult {
   double h_cd = 0;  // G3_CD's stable step
 };
 
-// G3_CD and the hand loop must be the same method; G3_CD converges at order 2.
-int CheckHandAndOrder(const wp::Table& table) {
-  int bad = fes::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6);
-  const double slope = fes::CurveOrder(table, "CEODE", "G3_CD");
-  const bool ok = slope > 1.8 && slope < 2.3;
-  std::printf("G3_CD order from the last three steps: %.3f %s\n", slope, ok ? "ok" : "-- OFF");
-  return bad + !ok;
-}
-
+// G3_CD (and the hand loop) down to 1e-6, which takes a step 15 times below its limit.
 void CeodeCurves(SUNContext ctx, Scene* s, wp::Rounds* rounds, bool quick, WpResult* res) {
-  // G3_CD (and the hand loop) down to 1e-6, which takes a step 15 times below its limit.
-  const std::vector<double> frac_cd =
-      quick ? std::vector<double>{0.99, 0.5, 0.25}
-            : std::vector<double>{0.99, 0.7, 0.5, 0.35, 0.25, 0.12, 0.06};
-  const std::vector<double> frac_high =
-      quick ? std::vector<double>{0.99, 0.5} : std::vector<double>{0.99, 0.7, 0.5, 0.35, 0.25};
-  for (const char* m : {"G3_CD", "G4_A34", "G5_O4"}) {
-    const bool cd = std::string(m) == "G3_CD";
-    const double hs = fes::GuardStep(ctx, &s->p, m);
-    if (cd) res->h_cd = hs;
-    fes::CeodeCfg cfg;
-    cfg.method = m;
-    for (double f : cd ? frac_cd : frac_high) {
-      const double hr = f * hs;
-      const double h = fes::FixedStep(s->p, hr);
-      rounds->Measure("CEODE", m, h, [ctx, s, cfg, hr](wp::Outcome* o) {
-        return fes::CeodeRun(ctx, &s->p, cfg, hr, o);
-      });
-      if (!cd) continue;
-      rounds->Measure("CEODE-hand", "G3_CD", h,
-                      [s, hr](wp::Outcome* o) { return HandRun(s, hr, o); });
-    }
-  }
+  using V = std::vector<double>;
+  const V frac_cd = quick ? V{0.99, 0.5, 0.25} : V{0.99, 0.7, 0.5, 0.35, 0.25, 0.12, 0.06};
+  const V frac_high = quick ? V{0.99, 0.5} : V{0.99, 0.7, 0.5, 0.35, 0.25};
+  const std::vector<wp::FracCurve> curves = {{"G3_CD", wp::CeodeOpts("G3_CD"), frac_cd},
+                                             {"G4_A34", wp::CeodeOpts("G4_A34"), frac_high},
+                                             {"G5_O4", wp::CeodeOpts("G5_O4"), frac_high}};
+  res->h_cd = wp::FractionCurves(ctx, &s->p, curves, rounds,
+                                 [s](double hr, wp::Outcome* o) { return HandRun(s, hr, o); });
 }
 
 // G5 is weakly unstable for every step (CEodeStabilityLimit = 0): its fastest mode
 // grows from round-off. Shown, not timed: how far one period gets at small steps.
 void G5Probe(SUNContext ctx, Scene* s, double h_cd) {
-  fes::CeodeCfg cfg;
-  cfg.method = "G5";
   for (double f : {0.3, 0.1}) {
     wp::Outcome o;
-    const int rc = fes::CeodeRun(ctx, &s->p, cfg, f * h_cd, &o);
+    const int rc = wp::CeodeRun(ctx, s->p, "G5", f * h_cd, &o);
     std::printf("G5 at h = %.2f x the G3_CD stable step: %s (error %.3e, %ld steps)\n", f,
                 rc != 0 ? "stopped or non-finite (CE_UNSTABLE)" : "ran", o.error, o.steps);
   }
-}
-
-// The SUNDIALS configurations of the linear plate (KLU: its Jacobian is constant and sparse).
-void SundialsCurves(SUNContext ctx, Scene* s, wp::Rounds* rounds, bool quick) {
-  using fes::Kind;
-  const std::vector<fes::SunConfig> configs = {
-      {Kind::kErk, 3, "ARKODE-ERK", "order3"},      {Kind::kErk, 4, "ARKODE-ERK", "order4"},
-      {Kind::kErk, 5, "ARKODE-ERK", "order5"},      {Kind::kAdams, 0, "CVODE-Adams", "fixedpoint"},
-      {Kind::kBdfSpgmr, 0, "CVODE-BDF", "SPGMR"},   {Kind::kBdfKlu, 0, "CVODE-BDF", "KLU"},
-      {Kind::kDirkSpgmr, 0, "ARKODE-DIRK", "SPGMR"}};
-  const std::vector<double> tols =
-      quick ? std::vector<double>{1e-5} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7};
-  fes::SundialsCurves(ctx, &s->p, configs, tols, quick ? 0.3 : fes::kSundialsCutoff, rounds);
 }
 
 WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
@@ -345,11 +266,16 @@ WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
   wp::Rounds rounds(&table);
   CeodeCurves(ctx, s, &rounds, args.quick, &res);
   G5Probe(ctx, s, res.h_cd);
-  SundialsCurves(ctx, s, &rounds, args.quick);
+  // KLU: the linear plate's Jacobian is constant and sparse.
+  wp::FeSundialsCurves(
+      ctx, &s->p, wp::Sun::kBdfKlu,
+      args.quick ? std::vector<double>{1e-5} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7},
+      args.quick ? 0.3 : wp::kSundialsCutoff, &rounds);
   rounds.Run();
-  res.bad += CheckHandAndOrder(table);
-  fes::PrintJudged(table, {1e-4, 1e-6});
-  std::printf("(issue 11 asks CE/SUN <= 1/3 and CE/hand <= 1.2 at both levels)\n");
+  // G3_CD and the hand loop are the same method; G3_CD converges at order 2.
+  res.bad += wp::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6) +
+             wp::CheckSecondOrder(table, "G3_CD");
+  wp::PrintEqualError(table, {1e-4, 1e-6});
   res.bad += table.failures();
   return res;
 }
@@ -389,7 +315,7 @@ void MakeScaleScene(int ny, Scene* s) {
   const int n = s->plate.n;
   s->p.n = n;
   s->p.user = s;
-  s->p.f2 = Rhs2;
+  s->p.Lift<Accel>();
   s->p.x0.assign(n, 0.0);
   const int pairs = n / 2;
   for (int j = 0; 2 * j + 1 < n; ++j) s->p.x0[2 * j + 1] = 1e-3 * (j + 1.0) / pairs;
@@ -413,10 +339,9 @@ ScalePoint ScaleAt(SUNContext ctx, int ny, double h_cd, double dx_ref) {
         PerStep([h](Scene* sc, wp::Outcome* o) { return HandRun(sc, h, o); }, &s, h, steps));
     for (int k = 0; k < 3; ++k) {
       const double hk = kScaleFrac[k] * h;
-      fes::CeodeCfg cfg;
-      cfg.method = kScaleSets[k];
+      const char* m = kScaleSets[k];
       per_step[k + 1].push_back(
-          PerStep([&](Scene* sc, wp::Outcome* o) { return fes::CeodeRun(ctx, &sc->p, cfg, hk, o); },
+          PerStep([&](Scene* sc, wp::Outcome* o) { return wp::CeodeRun(ctx, sc->p, m, hk, o); },
                   &s, hk, steps));
     }
   }
@@ -475,7 +400,7 @@ int ScalingPart(SUNContext ctx, const wp::Args& args, double h_cd, double dx_ref
 // ------------------------------------------------------- instruction counts
 // wp_fe_plate --count SOLVER NY STEPS: SOLVER (hand, G3_CD, G4_A34 or G5_O4) integrates the scaling
 // scene on the 4 NY x NY mesh for STEPS steps, untimed, and prints its step count. Under callgrind
-// (bench/fe_plate_instructions.sh) two step counts give instructions and simulated cache misses per
+// (bench/step_cost/instructions.sh fe-plate) two step counts give instructions and simulated cache misses per
 // step, counts that do not move with the machine's load. The step is 0.9 x 2 / (largest element
 // frequency), inside G3_CD's limit since that bound is above omega_max (part 1).
 int CountMain(int argc, char** argv) {
@@ -501,9 +426,7 @@ int CountMain(int argc, char** argv) {
   const double h = 0.9 * 2 / ElementBound(s.plate) * (frac == nullptr ? 1.0 : *frac);
   s.p.tend = h * static_cast<double>(steps);
   wp::Outcome o;
-  fes::CeodeCfg cfg;
-  cfg.method = solver.c_str();
-  const int rc = frac == nullptr ? HandRun(&s, h, &o) : fes::CeodeRun(ctx, &s.p, cfg, h, &o);
+  const int rc = frac == nullptr ? HandRun(&s, h, &o) : wp::CeodeRun(ctx, s.p, solver.c_str(), h, &o);
   std::printf("%s on %d DOF: %ld steps (asked %ld), run %s\n", solver.c_str(), s.plate.n, o.steps,
               steps, rc == 0 ? "ok" : "FAILED");
   SUNContext_Free(&ctx);

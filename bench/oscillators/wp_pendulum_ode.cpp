@@ -13,15 +13,9 @@
 //    (explicit path: f does not depend on theta');
 //  * the same G5 and G3_CD steps as a hand-written loop on raw doubles: the
 //    floor for per-step overhead (its errors must equal CEODE's);
-//  * ARKODE ERKStep with Kutta's RK3 (the paper's comparison) at the same h on
-//    the first-order system (theta, theta');
-//  * ARKODE ERKStep adaptive (default order 4) and CVODE Adams (fixed-point
-//    iteration), rtol = 1e-3 ... 1e-12, atol = rtol, energy error at every
-//    internal step (one-step mode);
-//  * the peers users pick outside SUNDIALS (bench/peers.h, when built with GSL
-//    and Boost): odeint runge_kutta4, velocity_verlet and
-//    symplectic_rkn_sb3a_mclachlan at the same h, odeint rkf78, dopri5,
-//    bulirsch_stoer and GSL rk8pd, rkf45, msadams at the same tolerances.
+//  * ARKODE ERKStep with Kutta's RK3 (the paper's comparison) at the same h; ERKStep adaptive
+//    and CVODE Adams at rtol = atol = 1e-3 ... 1e-12; the peers (bench/peers.h), the
+//    symplectic ones too (f depends on theta only).
 //
 // Usage: wp_pendulum_ode [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, ARKODE's RK3 is Kutta's method (checked
@@ -51,28 +45,15 @@ double Energy(double th, double om) {
   return 0.5 * kMass * kLen * kLen * om * om + kMass * kGrav * kLen * std::sin(th);
 }
 
-int Rhs2(sunrealtype, N_Vector x, N_Vector, N_Vector f, void*) {
-  NV_Ith_S(f, 0) = -(kGrav / kLen) * std::cos(NV_Ith_S(x, 0));
-  return 0;
-}
-
-int Rhs1(sunrealtype, N_Vector y, N_Vector yd, void*) {
-  NV_Ith_S(yd, 0) = NV_Ith_S(y, 1);
-  NV_Ith_S(yd, 1) = -(kGrav / kLen) * std::cos(NV_Ith_S(y, 0));
+int Accel(double, const double* x, const double*, double* a, void*) {
+  a[0] = -(kGrav / kLen) * std::cos(x[0]);
   return 0;
 }
 
 // E0 = 0 for the release from the horizontal at rest.
-double Err2(double, const double* x, const double* v, void*) {
+double Err(double, const double* x, const double* v, void*) {
   return std::fabs(Energy(x[0], v[0]));
 }
-double Err1(double, const double* y, void*) { return std::fabs(Energy(y[0], y[1])); }
-
-#ifdef CEODE_BENCH_PEERS
-void PeerAccel(double, const double* x, const double*, double* a, void*) {
-  a[0] = -(kGrav / kLen) * std::cos(x[0]);
-}
-#endif
 
 // The G3 step (docs/theory.md section 2, d = 3) written out on doubles.
 double HandG3(double alpha, double beta, double h, long* steps) {
@@ -121,7 +102,7 @@ double HandG5(const double p[4], double h, long* steps) {
 
 // ARKODE with the RK3 table must be Kutta's method: 5 steps of h = 0.1 against
 // the same steps by hand (see KuttaRk3 for the SUNDIALS 6.4.1 trap it guards).
-bool CheckRk3(SUNContext ctx, ARKodeButcherTable rk3) {
+bool CheckRk3(SUNContext ctx, const wp::Problem& p, ARKodeButcherTable rk3) {
   const double h = 0.1;
   double y[2] = {0, 0};
   for (int i = 0; i < 5; ++i) {
@@ -136,7 +117,7 @@ bool CheckRk3(SUNContext ctx, ARKodeButcherTable rk3) {
   N_Vector v = N_VNew_Serial(2, ctx);
   if (v == nullptr) return false;
   N_VConst(0, v);
-  void* mem = ERKStepCreate(Rhs1, 0.0, v, ctx);
+  void* mem = ERKStepCreate(p.f1, 0.0, v, ctx);
   sunrealtype t = 0;
   bool ok = mem != nullptr && !wp::Failed(ERKStepSetTable(mem, rk3), "ERKStepSetTable") &&
             !wp::Failed(ERKStepSetFixedStep(mem, h), "ERKStepSetFixedStep");
@@ -159,19 +140,14 @@ int main(int argc, char** argv) {
   std::printf("IFToMM simple pendulum, 10 s, error = max |E - E0| (J)\n");
   wp::Table table("pendulum_ode", args.csv);
 
-  wp::SecondOrder p2;
-  p2.n = 1;
-  p2.f = Rhs2;
-  p2.tend = kTend;
-  p2.x0 = {0.0};
-  p2.v0 = {0.0};
-  p2.err = Err2;
-  wp::FirstOrder p1;
-  p1.n = 2;
-  p1.f = Rhs1;
-  p1.tend = kTend;
-  p1.y0 = {0.0, 0.0};
-  p1.err = Err1;
+  wp::Problem p;
+  p.n = 1;
+  p.Lift<Accel>();
+  p.tend = kTend;
+  p.x0 = {0.0};
+  p.v0 = {0.0};
+  p.err = Err;
+  p.separable = true;  // f depends on theta only: the symplectic peers apply
 
   std::vector<double> steps = {1e-1, 1e-2, 1e-3, 1e-4, 1e-5};
   std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
@@ -184,10 +160,10 @@ int main(int argc, char** argv) {
   const char* methods[] = {"G3_CD", "G3_A2", "G4_A34", "G4_A14", "G5"};
   for (const char* m : methods) {
     for (double h : steps) {
-      wp::MeasureCeode(&table, ctx, p2, m, h, false, m);
+      wp::MeasureCeode(&table, ctx, p, m, h, false, m);
       if (std::string(m) == "G5" && std::fabs(h - 1e-3) < 1e-15) {
         wp::Outcome o;
-        if (wp::CeodeOnce(ctx, p2, m, h, false, &o) == 0) g5_1e3 = o.error;
+        if (wp::CeodeRun(ctx, p, m, h, &o) == 0) g5_1e3 = o.error;
       }
     }
   }
@@ -219,7 +195,7 @@ int main(int argc, char** argv) {
       table.Add(r);
       // The loop must be the same method: compare with the library's figure.
       wp::Outcome o;
-      if (wp::CeodeOnce(ctx, p2, cfg.c_str(), h, true, &o) != 0 ||
+      if (wp::CeodeRun(ctx, p, cfg.c_str(), h, &o, true) != 0 ||
           std::fabs(o.error - err) > std::max(1e-2 * err, 1e-13)) {
         std::printf("  hand loop %s h=%g: %.6e vs CEODE %.6e -- MISMATCH\n", cfg.c_str(), h, err,
                     o.error);
@@ -230,34 +206,22 @@ int main(int argc, char** argv) {
 
   ARKodeButcherTable rk3 = wp::KuttaRk3();
   if (rk3 == nullptr) return 1;
-  if (!CheckRk3(ctx, rk3)) ++bad;
+  if (!CheckRk3(ctx, p, rk3)) ++bad;
   for (double h : steps) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kErkFixed, h, 0, rk3, "RK3-Kutta");
+    wp::MeasureSundials(&table, ctx, p, {wp::Sun::kErkFixed, 0, rk3}, h, "RK3-Kutta");
   }
   ARKodeButcherTable_Free(rk3);
-  for (double tol : tols) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kErkAdaptive, tol, 1.0, nullptr, "adaptive");
-  }
-  for (double tol : tols) {
-    wp::MeasureSundials(&table, ctx, p1, wp::Sun::kCvodeAdams, tol, 1.0, nullptr, "adaptive");
+  for (wp::Sun kind : {wp::Sun::kErk, wp::Sun::kCvodeAdams}) {
+    for (double tol : tols) wp::MeasureSundials(&table, ctx, p, {kind}, tol, "adaptive");
   }
 
 #ifdef CEODE_BENCH_PEERS
-  // The peers (bench/peers.h); f depends on theta only, so the symplectic ones apply.
   peers::Setup();
-  peers::Problem pp;
-  pp.n = 1;
-  pp.acc = PeerAccel;
-  pp.tend = kTend;
-  pp.x0 = {0.0};
-  pp.v0 = {0.0};
-  pp.err = Err2;
-  pp.separable = true;
   // A finer h grid than CEODE's: RK4 and SB3A go from pre-asymptotic (h = 0.1) to
   // round-off (h = 1e-3) within two decades, and their order fits need points between.
   std::vector<double> peer_steps = {1e-1, 5e-2, 2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 1e-4, 1e-5};
   if (args.quick) peer_steps = {1e-2, 5e-3};
-  peers::MeasurePeers<1>(&table, pp, peer_steps, tols, 1.0);
+  peers::MeasurePeers<1>(&table, p, peer_steps, tols, 1.0);
   bad += peers::CheckPeerOrders(table, 1e-11, 1e-1);
 #else
   std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");

@@ -5,8 +5,7 @@
 // Problems (serial N_Vectors, CEodeEvolve(CE_ONE_STEP), h = 1e-3, guard off):
 //  * n = 1: damped driven pendulum theta'' = -(g/L) cos(theta) - 0.5 theta' + sin(2t),
 //    g/L = 9.81, theta(0) = 0.3, theta'(0) = 0; G4_A34.
-//  * n = 3: heavy symmetric top in ZXZ Euler angles (bench/wp_spinning_top.cpp's
-//    equations and data); G5_TOP.
+//  * n = 3: heavy symmetric top in ZXZ Euler angles (../oscillators/top_model.h); G5_TOP.
 // Configurations of each problem:
 //  * explicit   CEodeSetVelocityDependence(SUNFALSE): f sees the previous velocity
 //               (the cost floor of a step, not an accurate answer);
@@ -36,7 +35,8 @@
 #include <string>
 #include <vector>
 
-#include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+#include "oscillators/top_model.h"
+#include "wp_common.h"  // the clock, CeodeRhs (the top's acceleration lifted to CEODE's form)
 
 namespace {
 
@@ -45,24 +45,6 @@ constexpr long kBlock = 1000;
 
 int PendulumRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void*) {
   NV_Ith_S(f, 0) = -9.81 * std::cos(NV_Ith_S(x, 0)) - 0.5 * NV_Ith_S(v, 0) + std::sin(2 * t);
-  return 0;
-}
-
-struct Top {
-  double I1 = 5e-5, I3 = 2e-4, m = 0.02, l = 0.05, g = 9.81;
-};
-
-int TopRhs(sunrealtype, N_Vector x, N_Vector v, N_Vector f, void* user) {
-  const Top& p = *static_cast<Top*>(user);
-  const double* q = N_VGetArrayPointer(x);
-  const double* w = N_VGetArrayPointer(v);
-  double* a = N_VGetArrayPointer(f);
-  const double s = std::sin(q[1]), c = std::cos(q[1]);
-  const double w3 = w[2] + w[0] * c;
-  const double psi_dd = w[1] * (p.I3 * w3 - 2 * p.I1 * w[0] * c) / (p.I1 * s);
-  a[1] = w[0] * w[0] * s * c - (p.I3 / p.I1) * w3 * w[0] * s + (p.m * p.g * p.l / p.I1) * s;
-  a[0] = psi_dd;
-  a[2] = -psi_dd * c + w[0] * w[1] * s;
   return 0;
 }
 
@@ -87,18 +69,12 @@ const Config kConfigs[] = {
     {"newton", SUNTRUE, CE_IMPLICIT_NEWTON, 0},
 };
 
-double CpuNow() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 // Runs `steps` steps after the start; returns seconds per step (< 0: failure) and x at the end.
 double RunSteps(const Problem& p, const Config& c, long steps, std::vector<double>* xend,
                 double h = kStep, long block = kBlock) {
   SUNContext ctx = nullptr;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return -1;
-  Top top;
+  top::Top top;
   N_Vector x = N_VNew_Serial(p.n, ctx), v = N_VNew_Serial(p.n, ctx);
   SUNMatrix A = SUNDenseMatrix(p.n, p.n, ctx);
   SUNLinearSolver LS = SUNLinSol_Dense(x, A, ctx);
@@ -127,9 +103,9 @@ double RunSteps(const Problem& p, const Config& c, long steps, std::vector<doubl
     ok = (done == 0 || CEodeReInit(mem, 0, x0, v0) == CE_SUCCESS) &&
          CEodeEvolve(mem, 1e9, x, v, &t, CE_ONE_STEP) == CE_SUCCESS;
     const long n = std::min(block, steps - done);
-    const double t0 = CpuNow();
+    const double t0 = wp::Now();
     for (long i = 0; ok && i < n; ++i) ok = CEodeEvolve(mem, 1e9, x, v, &t, CE_ONE_STEP) == 0;
-    clock += CpuNow() - t0;
+    clock += wp::Now() - t0;
   }
   const double per_step = clock / static_cast<double>(std::max(steps, 1L));
   if (xend != nullptr) xend->assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + p.n);
@@ -155,7 +131,7 @@ double MedianPerStep(const Problem& p, const Config& c, long steps) {
 std::vector<Problem> Problems() {
   const double pi = std::acos(-1.0);
   return {{"pendulum", 1, PendulumRhs, "G4_A34", {0.3}, {0.0}},
-          {"top", 3, TopRhs, "G5_TOP", {0.0, pi / 6, 0.0}, {0.0, 0.0, 4 * pi}}};
+          {"top", 3, wp::CeodeRhs<top::Accel>, "G5_TOP", {0.0, pi / 6, 0.0}, {0.0, 0.0, 4 * pi}}};
 }
 
 // PC and AUTO against Newton after 1 s (one block), beside Newton's own error there (against

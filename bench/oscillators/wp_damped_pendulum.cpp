@@ -1,36 +1,16 @@
 // -----------------------------------------------------------------------------
-// wp_damped_pendulum: work-precision scene for the damped driven pendulum, the
-// 1-DOF velocity-dependent (implicit) case, every solver timed side by side in
-// one run (bench/wp_common.h; peers from bench/peers.h).
-//
-// Problem: theta'' = -(g/L) cos(theta) - 0.5 theta' + sin(2t), g/L = 9.81,
-// theta(0) = theta'(0) = 0, t in [0, 10]. Error = |theta(10) - ref| (global
-// error at the end; the error functions return 0 before t = 10).
-// Reference: classical RK4 in long double, Richardson-extrapolated, twice:
-// R1 from 1e5 and 2e5 steps, R2 from 2e5 and 4e5 steps; ref = R2, and the
-// scene checks |R1 - R2| < 1e-14 (the reference's own convergence) and, when
-// GSL is built in, |rk8pd at tol 1e-14 - ref| < 1e-11 (an independent method).
-//
-// Methods:
-//  * CEODE G3_CD, G4_A34, G5, G5_TOP, G5_ONES, G6_O5, G6_O6, G7_O7, G8_O8 at
-//    fixed h = 10/N, velocity dependence declared (CEodeSetVelocityDependence),
-//    Newton (the default) with SUNLinSol_Dense and the analytic df/dtheta' =
-//    -0.5, consistent start, stability guard off; a set's sweep stops at the
-//    first h whose error is below 3e-14 (smaller h only measure round-off);
-//  * ARKODE ERKStep with Kutta's RK3 at the same h; ARKODE ERKStep adaptive,
-//    CVODE Adams (fixed point) and CVODE BDF (Newton, dense), rtol = 1e-3 ...
-//    1e-13, atol = rtol;
-//  * the peers (bench/peers.h): odeint runge_kutta4 at the same h; odeint
-//    rkf78, dopri5, bulirsch_stoer and GSL rk8pd, rkf45, msadams over the same
-//    tolerances (velocity_verlet and the symplectic RKN do not apply: f depends
-//    on theta').
-//
-// Usage: wp_damped_pendulum [--csv FILE] [--quick]
-// Prints the table, the time at equal error (best CEODE, best SUNDIALS, best
-// peer) and CEODE's best time over odeint RK4's at 1e-6 and 1e-9 (issue 10's
-// target, measured, not a check). Exit code 0 when every run succeeded, the
-// reference checks passed and every peer's curve converges at its order
-// (peers::CheckPeerOrders).
+// wp_damped_pendulum: the damped driven pendulum, the 1-DOF velocity-dependent (implicit) case.
+// theta'' = -9.81 cos(theta) - 0.5 theta' + sin(2t), theta(0) = theta'(0) = 0, t in [0, 10];
+// error = |theta(10) - ref|. Reference: classical RK4 in long double, Richardson-extrapolated
+// from 1e5/2e5 and from 2e5/4e5 steps (they must agree to 1e-14), and GSL rk8pd at tol 1e-14
+// (within 1e-11).
+// Methods: CEODE's sets at h = 10/N, velocity dependence declared, Newton (dense, analytic
+// df/dtheta') and AUTO; a set's sweep stops below an error of 3e-14. ARKODE ERKStep with Kutta's
+// RK3 at the same h; ERKStep adaptive, CVODE Adams and BDF at rtol = atol = 1e-3 ... 1e-13; the
+// peers (not the symplectic ones: f depends on theta').
+// Usage: wp_damped_pendulum [--csv FILE] [--quick]. Prints CEODE's best time over odeint RK4's at
+// 1e-6 and 1e-9 (not a check). Exit code 0 when every run succeeded, the reference checks
+// passed and every peer converges at its order (peers::CheckPeerOrders).
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>
@@ -56,8 +36,8 @@ double Accel(double t, double th, double om) {
   return -kG * std::cos(th) - kDamp * om + std::sin(2 * t);
 }
 
-int Rhs2(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void*) {
-  NV_Ith_S(f, 0) = Accel(t, NV_Ith_S(x, 0), NV_Ith_S(v, 0));
+int AccelFn(double t, const double* x, const double* v, double* a, void*) {
+  a[0] = Accel(t, x[0], v[0]);
   return 0;
 }
 
@@ -67,21 +47,11 @@ int VelJac(sunrealtype, N_Vector, N_Vector, N_Vector, SUNMatrix J, void*, N_Vect
   return 0;
 }
 
-int Rhs1(sunrealtype t, N_Vector y, N_Vector yd, void*) {
-  NV_Ith_S(yd, 0) = NV_Ith_S(y, 1);
-  NV_Ith_S(yd, 1) = Accel(t, NV_Ith_S(y, 0), NV_Ith_S(y, 1));
-  return 0;
-}
-
 // Only the end counts: the instants before t = 10 report no error.
-double EndError(double t, double th, void* user) {
+double Err(double t, const double* x, const double*, void* user) {
   if (t < kTend - 1e-9) return 0;
-  return std::fabs(th - static_cast<Scene*>(user)->ref);
+  return std::fabs(x[0] - static_cast<Scene*>(user)->ref);
 }
-double Err2(double t, const double* x, const double*, void* user) {
-  return EndError(t, x[0], user);
-}
-double Err1(double t, const double* y, void* user) { return EndError(t, y[0], user); }
 
 // theta(10) by classical RK4 in long double with n steps.
 long double Rk4LongDouble(long n) {
@@ -118,12 +88,8 @@ bool Reference(Scene* s) {
 }
 
 #ifdef CEODE_BENCH_PEERS
-void PeerAccel(double t, const double* x, const double* v, double* a, void*) {
-  a[0] = Accel(t, x[0], v[0]);
-}
-
 // An independent check of the reference: GSL rk8pd at tol 1e-14.
-bool CrossCheck(const peers::Problem& p) {
+bool CrossCheck(const wp::Problem& p) {
   wp::Outcome o;
   const peers::Info& rk8pd = peers::InfoOf(peers::Kind::kRk8pd);
   const bool ran = peers::PeerOnce<1>(p, rk8pd, 1e-14, 1.0, &o) == 0;
@@ -133,7 +99,7 @@ bool CrossCheck(const peers::Problem& p) {
   return ok;
 }
 
-// CEODE's best curve over odeint RK4's at one error level (issue 10's target).
+// CEODE's best curve over odeint RK4's at one error level (the target).
 void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& sets, double e) {
   double tc = -1;
   std::string best = "not reached";
@@ -173,26 +139,32 @@ Plan MakePlan(bool quick) {
   return plan;
 }
 
+wp::Problem MakeProblem(Scene* scene) {
+  wp::Problem p;
+  p.n = 1;
+  p.Lift<AccelFn>();
+  p.user = scene;
+  p.tend = kTend;
+  p.x0 = {0.0};
+  p.v0 = {0.0};
+  p.err = Err;
+  p.vjac = VelJac;
+  return p;
+}
+
 // CEODE's sets (implicit path, Newton and AUTO, analytic df/dtheta').
-void RunCeode(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) {
-  wp::SecondOrder p2;
-  p2.n = 1;
-  p2.f = Rhs2;
-  p2.user = scene;
-  p2.tend = kTend;
-  p2.x0 = {0.0};
-  p2.v0 = {0.0};
-  p2.err = Err2;
-  p2.vel_dependent = true;
-  p2.vjac = VelJac;
+void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table* table) {
+  wp::CeodeOpts c;
+  c.vel = true;
   // Newton (the default), then AUTO: prediction-correction where kappa ||df/dv|| is small.
   for (int mode : {CE_IMPLICIT_NEWTON, CE_IMPLICIT_AUTO}) {
-    p2.implicit_mode = mode;
+    c.implicit_mode = mode;
     for (const std::string& m : plan.sets) {
       const std::string label = mode == CE_IMPLICIT_AUTO ? m + "-auto" : m;
+      c.method = m.c_str();
       for (double h : plan.steps) {
         wp::Outcome o;
-        if (!wp::MeasureCeode(table, ctx, p2, m.c_str(), h, false, label, &o)) continue;
+        if (!wp::MeasureCeode(table, ctx, p, c, h, label, &o)) continue;
         if (o.error < kRoundOff) break;
       }
     }
@@ -200,50 +172,33 @@ void RunCeode(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) 
 }
 
 // ARKODE (RK3 at the same h, adaptive ERK) and CVODE (Adams, BDF); false if no RK3 table.
-bool RunSundials(SUNContext ctx, Scene* scene, const Plan& plan, wp::Table* table) {
-  wp::FirstOrder p1;
-  p1.n = 2;
-  p1.f = Rhs1;
-  p1.user = scene;
-  p1.tend = kTend;
-  p1.y0 = {0.0, 0.0};
-  p1.err = Err1;
+bool RunSundials(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table* table) {
   ARKodeButcherTable rk3 = wp::KuttaRk3();
   if (rk3 == nullptr) return false;
   for (double h : plan.steps) {
     wp::Outcome o;
-    if (wp::MeasureSundials(table, ctx, p1, wp::Sun::kErkFixed, h, 0, rk3, "RK3-Kutta", nullptr,
+    if (wp::MeasureSundials(table, ctx, p, {wp::Sun::kErkFixed, 0, rk3}, h, "RK3-Kutta", nullptr,
                             &o) &&
         o.error < kRoundOff) {
       break;
     }
   }
   ARKodeButcherTable_Free(rk3);
-  for (wp::Sun kind : {wp::Sun::kErkAdaptive, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
-    for (double tol : plan.tols) {
-      wp::MeasureSundials(table, ctx, p1, kind, tol, 1.0, nullptr, "adaptive");
-    }
+  for (wp::Sun kind : {wp::Sun::kErk, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
+    for (double tol : plan.tols) wp::MeasureSundials(table, ctx, p, {kind}, tol, "adaptive");
   }
   return true;
 }
 
 // The peers, the reference's cross-check and their order checks; returns the problems.
-int RunPeers(Scene* scene, const Plan& plan, wp::Table* table) {
+int RunPeers(const wp::Problem& p, const Plan& plan, wp::Table* table) {
 #ifdef CEODE_BENCH_PEERS
   peers::Setup();
-  peers::Problem pp;
-  pp.n = 1;
-  pp.acc = PeerAccel;
-  pp.user = scene;
-  pp.tend = kTend;
-  pp.x0 = {0.0};
-  pp.v0 = {0.0};
-  pp.err = Err2;
-  int bad = CrossCheck(pp) ? 0 : 1;
-  peers::MeasurePeers<1>(table, pp, plan.steps, plan.tols, 1.0);
+  int bad = CrossCheck(p) ? 0 : 1;
+  peers::MeasurePeers<1>(table, p, plan.steps, plan.tols, 1.0);
   return bad + peers::CheckPeerOrders(*table, 1e-12, 1e-2);
 #else
-  (void)scene, (void)plan, (void)table;
+  (void)p, (void)plan, (void)table;
   std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
   return 0;
 #endif
@@ -262,9 +217,10 @@ int main(int argc, char** argv) {
   int bad = Reference(&scene) ? 0 : 1;
   const Plan plan = MakePlan(args.quick);
   wp::Table table("damped_pendulum", args.csv);
-  RunCeode(ctx, &scene, plan, &table);
-  if (!RunSundials(ctx, &scene, plan, &table)) ++bad;
-  bad += RunPeers(&scene, plan, &table);
+  const wp::Problem p = MakeProblem(&scene);
+  RunCeode(ctx, p, plan, &table);
+  if (!RunSundials(ctx, p, plan, &table)) ++bad;
+  bad += RunPeers(p, plan, &table);
   bad += table.failures();
   wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
 #ifdef CEODE_BENCH_PEERS
