@@ -486,8 +486,9 @@ int ValidateConfiguration(CEodeMemRec* ce, const char* func);  // all of the abo
 int ValidateStart(CEodeMemRec* ce, const char* func);          // the start's history is finite
 sunrealtype MaxNormOrNaN(N_Vector v);  // N_VMaxNorm skips NaN; this returns NaN for them
 
-// ceode_long_run.cpp: the measured long-run energy behaviour of each named set (bench/long_run,
-// docs/stability.md) and the advice that follows from it; pure, for the stability guard.
+// ceode_long_run.cpp: the long-run energy behaviour of each named set, measured by the long-run
+// study (data in docs/data/long_run_*.csv, docs/stability.md), and the advice that follows from
+// it; pure, for the stability guard.
 // kLongRunRoundOff: no drift resolved above round-off over 10^7 steps (the fitted rate is noise).
 enum LongRunKind { kLongRunBounded, kLongRunLinearDrift, kLongRunGrowing, kLongRunRoundOff };
 struct LongRunBehaviour {

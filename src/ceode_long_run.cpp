@@ -1,7 +1,7 @@
 // What each named set conserves over long runs, and the advice that follows for a given
-// Omega = h * omega_max. The figures are measurements of bench/long_run (10^7 steps of the
-// pendulum and of the linear oscillator at h = 1e-3 and 2e-3; table and command in
-// docs/stability.md, "Long runs"); the limits are those of docs/data/stability_limits.csv.
+// Omega = h * omega_max. The figures were measured by the long-run study (10^7 steps of the
+// pendulum and of the linear oscillator at h = 1e-3 and 2e-3; data in docs/data/long_run_*.csv,
+// table in docs/stability.md, "Long runs"); the limits are those of docs/data/stability_limits.csv.
 // Pure functions: no CEODE memory, no allocation, so the stability guard can call them anywhere.
 #include <cmath>
 #include <cstdio>

@@ -19,7 +19,8 @@ namespace {
 constexpr sunrealtype kPcContractionLimit = SUN_RCONST(0.2);
 // Back from the nonlinear solver only below this estimate: one power step from a kept direction
 // varies by a factor 5 along the top's nutation (0.07 .. 0.34 at h = 1e-2, where
-// prediction-correction is unstable); 0.05 was the former limit, safe on every scene.
+// prediction-correction is unstable); 0.05, a quarter of the contraction limit, is safe on every
+// scene.
 constexpr sunrealtype kPcReturnLimit = kPcContractionLimit / 4;
 constexpr int kPowerSteps = 3;  // power steps of the coupling estimate (one f each)
 // f changed by more than this many units of round-off of |f|: a real velocity dependence.
