@@ -17,7 +17,7 @@
  *
  * Reference solution: the chain is conservative and its links are rigid, so
  * E = sum(1/2 |v_i|^2 + g y_i) stays at E0 and every Phi_i at 0. The example
- * exits 0 when max |E - E0| <= 5e-7 J (|E0| = 22 J; bench/wp_chain_dae measures
+ * exits 0 when max |E - E0| <= 5e-7 J (|E0| = 22 J; bench/multibody/wp_chain_dae measures
  * 2.88e-7 for this configuration) and max |Phi_i| <= 1e-10 l^2.
  * ---------------------------------------------------------------------------*/
 #include <ceode/ceode.h>

@@ -1,6 +1,6 @@
 /* -----------------------------------------------------------------------------
  * The two-scale model of examples/mri_two_scale.c, shared with
- * bench/mri_inner_cost.c (one copy of the model and of its closed form):
+ * bench/sundials_interop/mri_inner_cost.c (one copy of the model and of its closed form):
  *     q'' = -omega^2 (q - s)            fast (the inner stepper)
  *     s'  = -lambda s + cos t           slow (MRIStep's explicit part)
  * First-order state y = (q, s, p, w), x = (q, s), v = (p, w); w = 0 throughout

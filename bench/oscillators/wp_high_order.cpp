@@ -15,7 +15,7 @@
 //
 //   wp_high_order [--csv FILE] [--quick]
 //   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
-//                                                     bench/instructions.sh high-order)
+//                                                     bench/step_cost/instructions.sh high-order)
 //   wp_high_order --count gsl_rk8pd TOL REPS         (the same for rk8pd at one tolerance)
 // Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
 // (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
