@@ -593,7 +593,7 @@ void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* 
                    sunrealtype* out) {
   const sunrealtype* x[kMaxTerms];
   // The solvers' vectors are all NVECTOR_SERIAL or all not (SerialBackend): one test for all.
-  const bool serial = X[0]->ops->nvgetarraypointer == N_VGetArrayPointer_Serial;
+  const bool serial = m > 0 && X[0]->ops->nvgetarraypointer == N_VGetArrayPointer_Serial;
   for (int j = 0; j < m; ++j) x[j] = serial ? NV_DATA_S(X[j]) : N_VGetArrayPointer(X[j]);
   if (m >= 3 && m <= kMaxDegree) {
     kEntries[m](n, c, x, out);
