@@ -50,7 +50,10 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   return CE_SUCCESS;
 }
 
-void Restart(CEodeMemRec* ce) { ce->started = false; }
+void Restart(CEodeMemRec* ce) {
+  ce->started = false;
+  ce->adapters.history_preset = false;  // a preset history holds for the configuration it was made for
+}
 
 bool IsFinite(N_Vector v) {
   // NaN propagates through the L1 norm; +Inf is either an Inf entry or the sum overflowing
@@ -174,7 +177,65 @@ int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
   return CE_SUCCESS;
 }
 
+// What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers.
+int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0) {
+  int flag = CheckInitialData(ce, func, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (N_VGetLength(x0) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "x0 has %ld entries, CEodeInit had %ld: use CEodeInit to resize.",
+                        static_cast<long>(N_VGetLength(x0)), static_cast<long>(ce->n));
+  }
+  N_VScale(1.0, x0, ce->xcur);
+  N_VScale(1.0, v0, ce->D[1]);
+  ce->tcur = t0;
+  ce->tretlast = t0;
+  Restart(ce);
+  ce->mass_evaluated = false;
+  ce->mass_dirty = true;
+  ce->a_holds = Holds::kNothing;
+  ce->jac_current = false;
+  ce->nst_lastsetup = -1;
+  ce->coupling = 0;  // the start estimates it again
+  GuardRestart(ce);
+  return CE_SUCCESS;
+}
+
 }  // namespace
+
+int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
+                N_Vector v0) {
+  if (!std::isfinite(t0)) return ProcessError(ce, CE_ILL_INPUT, func, "t0 is not finite.");
+  int flag = CheckInitialData(ce, func, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->initialized) {
+    // A second Init replaces the problem: drop every size-dependent object.
+    NlsFree(ce);
+    LsFree(ce);
+    ConstrFree(ce);
+    GuardFree(ce);
+    FreeVectors(ce);
+  }
+  flag = AllocVectors(ce, x0);
+  if (flag != CE_SUCCESS) return ProcessError(ce, flag, func, "Out of memory.");
+  ce->n = N_VGetLength(x0);
+  ce->f = f;
+  ce->initialized = true;
+  return CEodeReInit(ce, t0, x0, v0);
+}
+
+int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+          const ResetOptions& opt) {
+  int flag = RestartAt(ce, func, t0, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (opt.omega_max > 0) ce->omega_user = opt.omega_max;
+  if (opt.history) {
+    if ((flag = opt.history()) != CE_SUCCESS) return flag;
+    ce->adapters.history_preset = true;
+  }
+  return CE_SUCCESS;
+}
+
 }  // namespace ceode
 
 extern "C" {
@@ -203,54 +264,21 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "f = NULL: pass the right-hand side function f(t, x, v, f, data).");
   }
-  if (!std::isfinite(t0))
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
-  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
-  if (flag != CE_SUCCESS) return flag;
-  if (ce->initialized) {
-    // A second Init replaces the problem: drop every size-dependent object.
-    ceode::NlsFree(ce);
-    ceode::LsFree(ce);
-    ceode::ConstrFree(ce);
-    ceode::GuardFree(ce);
-    ceode::FreeVectors(ce);
-  }
-  flag = ceode::AllocVectors(ce, x0);
-  if (flag != CE_SUCCESS) return ceode::ProcessError(ce, flag, __func__, "Out of memory.");
-  ce->n = N_VGetLength(x0);
-  if (f != ceode::FirstOrderRhs) ceode::FirstOrderFree(ce);  // the native form replaces it
-  ce->f = f;
-  ce->initialized = true;
-  return CEodeReInit(mem, t0, x0, v0);
+  flag = ceode::InitProblem(ce, __func__, f, t0, x0, v0);
+  if (flag == CE_SUCCESS) ceode::FirstOrderFree(ce);  // the native form replaces it
+  return flag;
 }
 
 int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   CEodeMemRec* ce = nullptr;
   int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag == CE_SUCCESS) flag = ceode::RestartAt(ce, __func__, t0, x0, v0);
   if (flag != CE_SUCCESS) return flag;
-  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
-  if (flag != CE_SUCCESS) return flag;
-  if (N_VGetLength(x0) != ce->n) {
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                               "x0 has %ld entries, CEodeInit had %ld: use CEodeInit to resize.",
-                               static_cast<long>(N_VGetLength(x0)), static_cast<long>(ce->n));
-  }
-  N_VScale(1.0, x0, ce->xcur);
-  N_VScale(1.0, v0, ce->D[1]);
-  ce->tcur = t0;
-  ce->tretlast = t0;
-  ceode::Restart(ce);
-  ce->mass_evaluated = false;
-  ce->mass_dirty = true;
-  ce->a_holds = ceode::Holds::kNothing;
-  ce->jac_current = false;
-  ce->nst_lastsetup = -1;
   ce->guard_warned = false;
   ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
   ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = ce->nge = 0;
   ce->nfe_guard = ce->nme_guard = ce->nsetups_guard = 0;
   ceode::ImplicitStatsReset(ce);
-  ceode::GuardRestart(ce);
   return CE_SUCCESS;
 }
 

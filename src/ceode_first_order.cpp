@@ -16,10 +16,11 @@
 namespace ceode {
 namespace {
 
-// The adapter's state; it is CEODE's user_data while active, the user's data is kept here.
+}  // namespace
+
+// The adapter's state (Adapters::first_order); F gets the memory's user_data.
 struct FirstOrder {
   CEodeFirstOrderRhsFn F = nullptr;
-  void* user_data = nullptr;
   bool many = false;  // ManyVector [x; v], else serial of length 2n
   sunindextype n = 0;
   N_Vector y = nullptr;      // what F sees as y
@@ -30,7 +31,7 @@ struct FirstOrder {
   bool checked = false;  // the first half of ydot was compared with v
 };
 
-FirstOrder* Adapter(CEodeMemRec* ce) { return static_cast<FirstOrder*>(ce->fo); }
+namespace {
 
 N_Vector* Parts(N_Vector mv) {
   return static_cast<N_VectorContent_ManyVector>(mv->content)->subvec_array;
@@ -124,8 +125,9 @@ bool Build(FirstOrder* fo, N_Vector y0, SUNContext ctx) {
   return fo->y != nullptr && fo->ydot != nullptr && fo->xview != nullptr && fo->vview != nullptr;
 }
 
-// F at (t, [x; v]); the first half of ydot goes to xd, the second to a.
-int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_Vector a) {
+// F at (t, [x; v]) with the user's data; the first half of ydot goes to xd, the second to a.
+int CallF(FirstOrder* fo, void* user_data, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd,
+          N_Vector a) {
   if (fo->many) {
     N_Vector* yp = Parts(fo->y);
     N_Vector* dp = Parts(fo->ydot);
@@ -133,13 +135,13 @@ int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_
     yp[1] = v;
     dp[0] = xd;
     dp[1] = a;
-    return fo->F(t, fo->y, fo->ydot, fo->user_data);
+    return fo->F(t, fo->y, fo->ydot, user_data);
   }
   const auto bytes = static_cast<size_t>(fo->n) * sizeof(sunrealtype);
   sunrealtype* yd = N_VGetArrayPointer(fo->y);
   std::memcpy(yd, N_VGetArrayPointer(x), bytes);
   std::memcpy(yd + fo->n, N_VGetArrayPointer(v), bytes);
-  const int rv = fo->F(t, fo->y, fo->ydot, fo->user_data);
+  const int rv = fo->F(t, fo->y, fo->ydot, user_data);
   sunrealtype* dd = N_VGetArrayPointer(fo->ydot);
   std::memcpy(N_VGetArrayPointer(a), dd + fo->n, bytes);
   if (xd != nullptr) std::memcpy(N_VGetArrayPointer(xd), dd, bytes);
@@ -149,7 +151,7 @@ int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_
 // Largest |x'_i - v_i| relative to max(|v|, tiny) after F at (t, x, v).
 int FirstHalfMismatch(CEodeMemRec* ce, FirstOrder* fo, N_Vector x, N_Vector v, sunrealtype* rel) {
   N_Vector xd = ce->tmp1;
-  const int rv = CallF(fo, ce->tcur, x, v, xd, ce->tmp2);
+  const int rv = CallF(fo, ce->user_data, ce->tcur, x, v, xd, ce->tmp2);
   if (rv != 0) return rv;
   N_VLinearSum(1, xd, -1, v, xd);
   const sunrealtype vmax = N_VMaxNorm(v);
@@ -191,7 +193,7 @@ int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, 
                      FirstOrder** fo, N_Vector* x, N_Vector* v) {
   int flag = Access(mem, func, ce, true);
   if (flag != CE_SUCCESS) return flag;
-  *fo = Adapter(*ce);
+  *fo = (*ce)->adapters.first_order;
   if (*fo == nullptr) {
     return ProcessError(*ce, CE_NO_MALLOC, func,
                         "No first-order problem: call CEodeInitFirstOrder first.");
@@ -203,23 +205,18 @@ int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, 
 
 }  // namespace
 
-int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data) {
-  auto* fo = static_cast<FirstOrder*>(data);
-  return CallF(fo, t, x, v, fo->many ? fo->xdot : nullptr, a);
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem) {
+  auto* ce = static_cast<CEodeMemRec*>(mem);
+  FirstOrder* fo = ce->adapters.first_order;
+  return CallF(fo, ce->user_data, t, x, v, fo->many ? fo->xdot : nullptr, a);
 }
 
 void FirstOrderFree(CEodeMemRec* ce) {
-  FirstOrder* fo = Adapter(ce);
+  FirstOrder* fo = ce->adapters.first_order;
   if (fo == nullptr) return;
-  ce->user_data = fo->user_data;
-  ce->fo = nullptr;
+  ce->adapters.first_order = nullptr;
+  SelectRhs(ce);
   Destroy(fo);
-}
-
-bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data) {
-  if (ce->fo == nullptr) return false;
-  Adapter(ce)->user_data = user_data;
-  return true;
 }
 
 }  // namespace ceode
@@ -241,7 +238,6 @@ int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vec
   fo->F = F;
   fo->many = N_VGetVectorID(y0) == SUNDIALS_NVEC_MANYVECTOR;
   fo->n = N_VGetLength(y0) / 2;
-  fo->user_data = ce->fo != nullptr ? ceode::Adapter(ce)->user_data : ce->user_data;
   if (!ceode::Build(fo, y0, ce->sunctx)) {
     ceode::Destroy(fo);
     return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
@@ -249,16 +245,16 @@ int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vec
   N_Vector x0 = nullptr;
   N_Vector v0 = nullptr;
   ceode::Split(fo, y0, &x0, &v0);
-  // A previous adapter stays in place until this one is initialised (CEodeInit keeps it
-  // for f = FirstOrderRhs), so a failure leaves the memory as it was.
-  flag = CEodeInit(mem, ceode::FirstOrderRhs, t0, x0, v0);
+  // A previous adapter stays in place until this problem is initialised, so a failure leaves the
+  // memory as it was. There is no native f: the adapter's FirstOrderRhs is evaluated instead.
+  flag = ceode::InitProblem(ce, __func__, nullptr, t0, x0, v0);
   if (flag != CE_SUCCESS) {
     ceode::Destroy(fo);
     return flag;
   }
   ceode::FirstOrderFree(ce);
-  ce->fo = fo;
-  ce->user_data = fo;
+  ce->adapters.first_order = fo;
+  ceode::SelectRhs(ce);
   return CE_SUCCESS;
 }
 

@@ -127,6 +127,22 @@ constexpr sunindextype kInPlaceMinLen = 1024;
 // D_2 (f's output buffer) and the top derivative z (read as history by later sums).
 constexpr bool InPlaceLevel(int d, int k) { return k != 2 && k != d - 1; }
 
+struct FirstOrder;  // ceode_first_order.cpp
+struct Forcing;     // ceode_forcing.cpp
+
+// What CEODE evaluates when it is not the user's f(t, x, v, user_data) alone, and what a Reset
+// hands the next start. f and user_data always stay the user's: the adapters read them.
+struct Adapters {
+  // Called as rhs(t, x, v, f, ce) in place of f (nullptr: f itself); set by SelectRhs only.
+  CEodeRhsFn rhs = nullptr;
+  FirstOrder* first_order = nullptr;  // CEodeInitFirstOrder's F gives the acceleration
+  Forcing* forcing = nullptr;         // added to the acceleration (the inner stepper's)
+  void* stepper = nullptr;            // the inner stepper that drives this memory
+  // D_2..D_{d-1} at tcur came with the last Reset: the next start evaluates nothing and only
+  // forms x(t0 + h). Cleared by that start.
+  bool history_preset = false;
+};
+
 }  // namespace ceode
 
 // The solver memory. Named like SUNDIALS' CVodeMemRec so users reading a
@@ -248,7 +264,6 @@ struct CEodeMemRec {
   N_Vector phi = nullptr;
   bool phi_template_checked = false;  // Phi seen to write every template entry
   void* con = nullptr;                // private saddle-point workspace (ceode_constraints.cpp)
-  void* fo = nullptr;  // first-order adapter, CEODE's user_data while set (ceode_first_order.cpp)
 
   // Stability guard
   int guard_mode = CE_GUARD_WARN;
@@ -302,11 +317,8 @@ struct CEodeMemRec {
   bool to_context = ceode::sun::kContextErrors;  // SUNDIALS 7: through the SUNContext
   std::string last_msg;
 
-  // --- inner stepper (src/ceode_stepper.cpp) ---
-  // D_2..D_{d-1} at tcur were supplied by the owner of this memory (the MRI inner stepper, from
-  // the previous inner run and the known forcing jump): the next start evaluates nothing and only
-  // forms x(t0 + h). Cleared by that start.
-  bool start_preset = false;
+  // --- adapters (ceode_first_order.cpp, ceode_forcing.cpp, ceode_stepper.cpp) ---
+  ceode::Adapters adapters;
 };
 
 namespace ceode {
@@ -454,11 +466,40 @@ const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not
 // (empty when `current` is already the right choice); returns buf.
 const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
 
-// ceode_first_order.cpp: the f CEODE calls for CEodeInitFirstOrder; dropping the adapter
-// (native CEodeInit, CEodeFree) restores the user's data; user data set while it is active.
-int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data);
+// --- adapters ---
+// The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
+inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
+  return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
+                                     : ce->adapters.rhs(t, x, v, f, ce);
+}
+// The same without the forcing: the user's f, or F of the first-order form.
+int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f);
+// The identity of the problem's right-hand side (f, or the first-order adapter's).
+inline CEodeRhsFn RhsIdentity(const CEodeMemRec* ce) {
+  return ce->f != nullptr ? ce->f : ce->adapters.rhs;
+}
+// Sets adapters.rhs from the attached adapters (ceode_forcing.cpp).
+void SelectRhs(CEodeMemRec* ce);
+// ceode_first_order.cpp: F's acceleration (data: the memory); the adapter's record, dropped by a
+// native CEodeInit and by CEodeFree.
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
 void FirstOrderFree(CEodeMemRec* ce);
-bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data);
+
+// ceode.cpp: a new problem (f, or nullptr for the first-order form) at t0; CEodeInit without the
+// adapter bookkeeping.
+int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
+                N_Vector v0);
+// A restart at (t0, x0, v0) that keeps the counters and the guard's warning state (CEodeReInit
+// zeroes them): for an adapter that integrates in pieces.
+struct ResetOptions {
+  // Fills D_2..D_{d-1} at t0 for the degree of the last start; the next start then evaluates
+  // nothing. Empty: the start computes them.
+  std::function<int()> history;
+  // > 0: the guard's frequency from now on, so that later starts check h without estimating it.
+  sunrealtype omega_max = 0;
+};
+int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+          const ResetOptions& opt);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

@@ -46,7 +46,7 @@ void ProbeDirection(N_Vector w) {
 
 int CountedRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
                const char* func) {
-  const int rv = ce->f(t, x, v, f, ce->user_data);
+  const int rv = CallRhs(ce, t, x, v, f);
   ++ce->nfe_coupling;  // apart from the steps' evaluations, like the guard's
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -130,14 +130,14 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
 // is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
 int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   const bool detect = ce->vel_request == CE_VELOCITY_DETECT;
-  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != ce->f))) {
+  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != RhsIdentity(ce)))) {
     return CE_SUCCESS;
   }
   // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
   N_Vector u = ce->atmp, fbase = ce->tmp2;
   int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
-  if (!detect) ce->vel_checked_f = ce->f;  // once per right-hand side, not at every restart
+  if (!detect) ce->vel_checked_f = RhsIdentity(ce);  // once per right-hand side, not at every restart
   const sunrealtype sig = ProbeIncrement(ce->D[1]);
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
   const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);

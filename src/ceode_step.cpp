@@ -163,7 +163,7 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 
 bool NeedsSolverWork(const CEodeMemRec* ce) {
   return ce->LS != nullptr || ce->NLS != nullptr || ce->mfn != nullptr || ce->M != nullptr ||
-         ce->vel_dependent || ce->fo != nullptr || HasConstraints(ce);
+         ce->vel_dependent || ce->adapters.first_order != nullptr || HasConstraints(ce);
 }
 
 // Each N_VClone costs about a thousand instructions in Debian's -O0 SUNDIALS (the operation
@@ -210,7 +210,7 @@ int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func) {
 }  // namespace
 
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
-  const int rv = ce->f(t, x, v, f, ce->user_data);
+  const int rv = CallRhs(ce, t, x, v, f);
   ++ce->nfe;
   return rv == 0 ? CE_SUCCESS : RhsFailed(ce, rv, t, func);
 }
@@ -414,8 +414,8 @@ int AllocHistory(CEodeMemRec* ce, const char* func) {
 int OdeStart(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
   const sunrealtype t = ce->tcur;
-  const bool preset = ce->start_preset;  // the inner stepper's restart (src/ceode_stepper.cpp)
-  ce->start_preset = false;
+  const bool preset = ce->adapters.history_preset;  // from Reset (an adapter's restart)
+  ce->adapters.history_preset = false;
   int flag = preset ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
     flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
@@ -740,12 +740,16 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, sunrealtype tar
     RotateVectors(ce);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
+  // The right-hand side is chosen once: the user's f directly, or the adapters' (CallRhs).
+  const bool own_f = ce->adapters.rhs == nullptr;
+  const CEodeRhsFn rhs = own_f ? ce->f : ce->adapters.rhs;
+  void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
   const long int count = LeanStepCount(ce, target, max_steps);
   LeanEnd e;
   while (e.steps < count) {
     e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    e.rv = ce->f(e.t, p.x, p.v, p.a, ce->user_data);
+    e.rv = rhs(e.t, p.x, p.v, p.a, rhs_data);
     ++ce->nfe;
     if (e.rv != 0) break;
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;

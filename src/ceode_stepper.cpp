@@ -2,9 +2,9 @@
 // SetForcing on the Stepper below) behind MRIStep's custom inner stepper
 // (SUNDIALS 6.4 and 7.x) and the SUNStepper of SUNDIALS >= 7.2.
 //
-// The forced inner problem x' = v + r_x(t), v' = g(t, x, v) + r_v(t) is integrated
-// in second-order form with u = x' = v + r_x (docs/porting.md, "The forced inner
-// problem"):  x'' = g(t, x, u - r_x) + r_v + r_x'.
+// The stepper owns its state y = [x; v]. Every inner run hands the MRI forcing to the memory's
+// forcing hook (ceode_forcing.hpp: CEODE then integrates in u = x' = v + r_x) and restarts CEODE
+// with Reset, which keeps the counters; the user's f and user_data stay in the memory.
 #include <ceode/ceode_stepper.h>
 #include <nvector/nvector_manyvector.h>
 #include <nvector/nvector_serial.h>
@@ -13,81 +13,37 @@
 #include <cmath>
 #include <new>
 
+#include "ceode_forcing.hpp"
 #include "ceode_impl.hpp"
 
 namespace ceode {
 namespace {
 
-constexpr int kMaxForcing = 10;  // MRI forcing polynomials have (order + 1) terms at most
-
-// Views of the two halves of a first-order vector y = [x; v].
+// The two halves of a first-order vector y = [x; v]; as a view slot, empty serial vectors
+// re-pointed into y's array (no copy).
 struct Halves {
   N_Vector x = nullptr;
   N_Vector v = nullptr;
 };
 
-// Serial views are empty serial vectors re-pointed into y's array (no copy).
-struct ViewSlot {
-  N_Vector x = nullptr;
-  N_Vector v = nullptr;
-};
-
-// The counters CEodeReInit zeroes; the stepper adds every inner run to them.
-struct Counters {
-  long int nst, nfe, nfe_start, nni, nnf, nsetups, nls_solves, nje, nfeDQ, nme, nce;
-  long int nfe_guard, nme_guard, nsetups_guard;
-};
-
-Counters SaveCounters(const CEodeMemRec* ce) {
-  return {ce->nst,     ce->nfe,        ce->nfe_start, ce->nni,          ce->nnf,
-          ce->nsetups, ce->nls_solves, ce->nje,       ce->nfeDQ,        ce->nme,
-          ce->nce,     ce->nfe_guard,  ce->nme_guard, ce->nsetups_guard};
-}
-
-void AddCounters(CEodeMemRec* ce, const Counters& c) {
-  ce->nst += c.nst;
-  ce->nfe += c.nfe;
-  ce->nfe_start += c.nfe_start;
-  ce->nni += c.nni;
-  ce->nnf += c.nnf;
-  ce->nsetups += c.nsetups;
-  ce->nls_solves += c.nls_solves;
-  ce->nje += c.nje;
-  ce->nfeDQ += c.nfeDQ;
-  ce->nme += c.nme;
-  ce->nce += c.nce;
-  ce->nfe_guard += c.nfe_guard;
-  ce->nme_guard += c.nme_guard;
-  ce->nsetups_guard += c.nsetups_guard;
-}
-
-int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data);
-
-// The stepper's content. It owns its state y_own = [x; v] at t_own.
 struct Stepper {
   CEodeMemRec* ce = nullptr;
-  CEodeRhsFn g = nullptr;  // the user's fast acceleration and its data
-  void* g_data = nullptr;
+  CEodeRhsFn f = nullptr;  // the memory's f and user_data at creation: a change is refused
+  void* user_data = nullptr;
   sunrealtype h_max = 0;  // the user's inner step: the largest one taken
-  bool serial = false;    // y is a serial vector of 2n (else a ManyVector of two parts)
   N_Vector y_own = nullptr;
   sunrealtype t_own = 0;
   bool have_state = false;
-  bool omega_fixed = false;  // the guard's frequency is known: restarts do not re-estimate it
-  sunrealtype stepdir = 1;
+  bool omega_known = false;    // the guard's frequency is known: restarts do not re-estimate it
+  sunrealtype omega_new = 0;   // the first run's estimate, for the next Reset
   sunrealtype tstop = 0;
   bool tstop_set = false;
-  ViewSlot own_view, io_view, io2_view;
-  ViewSlot forcing_view[kMaxForcing];
+  Halves own_view, io_view, io2_view;
+  Halves forcing_view[kMaxForcing];
+  Forcing forcing;        // Adapters::forcing while the stepper exists
   N_Vector u = nullptr;   // x' = v + r_x during an inner run
-  N_Vector rx = nullptr;  // r_x(t), and v - r_x inside the trampoline
-  N_Vector vg = nullptr;
-  // Forcing r(t) = sum_k ((t - tshift)/tscale)^k F_k, in halves
-  int nforcing = 0;
-  sunrealtype tshift = 0;
-  sunrealtype tscale = 1;
-  N_Vector Fx[kMaxForcing] = {};
-  N_Vector Fv[kMaxForcing] = {};
+  N_Vector rx = nullptr;  // scratch for the restart: the jump of r_x
+  N_Vector xp = nullptr;  // and x plus a multiple of it
   long int nrestarts = 0;
   // What the next restart can reuse (docs/porting.md, "What a restart costs"): at t_end, the
   // end of the last inner run, the g parts g_end[k] = D_k - (r_v + r_x')^(k-2) of the history's
@@ -101,7 +57,7 @@ struct Stepper {
   N_Vector ytmp = nullptr;  // for the comparison of a reset state with the owned one
 };
 
-void FreeSlot(ViewSlot* s) {
+void FreeSlot(Halves* s) {
   if (s->x != nullptr) N_VDestroy(s->x);
   if (s->v != nullptr) N_VDestroy(s->v);
   s->x = s->v = nullptr;
@@ -110,15 +66,16 @@ void FreeSlot(ViewSlot* s) {
 void DestroyStepper(Stepper* st) {
   if (st == nullptr) return;
   CEodeMemRec* ce = st->ce;
-  if (ce != nullptr && ce->f == Trampoline) {  // hand the memory back to the user
-    ce->f = st->g;
-    ce->user_data = st->g_data;
+  if (ce != nullptr && ce->adapters.stepper == st) {  // the memory evaluates f unforced again
+    ce->adapters.stepper = nullptr;
+    ce->adapters.forcing = nullptr;
+    SelectRhs(ce);
   }
   FreeSlot(&st->own_view);
   FreeSlot(&st->io_view);
   FreeSlot(&st->io2_view);
-  for (ViewSlot& s : st->forcing_view) FreeSlot(&s);
-  for (N_Vector w : {st->y_own, st->u, st->rx, st->vg, st->rx_end, st->ytmp}) {
+  for (Halves& s : st->forcing_view) FreeSlot(&s);
+  for (N_Vector w : {st->y_own, st->u, st->rx, st->xp, st->forcing.vg, st->rx_end, st->ytmp}) {
     if (w != nullptr) N_VDestroy(w);
   }
   for (N_Vector w : st->g_end) {
@@ -129,7 +86,7 @@ void DestroyStepper(Stepper* st) {
 
 // The one validation point of the first-order vectors handed to the stepper:
 // y must be [x; v] with both halves of CEODE's length and vector type.
-int SplitVector(Stepper* st, N_Vector y, ViewSlot* slot, Halves* out, const char* func) {
+int SplitVector(Stepper* st, N_Vector y, Halves* slot, Halves* out, const char* func) {
   CEodeMemRec* ce = st->ce;
   if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
   const N_Vector_ID id = N_VGetVectorID(y);
@@ -168,110 +125,15 @@ int SplitVector(Stepper* st, N_Vector y, ViewSlot* slot, Halves* out, const char
   return CE_SUCCESS;
 }
 
-// Weights of r(t) (value) and r'(t) at t.
-void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealtype* der) {
-  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
-  sunrealtype p = 1;  // tau^k
-  for (int k = 0; k < st->nforcing; ++k) {
-    val[k] = p;
-    der[k] = 0;
-    if (k > 0) der[k] = k * val[k - 1] / st->tscale;
-    p *= tau;
-  }
-}
-
-// out = a * base + s * sum_k w[k] F[k] in one pass (base may be out or null; zero weights are
-// skipped, since a forced vector at large n costs one pass per term).
-void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const sunrealtype* w,
-                    N_Vector const* F, N_Vector out) {
-  sunrealtype c[2 * kMaxForcing + 1];
-  N_Vector X[2 * kMaxForcing + 1];
-  int m = 0;
-  if (base != nullptr) {
-    c[m] = a;
-    X[m++] = base;
-  }
-  for (int k = 0; k < nw; ++k) {
-    if (w[k] == 0) continue;
-    c[m] = s * w[k];
-    X[m++] = F[k];
-  }
-  if (m == 0) {  // N_VLinearCombination needs at least one vector
-    N_VConst(0, out);
-    return;
-  }
-  N_VLinearCombination(m, c, X, out);
-}
-
-// out = a * base + s * r_x(t) (base may be null).
-void WithForcingX(const Stepper* st, sunrealtype t, sunrealtype a, N_Vector base, sunrealtype s,
-                  N_Vector out) {
-  sunrealtype val[kMaxForcing], der[kMaxForcing];
-  ForcingWeights(st, t, val, der);
-  CombineForcing(a, base, s, st->nforcing, val, st->Fx, out);
-}
-
-// Weights of the m-th time derivative of r(t) at t.
-void ForcingDerivWeights(const Stepper* st, sunrealtype t, int m, sunrealtype* w) {
-  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
-  for (int k = 0; k < st->nforcing; ++k) {
-    sunrealtype c = k >= m ? 1 : 0;
-    for (int i = 0; i < m && k >= m; ++i) c *= static_cast<sunrealtype>(k - i) / st->tscale;
-    for (int i = m; i < k; ++i) c *= tau;
-    w[k] = c;
-  }
-}
-
-// out = base + s * (r_v^(m)(t) + r_x^(m+1)(t)): the forcing's part of the m-th derivative of
-// x'' = G added to base.
-void WithForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector base, sunrealtype s,
-                      N_Vector out) {
-  sunrealtype c[2 * kMaxForcing];
-  N_Vector X[2 * kMaxForcing];
-  ForcingDerivWeights(st, t, m, c);
-  ForcingDerivWeights(st, t, m + 1, c + st->nforcing);
-  for (int k = 0; k < st->nforcing; ++k) {
-    X[k] = st->Fv[k];
-    X[st->nforcing + k] = st->Fx[k];
-  }
-  CombineForcing(1, base, s, 2 * st->nforcing, c, X, out);
-}
-
-// CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
-int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
-  auto* st = static_cast<Stepper*>(data);
-  if (st->nforcing == 0) return st->g(t, x, u, f, st->g_data);
-  sunrealtype val[kMaxForcing], der[kMaxForcing];
-  ForcingWeights(st, t, val, der);
-  CombineForcing(1, u, -1, st->nforcing, val, st->Fx, st->vg);
-  const int rv = st->g(t, x, st->vg, f, st->g_data);
-  if (rv != 0) return rv;
-  sunrealtype c[2 * kMaxForcing];
-  N_Vector X[2 * kMaxForcing];
-  for (int k = 0; k < st->nforcing; ++k) {
-    c[k] = val[k];
-    X[k] = st->Fv[k];
-    c[st->nforcing + k] = der[k];
-    X[st->nforcing + k] = st->Fx[k];
-  }
-  CombineForcing(1, f, 1, 2 * st->nforcing, c, X, f);
-  return 0;
-}
-
 int Allocate(Stepper* st, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
-  st->serial = N_VGetVectorID(y) == SUNDIALS_NVEC_SERIAL;
   st->y_own = N_VClone(y);
-  st->u = N_VClone(ce->xcur);
-  st->rx = N_VClone(ce->xcur);
-  st->vg = N_VClone(ce->xcur);
-  st->rx_end = N_VClone(ce->xcur);
   st->ytmp = N_VClone(y);
-  if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr ||
-      st->rx_end == nullptr || st->ytmp == nullptr) {
-    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  bool ok = st->y_own != nullptr && st->ytmp != nullptr;
+  for (N_Vector* w : {&st->u, &st->rx, &st->xp, &st->forcing.vg, &st->rx_end}) {
+    ok = ok && (*w = N_VClone(ce->xcur)) != nullptr;
   }
-  return CE_SUCCESS;
+  return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
 }
 
 // Problems the inner stepper cannot take: the forcing adds to x'' directly, so
@@ -293,7 +155,7 @@ int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
 int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   int flag = StepperCheckMemory(ce, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->f == Trampoline) {
+  if (ce->adapters.stepper != nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "This CEODE memory already drives an inner stepper: create one CEODE "
                         "memory per stepper.");
@@ -301,12 +163,12 @@ int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   auto* st = new (std::nothrow) Stepper;
   if (st == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   st->ce = ce;
-  st->g = ce->f;
-  st->g_data = ce->user_data;
+  st->f = ce->f;
+  st->user_data = ce->user_data;
   st->h_max = ce->h;
-  st->omega_fixed = ce->omega_user > 0;
-  ce->f = Trampoline;
-  ce->user_data = st;
+  st->omega_known = ce->omega_user > 0;
+  ce->adapters.stepper = st;
+  ce->adapters.forcing = &st->forcing;  // no terms yet: f is evaluated as it is
   *out = st;
   return CE_SUCCESS;
 }
@@ -345,21 +207,18 @@ int StepperSetForcing(Stepper* st, sunrealtype tshift, sunrealtype tscale, N_Vec
                         "%d forcing vectors: 0..%d are supported (F must not be NULL).", nf,
                         kMaxForcing);
   }
-  if (nf > 1 && !(tscale != 0)) {
-    return ProcessError(st->ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
-  }
-  st->nforcing = 0;
+  N_Vector Fx[kMaxForcing], Fv[kMaxForcing];
   for (int k = 0; k < nf; ++k) {
     Halves hv;
     const int flag = SplitVector(st, F[k], &st->forcing_view[k], &hv, func);
-    if (flag != CE_SUCCESS) return flag;
-    st->Fx[k] = hv.x;
-    st->Fv[k] = hv.v;
+    if (flag != CE_SUCCESS) {
+      SetForcing(st->ce, &st->forcing, 0, 1, 0, Fx, Fv, func);  // no forcing rather than half of one
+      return flag;
+    }
+    Fx[k] = hv.x;
+    Fv[k] = hv.v;
   }
-  st->nforcing = nf;
-  st->tshift = tshift;
-  st->tscale = tscale;
-  return CE_SUCCESS;
+  return SetForcing(st->ce, &st->forcing, tshift, tscale, nf, Fx, Fv, func);
 }
 
 #ifdef CEODE_HAVE_SUNSTEPPER
@@ -371,7 +230,6 @@ int StepperSetStepDirection(Stepper* st, sunrealtype stepdir, const char* func) 
                         "such as Strang, or another inner stepper.",
                         static_cast<double>(stepdir));
   }
-  st->stepdir = 1;
   return CE_SUCCESS;
 }
 
@@ -398,46 +256,44 @@ void CaptureEnd(Stepper* st) {
   const sunrealtype t = ce->tcur;
   for (int k = 2; k < ce->degree; ++k) {
     if (st->g_end[k] == nullptr && (st->g_end[k] = N_VClone(ce->xcur)) == nullptr) return;
-    WithForcingAccel(st, t, k - 2, ce->D[k], -1, st->g_end[k]);
+    ForcingAccel(st->forcing, t, k - 2, ce->D[k], -1, st->g_end[k]);
   }
-  WithForcingX(st, t, 0, nullptr, 1, st->rx_end);
+  ForcingX(st->forcing, t, 0, nullptr, 1, st->rx_end);
   st->t_end = t;
   st->end_degree = ce->degree;
   st->end_valid = true;
 }
 
 // The start's derivatives at t0 from the last run's end and the new forcing (its derivatives
-// are known exactly). x and v are continuous, so g(t0, x0) is unchanged: D_2 costs nothing.
-// x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so the g part of the jerk,
-// g_t + g_x x', gains g_x delta: one forward difference, none when delta = 0. Degrees 3 and 4
-// are then exact. From D_4 on, the g parts also change with the jump (g_x times the jump of
-// D_2, g_xx terms in delta): carried as they are, these errors are proportional to the change
-// of the forcing, and a step sees them scaled by h^k (docs/porting.md, "What a restart costs").
-int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
+// are known exactly), written into the history by Reset. x and v are continuous, so g(t0, x0)
+// is unchanged: D_2 costs nothing. x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so
+// the g part of the jerk, g_t + g_x x', gains g_x delta: one forward difference, none when
+// delta = 0. Degrees 3 and 4 are then exact. From D_4 on, the g parts also change with the jump
+// (g_x times the jump of D_2, g_xx terms in delta): carried as they are, these errors are
+// proportional to the change of the forcing, and a step sees them scaled by h^k (docs/porting.md,
+// "What a restart costs").
+int PresetHistory(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
   CEodeMemRec* ce = st->ce;
   for (int k = 2; k < ce->degree; ++k) {
-    WithForcingAccel(st, t0, k - 2, st->g_end[k], 1, ce->D[k]);
+    ForcingAccel(st->forcing, t0, k - 2, st->g_end[k], 1, ce->D[k]);
   }
-  if (ce->degree >= 4) {
-    WithForcingX(st, t0, -1, st->rx_end, 1, st->rx);
-    const sunrealtype dn = N_VMaxNorm(st->rx);
-    if (dn > 0) {
-      const sunrealtype eps =
-          std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(sunrealtype(1), N_VMaxNorm(own.x) / dn);
-      N_VLinearSum(1, own.x, eps, st->rx, st->vg);
-      const int rv = st->g(t0, st->vg, own.v, ce->atmp, st->g_data);
-      ++ce->nfe;
-      ++ce->nfe_start;
-      if (rv != 0) {
-        return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                            "The right-hand side failed (returned %d) at t = %.17g.", rv,
-                            static_cast<double>(t0));
-      }
-      N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end[2], ce->atmp);
-      N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
-    }
+  if (ce->degree < 4) return CE_SUCCESS;
+  ForcingX(st->forcing, t0, -1, st->rx_end, 1, st->rx);
+  const sunrealtype dn = N_VMaxNorm(st->rx);
+  if (!(dn > 0)) return CE_SUCCESS;
+  const sunrealtype eps =
+      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(sunrealtype(1), N_VMaxNorm(own.x) / dn);
+  N_VLinearSum(1, own.x, eps, st->rx, st->xp);
+  const int rv = BaseRhs(ce, t0, st->xp, own.v, ce->atmp);
+  ++ce->nfe;
+  ++ce->nfe_start;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The right-hand side failed (returned %d) at t = %.17g.", rv,
+                        static_cast<double>(t0));
   }
-  ce->start_preset = true;
+  N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end[2], ce->atmp);
+  N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
   return CE_SUCCESS;
 }
 
@@ -450,18 +306,17 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
   int flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
   if (flag != CE_SUCCESS) return flag;
-  WithForcingX(st, t0, 1, own.v, 1, st->u);
-  const Counters saved = SaveCounters(ce);
-  const bool warned = ce->guard_warned;
-  flag = CEodeReInit(ce, t0, own.x, st->u);
-  AddCounters(ce, saved);
-  ce->guard_warned = warned;
+  ForcingX(st->forcing, t0, 1, own.v, 1, st->u);
   ++st->nrestarts;
-  const bool reuse = st->end_valid && CanReuse(st) && st->end_degree == ce->degree &&
-                     std::fabs(t0 - st->t_end) <= 1e-8 * ce->h;
+  ResetOptions opt;
+  opt.omega_max = st->omega_new;
+  st->omega_new = 0;
+  if (st->end_valid && CanReuse(st) && st->end_degree == ce->degree &&
+      std::fabs(t0 - st->t_end) <= 1e-8 * ce->h) {
+    opt.history = [&] { return PresetHistory(st, t0, own, func); };
+  }
   st->end_valid = false;
-  if (flag == CE_SUCCESS && reuse) flag = PresetStart(st, t0, own, func);
-  return flag;
+  return Reset(ce, func, t0, own.x, st->u, opt);
 }
 
 // Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's
@@ -485,7 +340,7 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
   int flag = StepperCheckMemory(ce, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->f != Trampoline || ce->user_data != st) {
+  if (ce->f != st->f || ce->user_data != st->user_data) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The CEODE memory of this stepper was changed by CEodeInit or "
                         "CEodeSetUserData after the stepper was created: free the stepper and "
@@ -508,22 +363,17 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   if (tout - t0 > tol) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
-    flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL);
-    ce->start_preset = false;
-    if (flag < 0) return flag;
+    if ((flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL)) < 0) return flag;
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.
     if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) CaptureEnd(st);
     // The first run estimated omega_max; later restarts check h against it without
     // a new power iteration.
-    if (!st->omega_fixed && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
-      const bool warned = ce->guard_warned;  // one warning per run, not one per restart
-      CEodeSetMaxFrequency(ce, ce->omega_est);
-      ce->guard_warned = warned;
-      ce->guard_pending = false;
-      st->omega_fixed = true;
+    if (!st->omega_known && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
+      st->omega_new = ce->omega_est;
+      st->omega_known = true;
     }
-    WithForcingX(st, tout, 1, st->u, -1, own.v);
+    ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
   N_VScale(1, st->y_own, y);
@@ -537,7 +387,7 @@ int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const cha
   if (flag != CE_SUCCESS) return flag;
   if ((flag = SplitVector(st, f, &st->io2_view, &out, func)) != CE_SUCCESS) return flag;
   N_VScale(1, in.v, out.x);
-  const int rv = st->g(t, in.x, in.v, out.v, st->g_data);
+  const int rv = BaseRhs(st->ce, t, in.x, in.v, out.v);
   ++st->ce->nfe;
   if (rv != 0) {
     return ProcessError(st->ce, CE_RHSFUNC_FAIL, func,
@@ -550,9 +400,7 @@ int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const cha
 long int StepperNumRestarts(const Stepper* st) { return st->nrestarts; }
 
 // The stepper attached to a CEODE memory, or nullptr.
-Stepper* AttachedStepper(CEodeMemRec* ce) {
-  return ce->f == Trampoline ? static_cast<Stepper*>(ce->user_data) : nullptr;
-}
+Stepper* AttachedStepper(CEodeMemRec* ce) { return static_cast<Stepper*>(ce->adapters.stepper); }
 
 }  // namespace
 }  // namespace ceode

@@ -1,0 +1,40 @@
+// The forcing of a problem integrated in pieces (the MRI inner stepper, ceode_stepper.cpp).
+// With r(t) = sum_k tau^k F_k, tau = (t - tshift) / tscale, in halves r = [r_x; r_v], the forced
+// problem x' = v + r_x, v' = g(t, x, v) + r_v is integrated in second-order form in
+// u = x' = v + r_x (docs/porting.md, "The forced inner problem"):
+//   x'' = g(t, x, u - r_x) + r_v + r_x',
+// where g is the memory's own right-hand side (BaseRhs): the user's f, or F of the first-order form.
+#ifndef CEODE_SRC_CEODE_FORCING_HPP_
+#define CEODE_SRC_CEODE_FORCING_HPP_
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+constexpr int kMaxForcing = 10;  // MRI forcing polynomials have (order + 1) terms at most
+
+// Adapters::forcing. Its owner (the stepper) supplies the vectors: Fx, Fv are views of the two
+// halves of F_k, and vg is scratch of CEODE's vector type for u - r_x.
+struct Forcing {
+  int n = 0;  // terms; 0: no forcing, CEODE evaluates BaseRhs itself
+  sunrealtype tshift = 0;
+  sunrealtype tscale = 1;
+  N_Vector Fx[kMaxForcing] = {};
+  N_Vector Fv[kMaxForcing] = {};
+  N_Vector vg = nullptr;
+};
+
+// Takes n <= kMaxForcing terms, the halves Fx[k], Fv[k] of F_k, and makes CEODE evaluate the
+// forced form (n = 0: the unforced one). A bad tscale is reported and leaves no forcing.
+int SetForcing(CEodeMemRec* ce, Forcing* fc, sunrealtype tshift, sunrealtype tscale, int n,
+               const N_Vector* Fx, const N_Vector* Fv, const char* func);
+// out = a * base + s * r_x(t) (base may be null).
+void ForcingX(const Forcing& fc, sunrealtype t, sunrealtype a, N_Vector base, sunrealtype s,
+              N_Vector out);
+// out = base + s * (r_v^(m)(t) + r_x^(m+1)(t)): the forcing's part of the m-th derivative of x''.
+void ForcingAccel(const Forcing& fc, sunrealtype t, int m, N_Vector base, sunrealtype s,
+                  N_Vector out);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_FORCING_HPP_
