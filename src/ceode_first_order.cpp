@@ -14,21 +14,18 @@
 #include "ceode_impl.hpp"
 
 namespace ceode {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 // The adapter's state (Adapters::first_order); F gets the memory's user_data.
 struct FirstOrder {
   CEodeFirstOrderRhsFn F = nullptr;
   bool many = false;  // ManyVector [x; v], else serial of length 2n
   sunindextype n = 0;
-  N_Vector y = nullptr;      // what F sees as y
-  N_Vector ydot = nullptr;   // what F writes
-  N_Vector xdot = nullptr;   // ManyVector form: the first half of ydot (x' = v, discarded)
-  N_Vector xview = nullptr;  // serial form: x and v windows on a user vector y
-  N_Vector vview = nullptr;
-  bool checked = false;  // the first half of ydot was compared with v
+  N_Vector y = nullptr;     // what F sees as y
+  N_Vector ydot = nullptr;  // what F writes
+  N_Vector xdot = nullptr;  // ManyVector form: the first half of ydot (x' = v, discarded)
+  N_Vector view[2] = {};    // serial form: x and v windows on a user vector y (SplitHalves)
+  bool checked = false;     // the first half of ydot was compared with v
 };
 
 namespace {
@@ -85,22 +82,13 @@ int CheckShape(CEodeMemRec* ce, const char* func, N_Vector y, const char* name,
   return CE_SUCCESS;
 }
 
-// x and v of a user vector y: its parts, or windows on its serial data.
+// x and v of a user vector y, checked by CheckShape.
 void Split(FirstOrder* fo, N_Vector y, N_Vector* x, N_Vector* v) {
-  if (fo->many) {
-    *x = N_VGetSubvector_ManyVector(y, 0);
-    *v = N_VGetSubvector_ManyVector(y, 1);
-    return;
-  }
-  sunrealtype* d = N_VGetArrayPointer(y);
-  N_VSetArrayPointer(d, fo->xview);
-  N_VSetArrayPointer(d + fo->n, fo->vview);
-  *x = fo->xview;
-  *v = fo->vview;
+  SplitHalves(y, fo->n, nullptr, fo->view, x, v);  // the views exist (Build)
 }
 
 void Destroy(FirstOrder* fo) {
-  N_Vector* all[] = {&fo->y, &fo->ydot, &fo->xdot, &fo->xview, &fo->vview};
+  N_Vector* all[] = {&fo->y, &fo->ydot, &fo->xdot, &fo->view[0], &fo->view[1]};
   for (N_Vector* w : all) {
     if (*w != nullptr) N_VDestroy(*w);
     *w = nullptr;
@@ -120,9 +108,8 @@ bool Build(FirstOrder* fo, N_Vector y0, SUNContext ctx) {
   }
   fo->y = N_VNew_Serial(2 * fo->n, ctx);
   fo->ydot = N_VNew_Serial(2 * fo->n, ctx);
-  fo->xview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0), ctx);
-  fo->vview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0) + fo->n, ctx);
-  return fo->y != nullptr && fo->ydot != nullptr && fo->xview != nullptr && fo->vview != nullptr;
+  N_Vector x = nullptr, v = nullptr;
+  return fo->y != nullptr && fo->ydot != nullptr && SplitHalves(y0, fo->n, ctx, fo->view, &x, &v);
 }
 
 // F at (t, [x; v]) with the user's data; the first half of ydot goes to xd, the second to a.
@@ -204,6 +191,22 @@ int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, 
 }
 
 }  // namespace
+
+bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_Vector* x,
+                 N_Vector* v) {
+  if (N_VGetVectorID(y) == SUNDIALS_NVEC_MANYVECTOR) {
+    *x = N_VGetSubvector_ManyVector(y, 0);
+    *v = N_VGetSubvector_ManyVector(y, 1);
+    return true;
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (view[i] == nullptr && (view[i] = N_VNewEmpty_Serial(n, ctx)) == nullptr) return false;
+    N_VSetArrayPointer(N_VGetArrayPointer(y) + i * n, view[i]);
+  }
+  *x = view[0];
+  *v = view[1];
+  return true;
+}
 
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem) {
   auto* ce = static_cast<CEodeMemRec*>(mem);

@@ -2,6 +2,9 @@
 // evaluates: the user's f, F of the first-order form, or either with the forcing.
 #include "ceode_forcing.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace ceode {
 namespace {
 
@@ -51,6 +54,12 @@ void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const s
   N_VLinearCombination(m, c, X, out);
 }
 
+// *w cloned from CEODE's vectors if missing; false: out of memory.
+bool Clone(const CEodeMemRec* ce, N_Vector* w) {
+  if (*w == nullptr) *w = N_VClone(ce->xcur);
+  return *w != nullptr;
+}
+
 // The forced right-hand side g(t, x, u - r_x) + r_v + r_x' (data: the memory).
 int ForcedRhs(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* mem) {
   auto* ce = static_cast<CEodeMemRec*>(mem);
@@ -88,22 +97,34 @@ void SelectRhs(CEodeMemRec* ce) {
   }
 }
 
+void FreeForcing(Forcing* fc) {
+  ForcedEnd& e = fc->end;
+  for (N_Vector w : {fc->vg, e.rx, e.jump, e.xp}) {
+    if (w != nullptr) N_VDestroy(w);
+  }
+  for (N_Vector w : e.g) {
+    if (w != nullptr) N_VDestroy(w);
+  }
+  *fc = Forcing();
+}
+
 int SetForcing(CEodeMemRec* ce, Forcing* fc, sunrealtype tshift, sunrealtype tscale, int n,
                const N_Vector* Fx, const N_Vector* Fv, const char* func) {
+  int flag = CE_SUCCESS;
   if (n > 1 && !(tscale != 0)) {
-    fc->n = 0;
-    SelectRhs(ce);
-    return ProcessError(ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
+    flag = ProcessError(ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
+  } else if (n > 0 && !Clone(ce, &fc->vg)) {
+    flag = ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
-  for (int k = 0; k < n; ++k) {
+  fc->n = flag == CE_SUCCESS ? n : 0;
+  for (int k = 0; k < fc->n; ++k) {
     fc->Fx[k] = Fx[k];
     fc->Fv[k] = Fv[k];
   }
-  fc->n = n;
   fc->tshift = tshift;
   fc->tscale = tscale;
   SelectRhs(ce);
-  return CE_SUCCESS;
+  return flag;
 }
 
 void ForcingX(const Forcing& fc, sunrealtype t, sunrealtype a, N_Vector base, sunrealtype s,
@@ -124,6 +145,62 @@ void ForcingAccel(const Forcing& fc, sunrealtype t, int m, N_Vector base, sunrea
     X[fc.n + k] = fc.Fx[k];
   }
   CombineForcing(1, base, s, 2 * fc.n, c, X, out);
+}
+
+// The carried history needs the explicit path's (D_2 = G at the end point, exactly; with declared
+// velocity dependence D_2 comes from the implicit solve and g_v would enter the jerk) and a
+// consistent one (not the zero start).
+void KeepEnd(CEodeMemRec* ce, Forcing* fc) {
+  ForcedEnd& e = fc->end;
+  e.valid = false;
+  if (ce->vel_dependent || ce->zero_start || !ce->started) return;
+  const sunrealtype t = ce->tcur;
+  for (int k = 2; k < ce->degree; ++k) {
+    if (!Clone(ce, &e.g[k])) return;
+    ForcingAccel(*fc, t, k - 2, ce->D[k], -1, e.g[k]);
+  }
+  if (!Clone(ce, &e.rx) || !Clone(ce, &e.jump) || !Clone(ce, &e.xp)) return;
+  ForcingX(*fc, t, 0, nullptr, 1, e.rx);
+  e.t = t;
+  e.degree = ce->degree;
+  e.valid = true;
+}
+
+bool CanCarry(const CEodeMemRec* ce, const Forcing& fc, sunrealtype t0) {
+  const ForcedEnd& e = fc.end;
+  return e.valid && !ce->vel_dependent && !ce->zero_start && e.degree == ce->degree &&
+         std::fabs(t0 - e.t) <= 1e-8 * ce->h;
+}
+
+// The forcing's derivatives are known exactly. x and v are continuous, so g(t0, x0) is
+// unchanged: D_2 costs nothing. x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so the
+// g part of the jerk, g_t + g_x x', gains g_x delta: one forward difference, none when
+// delta = 0. Degrees 3 and 4 are then exact. From D_4 on, the g parts also change with the jump
+// (g_x times the jump of D_2, g_xx terms in delta): carried as they are, these errors are
+// proportional to the change of the forcing, and a step sees them scaled by h^k (docs/porting.md,
+// "What a restart costs").
+int CarryHistory(CEodeMemRec* ce, Forcing* fc, sunrealtype t0, N_Vector x0, N_Vector v0,
+                 const char* func) {
+  ForcedEnd& e = fc->end;
+  for (int k = 2; k < ce->degree; ++k) ForcingAccel(*fc, t0, k - 2, e.g[k], 1, ce->D[k]);
+  if (ce->degree < 4) return CE_SUCCESS;
+  ForcingX(*fc, t0, -1, e.rx, 1, e.jump);
+  const sunrealtype dn = N_VMaxNorm(e.jump);
+  if (!(dn > 0)) return CE_SUCCESS;
+  const sunrealtype eps =
+      std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(sunrealtype(1), N_VMaxNorm(x0) / dn);
+  N_VLinearSum(1, x0, eps, e.jump, e.xp);
+  const int rv = BaseRhs(ce, t0, e.xp, v0, ce->atmp);
+  ++ce->nfe;
+  ++ce->nfe_start;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The right-hand side failed (returned %d) at t = %.17g.", rv,
+                        static_cast<double>(t0));
+  }
+  N_VLinearSum(1 / eps, ce->atmp, -1 / eps, e.g[2], ce->atmp);
+  N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
+  return CE_SUCCESS;
 }
 
 }  // namespace ceode

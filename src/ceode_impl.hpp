@@ -484,6 +484,11 @@ void SelectRhs(CEodeMemRec* ce);
 // native CEodeInit and by CEodeFree.
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
 void FirstOrderFree(CEodeMemRec* ce);
+// x and v of a first-order vector y = [x; v] with halves of length n: a ManyVector's two parts,
+// or windows on a serial y's array through view[0], view[1] (empty serial vectors, made when
+// first needed). False: out of memory.
+bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_Vector* x,
+                 N_Vector* v);
 
 // ceode.cpp: a new problem (f, or nullptr for the first-order form) at t0; CEodeInit without the
 // adapter bookkeeping.

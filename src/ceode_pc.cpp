@@ -130,14 +130,16 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
 // is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
 int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   const bool detect = ce->vel_request == CE_VELOCITY_DETECT;
-  if (ce->vel_dependent || !(detect || (ce->vel_request < 0 && ce->vel_checked_f != RhsIdentity(ce)))) {
+  if (ce->vel_dependent ||
+      !(detect || (ce->vel_request < 0 && ce->vel_checked_f != RhsIdentity(ce)))) {
     return CE_SUCCESS;
   }
   // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
   N_Vector u = ce->atmp, fbase = ce->tmp2;
   int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
-  if (!detect) ce->vel_checked_f = RhsIdentity(ce);  // once per right-hand side, not at every restart
+  // Once per right-hand side, not at every restart.
+  if (!detect) ce->vel_checked_f = RhsIdentity(ce);
   const sunrealtype sig = ProbeIncrement(ce->D[1]);
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
   const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
