@@ -229,7 +229,10 @@ int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vect
           const ResetOptions& opt) {
   int flag = RestartAt(ce, func, t0, x0, v0);
   if (flag != CE_SUCCESS) return flag;
-  if (opt.omega_max > 0) ce->omega_user = opt.omega_max;
+  const sunrealtype omega = ce->omega_est;
+  if (opt.keep_frequency && !(ce->omega_user > 0) && omega > 0 && std::isfinite(omega)) {
+    ce->omega_user = omega;
+  }
   if (opt.history) {
     if ((flag = opt.history()) != CE_SUCCESS) return flag;
     ce->adapters.history_preset = true;

@@ -208,6 +208,36 @@ bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_V
   return true;
 }
 
+int SplitFirstOrder(CEodeMemRec* ce, N_Vector y, N_Vector* view, N_Vector* x, N_Vector* v,
+                    const char* func) {
+  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
+  const N_Vector_ID id = N_VGetVectorID(y);
+  const N_Vector_ID want = N_VGetVectorID(ce->xcur);
+  if (id == SUNDIALS_NVEC_MANYVECTOR) {
+    const sunindextype np = N_VGetNumSubvectors_ManyVector(y);
+    const N_Vector px = np == 2 ? N_VGetSubvector_ManyVector(y, 0) : nullptr;
+    const N_Vector pv = np == 2 ? N_VGetSubvector_ManyVector(y, 1) : nullptr;
+    if (np != 2 || N_VGetLength(px) != ce->n || N_VGetLength(pv) != ce->n ||
+        N_VGetVectorID(px) != want || N_VGetVectorID(pv) != want) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The ManyVector state has %ld parts: it must have two, y = [x; v], "
+                          "each of length %ld and of the vector type of CEODE's x0.",
+                          static_cast<long>(np), static_cast<long>(ce->n));
+    }
+  } else if (id != SUNDIALS_NVEC_SERIAL || want != SUNDIALS_NVEC_SERIAL ||
+             N_VGetLength(y) != 2 * ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The state vector (id %d, length %ld) is neither a ManyVector [x; v] of "
+                        "two parts of length %ld nor a serial vector of length %ld (2n, with a "
+                        "serial x0 in CEodeInit).",
+                        static_cast<int>(id), static_cast<long>(N_VGetLength(y)),
+                        static_cast<long>(ce->n), static_cast<long>(2 * ce->n));
+  }
+  return SplitHalves(y, ce->n, ce->sunctx, view, x, v)
+             ? CE_SUCCESS
+             : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem) {
   auto* ce = static_cast<CEodeMemRec*>(mem);
   FirstOrder* fo = ce->adapters.first_order;

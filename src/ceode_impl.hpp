@@ -489,6 +489,10 @@ void FirstOrderFree(CEodeMemRec* ce);
 // first needed). False: out of memory.
 bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_Vector* x,
                  N_Vector* v);
+// The same for a y of the memory's own vectors (the inner stepper's state, forcing and output):
+// halves of CEODE's length and vector type, else an error reported as from func.
+int SplitFirstOrder(CEodeMemRec* ce, N_Vector y, N_Vector* view, N_Vector* x, N_Vector* v,
+                    const char* func);
 
 // ceode.cpp: a new problem (f, or nullptr for the first-order form) at t0; CEodeInit without the
 // adapter bookkeeping.
@@ -500,8 +504,9 @@ struct ResetOptions {
   // Fills D_2..D_{d-1} at t0 for the degree of the last start; the next start then evaluates
   // nothing. Empty: the start computes them.
   std::function<int()> history;
-  // > 0: the guard's frequency from now on, so that later starts check h without estimating it.
-  sunrealtype omega_max = 0;
+  // The guard's estimate of the last run, if there is one and no frequency is set, becomes the
+  // set frequency: later starts check h against it without estimating it again.
+  bool keep_frequency = false;
 };
 int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
           const ResetOptions& opt);

@@ -34,8 +34,6 @@ struct Stepper {
   N_Vector y_own = nullptr;
   sunrealtype t_own = 0;
   bool have_state = false;
-  bool omega_known = false;   // the guard's frequency is known: restarts do not re-estimate it
-  sunrealtype omega_new = 0;  // the first run's estimate, for the next Reset
   sunrealtype tstop = 0;
   bool tstop_set = false;
   Views own_view = {}, io_view = {}, io2_view = {};
@@ -66,36 +64,9 @@ void StepperDestroy(Stepper* st) {
   delete st;
 }
 
-// The one validation point of the first-order vectors handed to the stepper:
-// y must be [x; v] with both halves of CEODE's length and vector type.
+// y = [x; v] as views of the stepper's (SplitFirstOrder: the one check of its vectors).
 int SplitVector(Stepper* st, N_Vector y, Views& view, Halves* out, const char* func) {
-  CEodeMemRec* ce = st->ce;
-  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
-  const N_Vector_ID id = N_VGetVectorID(y);
-  const N_Vector_ID want = N_VGetVectorID(ce->xcur);
-  if (id == SUNDIALS_NVEC_MANYVECTOR) {
-    const sunindextype np = N_VGetNumSubvectors_ManyVector(y);
-    const N_Vector x = np == 2 ? N_VGetSubvector_ManyVector(y, 0) : nullptr;
-    const N_Vector v = np == 2 ? N_VGetSubvector_ManyVector(y, 1) : nullptr;
-    if (np != 2 || N_VGetLength(x) != ce->n || N_VGetLength(v) != ce->n ||
-        N_VGetVectorID(x) != want || N_VGetVectorID(v) != want) {
-      return ProcessError(ce, CE_ILL_INPUT, func,
-                          "The ManyVector state has %ld parts: it must have two, y = [x; v], "
-                          "each of length %ld and of the vector type of CEODE's x0.",
-                          static_cast<long>(np), static_cast<long>(ce->n));
-    }
-  } else if (id != SUNDIALS_NVEC_SERIAL || want != SUNDIALS_NVEC_SERIAL ||
-             N_VGetLength(y) != 2 * ce->n) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The state vector (id %d, length %ld) is neither a ManyVector [x; v] of "
-                        "two parts of length %ld nor a serial vector of length %ld (2n, with a "
-                        "serial x0 in CEodeInit).",
-                        static_cast<int>(id), static_cast<long>(N_VGetLength(y)),
-                        static_cast<long>(ce->n), static_cast<long>(2 * ce->n));
-  }
-  return SplitHalves(y, ce->n, ce->sunctx, view, &out->x, &out->v)
-             ? CE_SUCCESS
-             : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  return SplitFirstOrder(st->ce, y, view, &out->x, &out->v, func);
 }
 
 int Allocate(Stepper* st, N_Vector y, const char* func) {
@@ -108,9 +79,9 @@ int Allocate(Stepper* st, N_Vector y, const char* func) {
   return CE_SUCCESS;
 }
 
-// Problems the inner stepper cannot take: the forcing adds to x'' directly, so
-// a mass matrix would have to multiply it, and constraints would fight it.
-int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
+// Problems the inner stepper cannot take (the forcing adds to x'' directly: a mass matrix would
+// have to multiply it, constraints would fight it), and, with st, a memory changed behind it.
+int StepperCheckMemory(CEodeMemRec* ce, const Stepper* st, const char* func) {
   if (ce->mfn != nullptr || ce->M != nullptr || HasConstraints(ce)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The inner stepper needs M = I and no constraints (the MRI forcing is "
@@ -121,11 +92,17 @@ int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
                         "No inner step: call CEodeSetFixedStep(ce_mem, h) first (h is the "
                         "largest inner step).");
   }
+  if (st != nullptr && (ce->f != st->f || ce->user_data != st->user_data)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The CEODE memory of this stepper was changed by CEodeInit or "
+                        "CEodeSetUserData after the stepper was created: free the stepper and "
+                        "create a new one (put your data in user_data before creating it).");
+  }
   return CE_SUCCESS;
 }
 
 int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
-  int flag = StepperCheckMemory(ce, func);
+  int flag = StepperCheckMemory(ce, nullptr, func);
   if (flag != CE_SUCCESS) return flag;
   if (ce->adapters.stepper != nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -138,7 +115,6 @@ int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   st->f = ce->f;
   st->user_data = ce->user_data;
   st->h_max = ce->h;
-  st->omega_known = ce->omega_user > 0;
   ce->adapters.stepper = st;
   ce->adapters.forcing = &st->forcing;  // no terms yet: f is evaluated as it is
   *out = st;
@@ -179,18 +155,13 @@ int StepperSetForcing(Stepper* st, sunrealtype tshift, sunrealtype tscale, N_Vec
                         kMaxForcing);
   }
   N_Vector Fx[kMaxForcing], Fv[kMaxForcing];
-  for (int k = 0; k < nf; ++k) {
-    Halves hv;
-    const int flag = SplitVector(st, F[k], st->forcing_view[k], &hv, func);
-    if (flag != CE_SUCCESS) {
-      SetForcing(st->ce, &st->forcing, 0, 1, 0, Fx, Fv,
-                 func);  // no forcing rather than half of one
-      return flag;
-    }
-    Fx[k] = hv.x;
-    Fv[k] = hv.v;
+  int flag = CE_SUCCESS;
+  for (int k = 0; k < nf && flag == CE_SUCCESS; ++k) {
+    flag = SplitFirstOrder(st->ce, F[k], st->forcing_view[k], &Fx[k], &Fv[k], func);
   }
-  return SetForcing(st->ce, &st->forcing, tshift, tscale, nf, Fx, Fv, func);
+  if (flag != CE_SUCCESS) nf = 0;  // no forcing rather than half of one
+  const int set = SetForcing(st->ce, &st->forcing, tshift, tscale, nf, Fx, Fv, func);
+  return flag != CE_SUCCESS ? flag : set;
 }
 
 // Restart CEODE at (t0, x, u = v + r_x(t0)) with the largest step <= h_max that
@@ -205,8 +176,7 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   ForcingX(st->forcing, t0, 1, own.v, 1, st->u);
   ++st->nrestarts;
   ResetOptions opt;
-  opt.omega_max = st->omega_new;
-  st->omega_new = 0;
+  opt.keep_frequency = true;  // the first run estimates omega_max, later ones check h against it
   if (CanCarry(ce, st->forcing, t0)) {
     opt.history = [&] { return CarryHistory(ce, &st->forcing, t0, own.x, own.v, func); };
   }
@@ -214,34 +184,23 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   return Reset(ce, func, t0, own.x, st->u, opt);
 }
 
-// Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's
-// x0, v0 at t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
-int StateFromMemory(Stepper* st, N_Vector y, const char* func) {
-  Halves in, own;
-  int flag = SplitVector(st, y, st->io_view, &in, func);
-  if (flag == CE_SUCCESS && st->y_own == nullptr) flag = Allocate(st, y, func);
-  if (flag == CE_SUCCESS) flag = SplitVector(st, st->y_own, st->own_view, &own, func);
-  if (flag != CE_SUCCESS) return flag;
-  N_VScale(1, st->ce->xcur, own.x);
-  N_VScale(1, st->ce->D[1], own.v);
-  st->t_own = st->ce->tcur;
-  st->have_state = true;
-  st->forcing.end.valid = false;
-  return CE_SUCCESS;
-}
-
 // Integrates the owned state from t_own to tout (> t_own) and copies it to y.
 int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
-  int flag = StepperCheckMemory(ce, func);
+  int flag = StepperCheckMemory(ce, st, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->f != st->f || ce->user_data != st->user_data) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The CEODE memory of this stepper was changed by CEodeInit or "
-                        "CEodeSetUserData after the stepper was created: free the stepper and "
-                        "create a new one (put your data in user_data before creating it).");
+  Halves own, io;
+  if ((flag = SplitVector(st, y, st->io_view, &io, func)) != CE_SUCCESS) return flag;
+  if (st->y_own == nullptr && (flag = Allocate(st, y, func)) != CE_SUCCESS) return flag;
+  if ((flag = SplitVector(st, st->y_own, st->own_view, &own, func)) != CE_SUCCESS) return flag;
+  if (!st->have_state) {
+    // Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's x0, v0 at
+    // t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
+    N_VScale(1, ce->xcur, own.x);
+    N_VScale(1, ce->D[1], own.v);
+    st->t_own = ce->tcur;
+    st->have_state = true;
   }
-  if (!st->have_state && (flag = StateFromMemory(st, y, func)) != CE_SUCCESS) return flag;
   if (st->tstop_set && tout > st->tstop) tout = st->tstop;
   const sunrealtype t0 = st->t_own;
   const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(t0) + std::fabs(tout));
@@ -252,9 +211,6 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
                         "use a second-order splitting such as Strang, or another inner stepper.",
                         static_cast<double>(t0), static_cast<double>(tout));
   }
-  Halves own, io;
-  if ((flag = SplitVector(st, st->y_own, st->own_view, &own, func)) != CE_SUCCESS) return flag;
-  if ((flag = SplitVector(st, y, st->io_view, &io, func)) != CE_SUCCESS) return flag;
   if (tout - t0 > tol) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
@@ -262,12 +218,6 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.
     if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) KeepEnd(ce, &st->forcing);
-    // The first run estimated omega_max; later restarts check h against it without
-    // a new power iteration.
-    if (!st->omega_known && ce->omega_est > 0 && std::isfinite(ce->omega_est)) {
-      st->omega_new = ce->omega_est;
-      st->omega_known = true;
-    }
     ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
@@ -292,10 +242,7 @@ int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const cha
   return CE_SUCCESS;
 }
 
-// ---------------------------------------------------------------------------
-// Version-specific glue: each callback unpacks its stepper and calls the
-// implementation above.
-// ---------------------------------------------------------------------------
+// --- Version-specific glue: each callback unpacks its stepper and calls the above. ---
 Stepper* MriContent(MRIStepInnerStepper s) {
   void* content = nullptr;
   return MRIStepInnerStepper_GetContent(s, &content) == 0 ? static_cast<Stepper*>(content)
@@ -333,67 +280,68 @@ Stepper* SunContent(SUNStepper s) {
                                                            : nullptr;
 }
 
-// SUNStepper calls return a SUNErrCode; CEODE's own flag is the stepper's last flag.
-SUNErrCode SunResult(SUNStepper s, int flag) {
+// Runs call(st) on the stepper of s (SUN_ERR_ARG_CORRUPT without one). CEODE's own flag becomes
+// the stepper's last flag; a failure returns `fail`.
+template <class Call>
+SUNErrCode OnSun(SUNStepper s, Call call, SUNErrCode fail = SUN_ERR_OP_FAIL) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  const int flag = call(st);
   SUNStepper_SetLastFlag(s, flag);
-  return flag < 0 ? SUN_ERR_OP_FAIL : SUN_SUCCESS;
+  return flag < 0 ? fail : SUN_SUCCESS;
 }
 
 SUNErrCode SunEvolve(SUNStepper s, sunrealtype tout, N_Vector vret, sunrealtype* tret) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr || tret == nullptr) return SUN_ERR_ARG_CORRUPT;
-  const int flag = StepperEvolve(st, tout, vret, "CEodeSUNStepperEvolve");
-  *tret = st->t_own;
-  return SunResult(s, flag);
+  if (tret == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return OnSun(s, [&](Stepper* st) {
+    const int flag = StepperEvolve(st, tout, vret, "CEodeSUNStepperEvolve");
+    *tret = st->t_own;
+    return flag;
+  });
 }
 
 SUNErrCode SunFullRhs(SUNStepper s, sunrealtype t, N_Vector v, N_Vector f, SUNFullRhsMode) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s, StepperFullRhs(st, t, v, f, "CEodeSUNStepperFullRhs"));
+  return OnSun(s,
+               [&](Stepper* st) { return StepperFullRhs(st, t, v, f, "CEodeSUNStepperFullRhs"); });
 }
 
 SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s, StepperReset(st, tR, vR, "CEodeSUNStepperReset"));
+  return OnSun(s, [&](Stepper* st) { return StepperReset(st, tR, vR, "CEodeSUNStepperReset"); });
 }
 
 SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  st->tstop = tstop;
-  st->tstop_set = true;
-  return SUN_SUCCESS;
+  return OnSun(s, [&](Stepper* st) {
+    st->tstop = tstop;
+    st->tstop_set = true;
+    return CE_SUCCESS;
+  });
 }
 
 SUNErrCode SunSetStepDirection(SUNStepper s, sunrealtype stepdir) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  int flag = CE_SUCCESS;
-  if (stepdir < 0) {
-    flag = ProcessError(st->ce, CE_BAD_T, "CEodeSUNStepperSetStepDirection",
+  const auto check = [&](Stepper* st) {
+    if (!(stepdir < 0)) return CE_SUCCESS;
+    return ProcessError(st->ce, CE_BAD_T, "CEodeSUNStepperSetStepDirection",
                         "Step direction %g: CEODE integrates forward only (a splitting method "
                         "of order > 2 takes negative substeps); use a second-order splitting "
                         "such as Strang, or another inner stepper.",
                         static_cast<double>(stepdir));
-  }
-  SUNStepper_SetLastFlag(s, flag);
-  return flag < 0 ? SUN_ERR_ARG_OUTOFRANGE : SUN_SUCCESS;
+  };
+  return OnSun(s, check, SUN_ERR_ARG_OUTOFRANGE);
 }
 
 SUNErrCode SunSetForcing(SUNStepper s, sunrealtype tshift, sunrealtype tscale, N_Vector* F,
                          int nf) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s, StepperSetForcing(st, tshift, tscale, F, nf, "CEodeSUNStepperForcing"));
+  return OnSun(s, [&](Stepper* st) {
+    return StepperSetForcing(st, tshift, tscale, F, nf, "CEodeSUNStepperForcing");
+  });
 }
 
 SUNErrCode SunGetNumSteps(SUNStepper s, suncountertype* nst) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr || nst == nullptr) return SUN_ERR_ARG_CORRUPT;
-  *nst = static_cast<suncountertype>(st->ce->nst);
-  return SUN_SUCCESS;
+  if (nst == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return OnSun(s, [&](Stepper* st) {
+    *nst = static_cast<suncountertype>(st->ce->nst);
+    return CE_SUCCESS;
+  });
 }
 
 SUNErrCode SunDestroy(SUNStepper s) {
