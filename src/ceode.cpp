@@ -52,8 +52,7 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
 
 void Restart(CEodeMemRec* ce) {
   ce->started = false;
-  ce->adapters.history_preset =
-      false;  // a preset history holds for the configuration it was made for
+  ce->adapters.history_preset = false;  // it holds for the configuration it was made for
 }
 
 bool IsFinite(N_Vector v) {

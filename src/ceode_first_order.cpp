@@ -14,7 +14,6 @@
 #include "ceode_impl.hpp"
 
 namespace ceode {
-namespace {}  // namespace
 
 // The adapter's state (Adapters::first_order); F gets the memory's user_data.
 struct FirstOrder {

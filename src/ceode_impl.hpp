@@ -136,7 +136,7 @@ struct Adapters {
   // Called as rhs(t, x, v, f, ce) in place of f (nullptr: f itself); set by SelectRhs only.
   CEodeRhsFn rhs = nullptr;
   FirstOrder* first_order = nullptr;  // CEodeInitFirstOrder's F gives the acceleration
-  Forcing* forcing = nullptr;         // added to the acceleration (the inner stepper's)
+  Forcing* forcing = nullptr;         // the inner stepper's, on top of either (ceode_forcing.hpp)
   void* stepper = nullptr;            // the inner stepper that drives this memory
   // D_2..D_{d-1} at tcur came with the last Reset: the next start evaluates nothing and only
   // forms x(t0 + h). Cleared by that start.
@@ -467,6 +467,10 @@ const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not
 const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
 
 // --- adapters ---
+// ceode_first_order.cpp: F's acceleration (data: the memory); the adapter's record, dropped by a
+// native CEodeInit and by CEodeFree.
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
+void FirstOrderFree(CEodeMemRec* ce);
 // The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
 inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
   return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
@@ -474,16 +478,12 @@ inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vec
 }
 // The same without the forcing: the user's f, or F of the first-order form.
 int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f);
-// The identity of the problem's right-hand side (f, or the first-order adapter's).
+// The identity of the problem's right-hand side (f, or the first-order adapter's), forced or not.
 inline CEodeRhsFn RhsIdentity(const CEodeMemRec* ce) {
-  return ce->f != nullptr ? ce->f : ce->adapters.rhs;
+  return ce->f != nullptr ? ce->f : FirstOrderRhs;
 }
 // Sets adapters.rhs from the attached adapters (ceode_forcing.cpp).
 void SelectRhs(CEodeMemRec* ce);
-// ceode_first_order.cpp: F's acceleration (data: the memory); the adapter's record, dropped by a
-// native CEodeInit and by CEodeFree.
-int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
-void FirstOrderFree(CEodeMemRec* ce);
 // x and v of a first-order vector y = [x; v] with halves of length n: a ManyVector's two parts,
 // or windows on a serial y's array through view[0], view[1] (empty serial vectors, made when
 // first needed). False: out of memory.
