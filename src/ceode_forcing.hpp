@@ -4,7 +4,8 @@
 // u = x' = v + r_x (docs/porting.md, "The forced inner problem"):
 //   x'' = g(t, x, u - r_x) + r_v + r_x',
 // where g is the memory's own right-hand side (BaseRhs): the user's f, or F of the first-order
-// form.
+// form. The forcing enters f's output, before any mass solve; with M != I it would have to be
+// multiplied by M first, so the stepper takes M = I only.
 #ifndef CEODE_SRC_CEODE_FORCING_HPP_
 #define CEODE_SRC_CEODE_FORCING_HPP_
 
