@@ -266,5 +266,44 @@ for c in "${scenes[@]}"; do
   printf '%-18s %s\n' "$n" "$(grep -E 'Table 7|G5 at h|problem|checks off|[0-9]+ checks,|work-precision:' "$OUT/$n.txt" | tr '\n' ' ')"
 done
 echo "$o3_note"
+# ---- results page (docs/results.md) ---------------------------------------------------------
+# How this run was made (docs/results/run_info.json: commit, dates, machine, compiler and flags,
+# SUNDIALS builds, command, repetitions), then docs/results.md regenerated from docs/results/ by
+# scripts/results_page.py. Nothing in results.md is edited by hand.
+run_info() {
+  local cache=$BUILD/CMakeCache.txt cxx sdir pkg o3v=""
+  cxx=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$cache" 2>/dev/null)
+  sdir=$(sed -n 's/^SUNDIALS_DIR:[A-Z]*=//p' "$cache" 2>/dev/null)
+  pkg=$(dpkg-query -W -f='libsundials-dev ${Version}' libsundials-dev 2>/dev/null || echo "system SUNDIALS")
+  [ -e "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfigVersion.cmake" ] &&
+    o3v=$(sed -n 's/^set(PACKAGE_VERSION "\(.*\)")/\1/p' "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfigVersion.cmake")
+  RI_COMMIT="$(git rev-parse --short HEAD 2>/dev/null)$( [ -n "$(git status --porcelain -- src include bench 2>/dev/null)" ] && echo ' (with local changes)')" \
+  RI_START=$(date -u -d "@$T0" '+%F %H:%M') RI_END=$(date -u '+%F %H:%M') RI_SECONDS=$(elapsed) RI_EXIT=$status \
+  RI_MACHINE="$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1) (family $(lscpu 2>/dev/null | sed -n 's/^CPU family: *//p' | head -1)), $(nproc) CPUs$(lscpu 2>/dev/null | grep -q '^Hypervisor' && echo ', virtual machine')" \
+  RI_OS="$(. /etc/os-release 2>/dev/null && echo "$PRETTY_NAME")" \
+  RI_COMPILER="$("${cxx:-c++}" --version 2>/dev/null | head -1)" \
+  RI_FLAGS="CMAKE_BUILD_TYPE=$(sed -n 's/^CMAKE_BUILD_TYPE:[A-Z]*=//p' "$cache") ($(sed -n 's/^CMAKE_CXX_FLAGS_RELEASE:[A-Z]*=//p' "$cache"))" \
+  RI_PKG="$(sed -n 's/^set(PACKAGE_VERSION "\(.*\)")/\1/p' "$sdir/SUNDIALSConfigVersion.cmake" 2>/dev/null), $pkg, compiled ${SUNDIALS_PACKAGE_FLAGS:--O0}" \
+  RI_O3="$( [ -n "$o3v" ] && [ -f "$O3_BUILD/CMakeCache.txt" ] && echo "$o3v from the source tarball, Release, C flags -O3 (scripts/build_sundials.sh, $O3_PREFIX); CEODE rebuilt on it" || echo "not run")" \
+  RI_COMMAND="$( [ -n "${SUNDIALS_O3_PREFIX:-}" ] && echo "SUNDIALS_O3_PREFIX=$SUNDIALS_O3_PREFIX ")scripts/main_job.sh" \
+  "$PYTHON" - "$OUT/run_info.json" <<'PY'
+import json, os, sys
+e = os.environ.get
+info = {"commit": e("RI_COMMIT"), "start": e("RI_START"), "end": e("RI_END"),
+        "seconds": int(e("RI_SECONDS")), "exit": int(e("RI_EXIT")), "machine": e("RI_MACHINE"),
+        "os": e("RI_OS"), "compiler": e("RI_COMPILER"), "ceode_flags": e("RI_FLAGS"),
+        "sundials_o3": e("RI_O3"), "sundials_package": e("RI_PKG"), "command": e("RI_COMMAND"),
+        "repetitions": "work-precision points: median of 5 repetitions of at least 50 ms (3 from "
+                       "0.5 s, 1 from 2 s), FE scenes in interleaved rounds; per-step benchmark: "
+                       "median of 11, interleaved at random; MPI: best of 3"}
+with open(sys.argv[1], "w") as f:
+    json.dump(info, f, indent=2, ensure_ascii=False)
+    f.write("\n")
+PY
+}
+step "results page (docs/results/run_info.json, docs/results.md)"
+run_info || status=1
+"$PYTHON" scripts/results_page.py --results "$OUT" --out "$ROOT/docs/results.md" || status=1
+# ---- end results page -----------------------------------------------------------------------
 step "total $(elapsed) s; results in docs/results/ (exit $status)"
 exit $status

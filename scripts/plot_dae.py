@@ -7,10 +7,10 @@ rhs_evals,seconds) and writes
 
   * for scene pendulum_dae: a log-log work-precision plot, max energy error
     against run time, one curve per solver/configuration, points joined from
-    the largest step/tolerance to the smallest, to OUTDIR/pendulum_dae.png/.svg;
+    the largest step/tolerance to the smallest, to OUTDIR/pendulum_dae.png;
   * for scene chain_dae: time per step against the number of bodies N, with
     the least-squares log-log slope and a linear-growth guide, to
-    OUTDIR/chain_dae.png/.svg.
+    OUTDIR/chain_dae.png.
 
 Usage:
   python3 scripts/plot_dae.py [CSV ...] [--outdir docs/results]
@@ -29,9 +29,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
-# Reproducible SVG output (no random ids, no date).
-matplotlib.rcParams["svg.hashsalt"] = "ceode"
 
 STYLE = {
     "ARKODE": dict(marker="s", linestyle="--"),
@@ -59,13 +56,10 @@ def read_rows(paths):
 
 def save(fig, outdir, stem):
     os.makedirs(outdir, exist_ok=True)
-    written = []
-    for ext in ("png", "svg"):
-        path = os.path.join(outdir, f"{stem}.{ext}")
-        fig.savefig(path, dpi=150, bbox_inches="tight", metadata={"Date": None} if ext == "svg" else None)
-        written.append(path)
+    path = os.path.join(outdir, f"{stem}.png")
+    fig.savefig(path, dpi=150, bbox_inches="tight")
     plt.close(fig)
-    return written
+    return [path]
 
 
 def plot_pendulum(rows, outdir):
@@ -91,7 +85,8 @@ def plot_pendulum(rows, outdir):
     return save(fig, outdir, "pendulum_dae")
 
 
-def plot_chain(rows, outdir):
+def chain_slope(rows):
+    """([(N, seconds per step, config)] sorted by N, least-squares log-log slope) of chain_dae rows."""
     pts = []
     for r in rows:
         try:
@@ -107,6 +102,13 @@ def plot_chain(rows, outdir):
     mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
     sxx = sum((x - mx) ** 2 for x in lx)
     slope = sum((x - mx) * (y - my) for x, y in zip(lx, ly)) / sxx if sxx > 0 else float("nan")
+    return pts, slope
+
+
+def plot_chain(rows, outdir):
+    pts, slope = chain_slope(rows)
+    ns = [p[0] for p in pts]
+    ts = [p[1] for p in pts]
     fig, ax = plt.subplots(figsize=(6.5, 5))
     ax.loglog(ns, ts, "o-", label=f"CEODE {pts[0][2]} + KLU (slope {slope:.2f})")
     ax.loglog(ns, [ts[-1] * n / ns[-1] for n in ns], "k:", label="linear growth")

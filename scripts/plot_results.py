@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Draws one log-log work-precision plot per scene CSV: error against run time,
 one curve per (solver, config): CEODE solid, SUNDIALS dashed, the odeint/GSL
-peers (bench/peers.h) dash-dotted, the hand loop dotted grey. Writes <csv stem>.png and .svg beside the CSV
+peers (bench/peers.h) dash-dotted, the hand loop dotted grey. Writes <csv stem>.png beside the CSV
 (or into --outdir).
 
 Usage: plot_results.py [--outdir DIR] [--skip-existing] FILE.csv ...
@@ -33,6 +33,7 @@ YLABEL = {
     "forced_vibration": "max |x - x_exact| over 1000 s [m]",
     "chain_dae_wp": "max |E - E0| over 2 s [J] (chain of 8 masses, E0 = -22 J)",
     "damped_pendulum": "|theta(10) - ref| [rad]",
+    "pendulum_dae": "max |E - E0| over 10 s [J]",
 }
 
 
@@ -88,10 +89,9 @@ def plot(path, outdir, skip_existing):
     else:
         ax.legend(fontsize=7, ncol=2, loc="best")
     fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{base}.{ext}", dpi=120)
+    fig.savefig(f"{base}.png", dpi=120)
     plt.close(fig)
-    print(f"wrote {base}.png and .svg")
+    print(f"wrote {base}.png")
 
 
 def main():

@@ -2,7 +2,7 @@
 """Spectral radius rho(Omega) of CEODE's named sets beside RK3, RK4, AB4 and HHT-alpha.
 
 Runs the ceode-stability tool for every method (same undamped oscillator, Omega = omega*h),
-writes docs/data/stability_<method>.csv and draws docs/stability_g3/g4/g5.{png,svg}.
+writes docs/data/stability_<method>.csv and draws docs/stability_g3/g4/g5.png.
 
 Usage: /usr/bin/python3 scripts/plot_stability.py [--tool build/tools/ceode-stability]
 Needs Debian's python3-matplotlib (the system interpreter /usr/bin/python3).
@@ -86,8 +86,7 @@ def main():
         axz.set_ylabel("ρ − 1 (symlog)")
         axz.set_title("near ρ = 1")
         fig.tight_layout()
-        for ext in ("png", "svg"):
-            fig.savefig(os.path.join(ROOT, "docs", "stability_%s.%s" % (key, ext)), dpi=110)
+        fig.savefig(os.path.join(ROOT, "docs", "stability_%s.png" % key), dpi=110)
         plt.close(fig)
     for m in methods:
         print("%-8s Omega_max = %.10g" % (m, limits[m]))

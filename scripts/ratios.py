@@ -13,9 +13,10 @@ reaches are reported as such, with no ratio. The hand-written loop
 takes no part in the CEODE figure.
 
 A CSV whose name ends in _o3.csv is the same scene run against SUNDIALS 6.4.1
-built -O3 (CEODE linked against it too); the others ran against Debian's
-libsundials-dev 6.4.1, which is built -O0. Column sundials_build says which;
-the -O3 rows come first in each scene and are the headline figures.
+built -O3 (CEODE linked against it too); the others ran against the system's
+SUNDIALS package (libsundials-dev 6.4.1, compiled -O0). Column sundials_build
+says which ("6.4.1 -O3" or "6.4.1 -O0"); the -O3 rows come first in each scene
+and are the headline figures.
 
 Usage: ratios.py --out ratios.csv [--levels 1e-6,1e-9,1e-11] [--scene-levels fe_=1e-4,1e-6]
                  FILE.csv ...
@@ -59,7 +60,7 @@ def main():
         if scene is None:
             continue
         o3 = os.path.splitext(os.path.basename(path))[0].endswith("_o3")
-        build = "6.4.1 -O3" if o3 else "Debian 6.4.1 -O0"
+        build = "6.4.1 -O3" if o3 else "6.4.1 -O0"
         levels = next((lv for p, lv in special if scene.startswith(p)), default_levels)
         for lv in levels:
             c = best(curves, is_ceode, lv)

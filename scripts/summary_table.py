@@ -3,17 +3,21 @@
 
 One row per scene and error level: the best CEODE and best SUNDIALS curves of the
 -O3 half with their times and ratio, the best peer (Boost.Odeint, GSL) with the
-CEODE / peer ratio, the CEODE / SUNDIALS ratio of the Debian (-O0) half, and
-CEODE's time over the hand-written loop's ("CEODE-hand" curves) where a scene has one.
-Scenes run only against Debian's SUNDIALS (no -O3 row) show that half.
+CEODE / peer ratio, the CEODE / SUNDIALS ratio against the unoptimised (-O0)
+SUNDIALS package, and CEODE's time over the hand-written loop's ("CEODE-hand"
+curves) where a scene has one. Scenes run only against the -O0 package (no -O3
+row) show that half, marked "(-O0)".
 
 Usage: summary_table.py ratios.csv [--out summary.md]
+scripts/results_page.py imports read_rows() and table() for docs/results.md.
 """
 import argparse
 import csv
 import sys
 
 O3 = "6.4.1 -O3"
+HEAD = ("| scene | error | best CEODE | s | best SUNDIALS | s | **CEODE / SUNDIALS** | best peer | s "
+        "| **CEODE / peer** | CEODE / SUNDIALS, -O0 package | CEODE / hand loop |\n|" + "---|" * 12)
 
 
 def cell(v):
@@ -35,31 +39,44 @@ def strip(name):
     return name[len("CEODE "):] if name.startswith("CEODE ") else name
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("ratios")
-    ap.add_argument("--out")
-    args = ap.parse_args()
-    with open(args.ratios, newline="") as f:
-        rows = list(csv.DictReader(f))
-    debian = {(r["scene"], r["error_level"]): r for r in rows if r["sundials_build"] != O3}
-    keys = [(r["scene"], r["error_level"]) for r in rows if r["sundials_build"] == O3]
-    keys += [k for k in debian if k not in keys]
-    head = ("| scene | error | best CEODE | s | best SUNDIALS | s | **CEODE / SUNDIALS** | best peer | s "
-            "| **CEODE / peer** | CEODE / SUNDIALS, Debian -O0 | CEODE / hand loop |\n|" + "---|" * 12)
-    lines = [head]
+def read_rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def headline(rows):
+    """[(scene, level, row)]: the -O3 row of every scene and level, else the -O0 one."""
     by_key = {(r["scene"], r["error_level"], r["sundials_build"]): r for r in rows}
-    for scene, level in keys:
-        r = by_key.get((scene, level, O3)) or debian[(scene, level)]
-        half = "" if r["sundials_build"] == O3 else " (Debian)"
-        d = debian.get((scene, level), {})
+    o0 = {(r["scene"], r["error_level"]): r for r in rows if r["sundials_build"] != O3}
+    keys = [(r["scene"], r["error_level"]) for r in rows if r["sundials_build"] == O3]
+    keys += [k for k in o0 if k not in keys]
+    return [(s, lv, by_key.get((s, lv, O3)) or o0[(s, lv)]) for s, lv in keys]
+
+
+def table(rows, scenes=None):
+    """The Markdown table (list of lines), every scene or only those in scenes."""
+    o0 = {(r["scene"], r["error_level"]): r for r in rows if r["sundials_build"] != O3}
+    lines = HEAD.split("\n")
+    for scene, level, r in headline(rows):
+        if scenes is not None and scene not in scenes:
+            continue
+        half = "" if r["sundials_build"] == O3 else " (-O0)"
+        d = o0.get((scene, level), {})
         lines.append(
             f"| {scene}{half} | {level} | {strip(r['ceode_best'])} | {secs(r['ceode_seconds'])} "
             f"| {r['sundials_best']} | {secs(r['sundials_seconds'])} "
             f"| **{cell(r['ratio_ceode_over_sundials'])}** | {cell(r['peer_best'])} "
             f"| {secs(r['peer_seconds'])} | **{cell(r['ratio_ceode_over_peer'])}** "
             f"| {cell(d.get('ratio_ceode_over_sundials', ''))} | {hand(r)} |")
-    text = "\n".join(lines) + "\n"
+    return lines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("ratios")
+    ap.add_argument("--out")
+    args = ap.parse_args()
+    text = "\n".join(table(read_rows(args.ratios))) + "\n"
     if args.out:
         with open(args.out, "w") as f:
             f.write(text)

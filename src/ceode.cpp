@@ -177,8 +177,10 @@ int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
   return CE_SUCCESS;
 }
 
-// What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers.
-int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0) {
+// What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
+// with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
+int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+              bool counters) {
   int flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (N_VGetLength(x0) != ce->n) {
@@ -191,13 +193,14 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
   ce->tcur = t0;
   ce->tretlast = t0;
   Restart(ce);
-  ce->mass_evaluated = false;
-  ce->mass_dirty = true;
-  ce->a_holds = Holds::kNothing;
-  ce->jac_current = false;
-  ce->nst_lastsetup = -1;
-  ce->coupling = 0;  // the start estimates it again
-  GuardRestart(ce);
+  if (counters) {
+    ce->nst = ce->nfe = ce->nfe_start = 0;
+    ConstrReset(ce);
+  }
+  LsReset(ce, counters);
+  NlsReset(ce, counters);
+  PcReset(ce, counters);
+  GuardReset(ce, counters);
   return CE_SUCCESS;
 }
 
@@ -211,6 +214,7 @@ int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0,
   if (ce->initialized) {
     // A second Init replaces the problem: drop every size-dependent object.
     NlsFree(ce);
+    PcFree(ce);
     LsFree(ce);
     ConstrFree(ce);
     GuardFree(ce);
@@ -226,11 +230,11 @@ int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0,
 
 int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
           const ResetOptions& opt) {
-  int flag = RestartAt(ce, func, t0, x0, v0);
+  int flag = RestartAt(ce, func, t0, x0, v0, false);
   if (flag != CE_SUCCESS) return flag;
-  const sunrealtype omega = ce->omega_est;
-  if (opt.keep_frequency && !(ce->omega_user > 0) && omega > 0 && std::isfinite(omega)) {
-    ce->omega_user = omega;
+  const sunrealtype omega = ce->guard.omega_est;
+  if (opt.keep_frequency && !(ce->guard.omega_user > 0) && omega > 0 && std::isfinite(omega)) {
+    ce->guard.omega_user = omega;
   }
   if (opt.history) {
     if ((flag = opt.history()) != CE_SUCCESS) return flag;
@@ -275,14 +279,7 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
 int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   CEodeMemRec* ce = nullptr;
   int flag = ceode::Access(mem, __func__, &ce, true);
-  if (flag == CE_SUCCESS) flag = ceode::RestartAt(ce, __func__, t0, x0, v0);
-  if (flag != CE_SUCCESS) return flag;
-  ce->guard_warned = false;
-  ce->nst = ce->nfe = ce->nfe_start = ce->nni = ce->nnf = 0;
-  ce->nsetups = ce->nls_solves = ce->nje = ce->nfeDQ = ce->nme = ce->nce = ce->nge = 0;
-  ce->nfe_guard = ce->nme_guard = ce->nsetups_guard = 0;
-  ceode::ImplicitStatsReset(ce);
-  return CE_SUCCESS;
+  return flag == CE_SUCCESS ? ceode::RestartAt(ce, __func__, t0, x0, v0, true) : flag;
 }
 
 int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
@@ -293,10 +290,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
   flag = ceode::Prepare(ce, __func__);
-  if (flag == CE_SUCCESS && ce->guard_pending) {
-    ce->guard_pending = false;
-    flag = ceode::GuardCheck(ce, __func__);
-  }
+  if (flag == CE_SUCCESS) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {
     // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
     *tret = ce->tcur;
@@ -359,6 +353,7 @@ void CEodeFree(void** mem) {
   auto* ce = static_cast<CEodeMemRec*>(*mem);
   ceode::FirstOrderFree(ce);
   ceode::NlsFree(ce);
+  ceode::PcFree(ce);
   ceode::LsFree(ce);
   ceode::ConstrFree(ce);
   ceode::GuardFree(ce);

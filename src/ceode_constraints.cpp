@@ -22,6 +22,8 @@
 #include <nvector/nvector_serial.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <new>
 
@@ -44,7 +46,7 @@ constexpr int kMaxStaleIters = 10;       // iterations with a matrix of an earli
 // StartMethod name no other entry): its errors name that one.
 constexpr const char* kFunc = "CEodeEvolve";
 
-// Private workspace of the constrained solve (ce->con).
+// Private workspace of the constrained solve (ce->con.work).
 struct ConWork {
   int degree = 0;
   Saddle sad;
@@ -72,7 +74,7 @@ struct ConWork {
   bool lam_prev_valid = false;  // lam_prev holds lambda(t - 2h) for the predictor
 };
 
-ConWork* Work(CEodeMemRec* ce) { return static_cast<ConWork*>(ce->con); }
+ConWork* Work(CEodeMemRec* ce) { return static_cast<ConWork*>(ce->con.work); }
 
 void Destroy(N_Vector* v) {
   if (*v != nullptr) N_VDestroy(*v);
@@ -94,7 +96,7 @@ void FreeWork(CEodeMemRec* ce) {
   Destroy(&w->Gh);
   Destroy(&w->J);
   delete w;
-  ce->con = nullptr;
+  ce->con.work = nullptr;
 }
 
 // y += alpha G^T lam (G is nc x n); arrays of local data.
@@ -150,8 +152,8 @@ void StartPosition(CEodeMemRec* ce, ConWork* w, N_Vector x0, N_Vector a, N_Vecto
 }
 
 int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi) {
-  const int rv = ce->phifn(t, x, phi, ce->user_data);
-  ++ce->nce;
+  const int rv = ce->con.phi_fn(t, x, phi, ce->user_data);
+  ++ce->con.nce;
   if (rv != 0) {
     return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint function failed (returned %d) at t = %.17g. The step was "
@@ -169,8 +171,8 @@ int EvalPhi(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector phi) {
 
 int EvalG(CEodeMemRec* ce, sunrealtype t, N_Vector x, SUNMatrix G) {
   SUNMatZero(G);
-  const int rv = ce->Gfn(t, x, G, ce->user_data);
-  ++ce->nge;
+  const int rv = ce->con.G_fn(t, x, G, ce->user_data);
+  ++ce->con.nge;
   if (rv != 0) {
     return ProcessError(ce, CE_CONSTR_FAIL, kFunc,
                         "The constraint Jacobian function failed (returned %d) at t = %.17g.", rv,
@@ -201,9 +203,9 @@ int EvalF(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
 // evaluation are the same, for at most msbj steps (its G0 ages with the motion; docs/theory.md
 // section 8.3).
 bool ABlockUsable(const CEodeMemRec* ce, const ConWork* w, sunrealtype kappa, SUNMatrix J) {
-  const bool mass_fixed = ce->mfn == nullptr || ce->mass_constant;
+  const bool mass_fixed = ce->ls.mfn == nullptr || ce->ls.mass_constant;
   return mass_fixed && w->a_valid && w->kappa_a == (J != nullptr ? kappa : 0) &&
-         (J == nullptr || w->jac_gen_a == w->jac_gen) && ce->nst - w->nst_a < ce->msbj;
+         (J == nullptr || w->jac_gen_a == w->jac_gen) && ce->nst - w->nst_a < ce->ls.msbj;
 }
 
 // Factors the saddle-point matrix; a failure leaves no usable step matrix. A refresh of the
@@ -218,7 +220,7 @@ int Setup(CEodeMemRec* ce, ConWork* w, sunrealtype kappa, SUNMatrix J, SUNMatrix
     w->kappa_a = J != nullptr ? kappa : 0;
     w->jac_gen_a = w->jac_gen;
     w->nst_a = ce->nst;
-    if (J == nullptr) ++ce->nje;
+    if (J == nullptr) ++ce->con.nje;
   }
   if (flag != CE_SUCCESS) w->factored = false;
   return flag;
@@ -302,10 +304,10 @@ struct Iterate {
   bool fresh = false;  // the matrix was formed in this solve
 };
 
-// The residual at the iterate (a, lam, w->xtrial): Phi into ce->phi, r1 = f - M a - Gt^T lam.
+// The residual at the iterate (a, lam, w->xtrial): Phi into ce->con.phi, r1 = f - M a - Gt^T lam.
 int Residual(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
              Iterate* it) {
-  int flag = EvalPhi(ce, sp.tc, w->xtrial, ce->phi);
+  int flag = EvalPhi(ce, sp.tc, w->xtrial, ce->con.phi);
   if (flag != CE_SUCCESS) return flag;
   if (sp.vdep) {
     N_VLinearSum(1, sp.V0, sp.kappa, a, w->vtmp);
@@ -313,8 +315,8 @@ int Residual(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vec
     if (flag != CE_SUCCESS) return flag;
   }
   it->fscale = N_VMaxNorm(w->fval);
-  if (ce->M != nullptr) {
-    if (SUNMatMatvec(ce->M, a, w->r1) != 0) {
+  if (ce->ls.M != nullptr) {
+    if (SUNMatMatvec(ce->ls.M, a, w->r1) != 0) {
       return ProcessError(ce, CE_LSETUP_FAIL, kFunc, "M a failed: check the mass matrix size.");
     }
     it->fscale += N_VMaxNorm(w->r1);
@@ -333,7 +335,7 @@ int Residual(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vec
 // is reused (for msbj steps, the same kappa, until the iteration contracts slowly), as CVODE
 // reuses its Jacobian: forming it costs n evaluations of f, G costs one call.
 bool JacUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
-  return sp.reuse && w->nst_jac >= 0 && w->kappa_jac == sp.kappa && ce->nst - w->nst_jac < ce->msbj;
+  return sp.reuse && w->nst_jac >= 0 && w->kappa_jac == sp.kappa && ce->nst - w->nst_jac < ce->ls.msbj;
 }
 
 // The Newton matrix at the current iterate: H = G(x_i), df/dv when f depends on v (evaluated
@@ -353,7 +355,7 @@ int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
   }
   if (flag == CE_SUCCESS) flag = Setup(ce, w, sp.kappa, sp.vdep ? w->J : nullptr, w->Gh, sp.t);
   if (flag != CE_SUCCESS) return flag;
-  if (!sp.vdep && !w->sad.sc.active) ++ce->nje;  // the full saddle matrix, G in it, is refreshed
+  if (!sp.vdep && !w->sad.sc.active) ++ce->con.nje;  // the full saddle matrix, G in it, is refreshed
   w->factored = true;
   w->kappa_fact = sp.kappa;
   w->mu_fact = sp.mu;
@@ -367,24 +369,24 @@ int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
 // a stale one costs more iterations than a factorisation on small systems (measured on the DAE
 // pendulum: 2.4x the time per step with msbj = 20; docs/theory.md section 8).
 bool MatrixUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
-  const bool mass_fixed = ce->mfn == nullptr || ce->mass_constant;
-  return sp.reuse && !sp.vdep && ce->msbj_set && w->factored && mass_fixed &&
-         w->kappa_fact == sp.kappa && w->mu_fact == sp.mu && ce->nst - w->nst_fact < ce->msbj;
+  const bool mass_fixed = ce->ls.mfn == nullptr || ce->ls.mass_constant;
+  return sp.reuse && !sp.vdep && ce->ls.msbj_set && w->factored && mass_fixed &&
+         w->kappa_fact == sp.kappa && w->mu_fact == sp.mu && ce->nst - w->nst_fact < ce->ls.msbj;
 }
 
 // One Newton correction: x(t+h; a) is affine in a with slope mu, so it moves by delta itself.
 int LinSolve(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vector lam,
              Iterate* it) {
-  const int flag = Solve(ce, w, sp.mu, w->r1, it->x_done ? 0 : -1, ce->phi, sp.t);
+  const int flag = Solve(ce, w, sp.mu, w->r1, it->x_done ? 0 : -1, ce->con.phi, sp.t);
   if (flag != CE_SUCCESS) return flag;
   SaddleSplit(w->sad, w->delta, w->s);
-  ++ce->nni;
+  ++ce->con.nni;
   N_VLinearSum(1, w->xtrial, 1, w->delta, w->xtrial);
   N_VLinearSum(1, a, 1 / sp.mu, w->delta, a);
   N_VLinearSum(1, lam, 1 / sp.mu, w->s, lam);
   it->dnorm = N_VMaxNorm(w->delta);
   it->xscale = std::max(N_VMaxNorm(w->xtrial), SUN_RCONST(1e-300));
-  it->tol = ce->nls_tol_set ? ce->nls_reltol * it->xscale + ce->nls_abstol
+  it->tol = ce->nls.tol_set ? ce->nls.reltol * it->xscale + ce->nls.abstol
                             : kTolUlps * SUN_UNIT_ROUNDOFF * it->xscale;
   return CE_SUCCESS;
 }
@@ -416,7 +418,7 @@ Conv StaleConvTest(int m, const Iterate& it, sunrealtype ftol) {
 
 Conv ConvTest(const CEodeMemRec* ce, const SolveSpec& sp, int m, const Iterate& it) {
   if (!std::isfinite(it.dnorm)) return Conv::kFailed;
-  const sunrealtype ftol = ce->nls_tol_set ? ce->nls_reltol : kTolUlps * SUN_UNIT_ROUNDOFF;
+  const sunrealtype ftol = ce->nls.tol_set ? ce->nls.reltol : kTolUlps * SUN_UNIT_ROUNDOFF;
   if (!it.fresh) return StaleConvTest(m, it, ftol);
   const bool force_ok = !sp.vdep || it.r1norm <= ftol * it.fscale;
   if (it.dnorm <= it.tol && force_ok) return Conv::kConverged;
@@ -433,10 +435,10 @@ Conv ConvTest(const CEodeMemRec* ce, const SolveSpec& sp, int m, const Iterate& 
   return Conv::kRefresh;                                     // slow: refresh at the next iterate
 }
 
-int MaxIters(const CEodeMemRec* ce) { return ce->maxcor_set ? ce->maxcor : kMaxIters; }
+int MaxIters(const CEodeMemRec* ce) { return ce->nls.maxcor_set ? ce->nls.maxcor : kMaxIters; }
 
 int ConvFailure(CEodeMemRec* ce, const SolveSpec& sp, const Iterate& it) {
-  ++ce->nnf;
+  ++ce->con.nnf;
   return ProcessError(ce, CE_CONV_FAILURE, kFunc,
                       "The constraint Newton iteration did not converge at t = %.17g (last change "
                       "of x(t+h) %g, target %g, %d iterations): reduce h, and check that "
@@ -519,16 +521,16 @@ SUNMatrix MakeMatrix(CEodeMemRec* ce, const Saddle& s, sunindextype r, sunindext
 
 int AllocWork(CEodeMemRec* ce, ConWork* w, const char* func) {
   const sunindextype n = ce->n;
-  w->Gt = MakeMatrix(ce, w->sad, ce->nc, n);
-  w->Gh = MakeMatrix(ce, w->sad, ce->nc, n);
+  w->Gt = MakeMatrix(ce, w->sad, ce->con.nc, n);
+  w->Gh = MakeMatrix(ce, w->sad, ce->con.nc, n);
   if (ce->vel_dependent) {
-    w->J = ce->jac != nullptr ? MakeMatrix(ce, w->sad, n, n) : SUNDenseMatrix(n, n, ce->sunctx);
+    w->J = ce->ls.jac != nullptr ? MakeMatrix(ce, w->sad, n, n) : SUNDenseMatrix(n, n, ce->sunctx);
   }
   N_Vector* svecs[] = {&w->xtrial, &w->fval, &w->r1, &w->delta, &w->vtmp,
                        &w->inc,    &w->xpt,  &w->a0, &w->vbase};
   for (N_Vector* v : svecs) *v = N_VClone(ce->xcur);
   N_Vector* lvecs[] = {&w->lam, &w->lam_prev, &w->s, &w->gam};
-  for (N_Vector* v : lvecs) *v = N_VClone(ce->lambda);
+  for (N_Vector* v : lvecs) *v = N_VClone(ce->con.lambda);
   bool ok = w->Gt != nullptr && w->Gh != nullptr && (w->J != nullptr || !ce->vel_dependent);
   for (N_Vector* v : svecs) ok = ok && *v != nullptr;
   for (N_Vector* v : lvecs) ok = ok && *v != nullptr;
@@ -555,12 +557,12 @@ int ConsistentStart(CEodeMemRec* ce, ConWork* w) {
 
 }  // namespace
 
-bool HasConstraints(const CEodeMemRec* ce) { return ce->phifn != nullptr; }
+bool HasConstraints(const CEodeMemRec* ce) { return ce->con.phi_fn != nullptr; }
 
 int ConstrInitialize(CEodeMemRec* ce, const char* func) {
   if (!HasConstraints(ce)) return CE_SUCCESS;
   FreeWork(ce);
-  if (!LocalData(ce->xcur) || !LocalData(ce->lambda)) {
+  if (!LocalData(ce->xcur) || !LocalData(ce->con.lambda)) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "Constraints need state and multiplier vectors with local data "
                         "(N_VGetArrayPointer, e.g. serial or OpenMP N_Vectors): the saddle-point "
@@ -568,7 +570,7 @@ int ConstrInitialize(CEodeMemRec* ce, const char* func) {
   }
   auto* w = new (std::nothrow) ConWork;
   if (w == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-  ce->con = w;
+  ce->con.work = w;
   w->degree = ce->degree;
   const int flag = SaddleInit(ce, &w->sad, func);
   return flag == CE_SUCCESS ? AllocWork(ce, w, func) : flag;
@@ -603,13 +605,13 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   N_VScale(1, w->xpt, ce->xnext);
   if (ce->zero_start) {
     N_VScale(1, w->a0, ce->D[2]);
-    N_VScale(1, w->lam, ce->lambda);
+    N_VScale(1, w->lam, ce->con.lambda);
   } else {
     // The index-1 values are the consistent derivatives at t0; the start's own (a, lambda) only
     // served to put x(t0 + h) on the constraint manifold.
-    N_VScale(1, w->lam_prev, ce->lambda);
+    N_VScale(1, w->lam_prev, ce->con.lambda);
   }
-  if (!IsFinite(ce->D[2]) || !IsFinite(ce->lambda) || !IsFinite(ce->xnext)) {
+  if (!IsFinite(ce->D[2]) || !IsFinite(ce->con.lambda) || !IsFinite(ce->xnext)) {
     return ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
                         "The constrained start produced NaN or Inf at t0 = %.17g.",
                         static_cast<double>(t0));
@@ -624,9 +626,9 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
   // Predictors: Taylor of the acceleration from t - h, linear extrapolation of lambda.
   PredictAccel(ce, a);
   if (w->lam_prev_valid) {
-    N_VLinearSum(2, ce->lambda, -1, w->lam_prev, w->lam);
+    N_VLinearSum(2, ce->con.lambda, -1, w->lam_prev, w->lam);
   } else {
-    N_VScale(1, ce->lambda, w->lam);
+    N_VScale(1, ce->con.lambda, w->lam);
   }
   N_Vector V0 = ce->D[1];  // f independent of v: it sees the last velocity, as the ODE path
   if (ce->vel_dependent) {
@@ -638,20 +640,75 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
                      V0, false, true};
   const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr);
   if (flag != CE_SUCCESS) return flag;
-  N_VScale(1, ce->lambda, w->lam_prev);
-  N_VScale(1, w->lam, ce->lambda);
+  N_VScale(1, ce->con.lambda, w->lam_prev);
+  N_VScale(1, w->lam, ce->con.lambda);
   w->lam_prev_valid = true;
   return CE_SUCCESS;
 }
 
+namespace {
+
+// A NaN with a payload no arithmetic produces: an entry still holding it was not written.
+constexpr std::uint64_t kSentinelBits = 0x7FF80000000CE0DEULL;
+static_assert(sizeof(sunrealtype) == sizeof(kSentinelBits), "sunrealtype must be double");
+
+sunrealtype Sentinel() {
+  sunrealtype s;
+  std::memcpy(&s, &kSentinelBits, sizeof(s));
+  return s;
+}
+
+bool IsSentinel(sunrealtype v) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  return bits == kSentinelBits;
+}
+
+}  // namespace
+
+// The constraints' validation point (ValidateConfiguration calls it): one Phi call on a
+// template filled with sentinels says whether Phi writes every entry.
+int ValidateConstraintTemplate(CEodeMemRec* ce, const char* func) {
+  if (!HasConstraints(ce) || ce->con.template_checked || ce->con.phi == nullptr) return CE_SUCCESS;
+  sunrealtype* pd = N_VGetArrayPointer(ce->con.phi);
+  if (pd == nullptr) return CE_SUCCESS;  // no local data: refused later by the constraint solver
+  const sunindextype nc = N_VGetLength(ce->con.phi);
+  for (sunindextype i = 0; i < nc; ++i) pd[i] = Sentinel();
+  const int rv = ce->con.phi_fn(ce->tcur, ce->xcur, ce->con.phi, ce->user_data);
+  ++ce->con.nce;
+  if (rv != 0) return CE_SUCCESS;  // the start reports the failure with its own message
+  sunindextype untouched = 0, first = -1;
+  for (sunindextype i = 0; i < nc; ++i) {
+    if (IsSentinel(pd[i])) {
+      if (first < 0) first = i;
+      ++untouched;
+    }
+  }
+  if (untouched > 0) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The constraint template has nc = %ld entries but the constraint "
+                        "function wrote only %ld of them (entry %ld and %ld more left unset): the "
+                        "template's length must equal the number of constraints Phi writes.",
+                        static_cast<long>(nc), static_cast<long>(nc - untouched),
+                        static_cast<long>(first), static_cast<long>(untouched - 1));
+  }
+  ce->con.template_checked = true;
+  return CE_SUCCESS;
+}
+
+void ConstrReset(CEodeMemRec* ce) {
+  ConstrMem& c = ce->con;
+  c.nce = c.nge = c.nni = c.nnf = c.nje = c.nsetups = c.nsolves = 0;
+}
+
 void ConstrFree(CEodeMemRec* ce) {
   FreeWork(ce);
-  if (ce->lambda != nullptr) N_VDestroy(ce->lambda);
-  if (ce->phi != nullptr) N_VDestroy(ce->phi);
-  ce->lambda = ce->phi = nullptr;
-  ce->phifn = nullptr;
-  ce->Gfn = nullptr;
-  ce->nc = 0;
+  if (ce->con.lambda != nullptr) N_VDestroy(ce->con.lambda);
+  if (ce->con.phi != nullptr) N_VDestroy(ce->con.phi);
+  ce->con.lambda = ce->con.phi = nullptr;
+  ce->con.phi_fn = nullptr;
+  ce->con.G_fn = nullptr;
+  ce->con.nc = 0;
 }
 
 }  // namespace ceode
@@ -679,17 +736,17 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
                                "The constraint template vector is empty: its length is nc.");
   }
   ceode::ConstrFree(ce);
-  ce->lambda = N_VClone(phi_template);
-  ce->phi = N_VClone(phi_template);
-  if (ce->lambda == nullptr || ce->phi == nullptr) {
+  ce->con.lambda = N_VClone(phi_template);
+  ce->con.phi = N_VClone(phi_template);
+  if (ce->con.lambda == nullptr || ce->con.phi == nullptr) {
     ceode::ConstrFree(ce);
     return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
   }
-  N_VConst(0, ce->lambda);
-  ce->phifn = phi;
-  ce->Gfn = G;
-  ce->nc = nc;
-  ce->phi_template_checked = false;  // checked against Phi at the next start
+  N_VConst(0, ce->con.lambda);
+  ce->con.phi_fn = phi;
+  ce->con.G_fn = G;
+  ce->con.nc = nc;
+  ce->con.template_checked = false;  // checked against Phi at the next start
   ceode::Restart(ce);
   return CE_SUCCESS;
 }
@@ -698,7 +755,7 @@ int CEodeSetSchurComplement(void* mem, sunbooleantype use) {
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->schur = use != SUNFALSE;
+  ce->con.schur = use != SUNFALSE;
   return CE_SUCCESS;
 }
 
@@ -711,18 +768,18 @@ int CEodeGetMultipliers(void* mem, N_Vector lambda) {
                                "No constraints are set (CEodeSetConstraints): there are no "
                                "multipliers.");
   }
-  if (lambda == nullptr || N_VGetLength(lambda) != ce->nc) {
+  if (lambda == nullptr || N_VGetLength(lambda) != ce->con.nc) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "lambda must be a vector of length nc = %ld (clone the constraint "
                                "template).",
-                               static_cast<long>(ce->nc));
+                               static_cast<long>(ce->con.nc));
   }
   if (!ce->started) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "No multipliers yet: call CEodeEvolve first.");
   }
   // lambda(t) belongs to the acceleration at the last step time (CEodeGetCurrentTime).
-  N_VScale(1, ce->lambda, lambda);
+  N_VScale(1, ce->con.lambda, lambda);
   return CE_SUCCESS;
 }
 

@@ -310,7 +310,7 @@ int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout, sunrealtyp
   N_Vector v = nullptr;
   int flag = ceode::AccessFirstOrder(mem, __func__, yout, "yout", &ce, &fo, &x, &v);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->mfn != nullptr || ce->phifn != nullptr || ce->jac != nullptr) {
+  if (ce->ls.mfn != nullptr || ce->con.phi_fn != nullptr || ce->ls.jac != nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "A mass matrix, constraints or a velocity Jacobian is attached: "
                                "with those use the native form (CEodeInit, CEodeEvolve).");

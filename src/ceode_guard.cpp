@@ -73,12 +73,12 @@ struct GuardWork {
   bool arnoldi = false;
 };
 
-GuardWork* Work(CEodeMemRec* ce) { return static_cast<GuardWork*>(ce->guard); }
+GuardWork* Work(CEodeMemRec* ce) { return static_cast<GuardWork*>(ce->guard.work); }
 
 int AllocWork(CEodeMemRec* ce, const char* func) {
-  if (ce->guard != nullptr) return CE_SUCCESS;
+  if (ce->guard.work != nullptr) return CE_SUCCESS;
   auto* g = new GuardWork;
-  ce->guard = g;
+  ce->guard.work = g;
   for (N_Vector* v : {&g->q_prev, &g->q, &g->w, &g->mw, &g->xp, &g->f0}) {
     *v = N_VClone(ce->xcur);
     if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
@@ -109,15 +109,15 @@ void FreeMass(GuardWork* g) {
 // guard has no solver for.
 int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
   *usable = true;
-  if (g->M_source != ce->M || g->mfn_source != ce->mfn) FreeMass(g);
-  if (ce->M == nullptr) return CE_SUCCESS;
-  if (g->mass_ready && ce->mass_constant) return CE_SUCCESS;
+  if (g->M_source != ce->ls.M || g->mfn_source != ce->ls.mfn) FreeMass(g);
+  if (ce->ls.M == nullptr) return CE_SUCCESS;
+  if (g->mass_ready && ce->ls.mass_constant) return CE_SUCCESS;
   if (g->M == nullptr) {
-    g->M_source = ce->M;
-    g->mfn_source = ce->mfn;
-    g->M = SUNMatClone(ce->M);
-    const SUNMatrix_ID id = SUNMatGetID(ce->M);
-    if (id == SUNMATRIX_DENSE || id == SUNMATRIX_BAND) g->M_prod = SUNMatClone(ce->M);
+    g->M_source = ce->ls.M;
+    g->mfn_source = ce->ls.mfn;
+    g->M = SUNMatClone(ce->ls.M);
+    const SUNMatrix_ID id = SUNMatGetID(ce->ls.M);
+    if (id == SUNMATRIX_DENSE || id == SUNMATRIX_BAND) g->M_prod = SUNMatClone(ce->ls.M);
     if (g->M == nullptr ||
         ((id == SUNMATRIX_DENSE || id == SUNMATRIX_BAND) && g->M_prod == nullptr))
       return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
@@ -132,8 +132,8 @@ int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
     return CE_SUCCESS;
   }
   SUNMatZero(g->M);
-  int rv = ce->mfn(ce->tcur, ce->xcur, g->M, ce->user_data, g->w, g->mw, g->xp);
-  ++ce->nme_guard;
+  int rv = ce->ls.mfn(ce->tcur, ce->xcur, g->M, ce->user_data, g->w, g->mw, g->xp);
+  ++ce->guard.nme;
   if (rv != 0) {
     return ProcessError(ce, CE_MASSFUNC_FAIL, func,
                         "The mass matrix function failed (returned %d) in the stability guard at "
@@ -144,7 +144,7 @@ int GuardMass(CEodeMemRec* ce, GuardWork* g, const char* func, bool* usable) {
     return ProcessError(ce, CE_MEM_FAIL, func, "The stability guard could not copy M.");
   }
   rv = SUNLinSolSetup(g->LS, g->M);
-  ++ce->nsetups_guard;
+  ++ce->guard.nsetups;
   if (rv != 0) {
     return ProcessError(ce, CE_LSETUP_FAIL, func,
                         "The stability guard could not factor M (returned %d): M is singular.", rv);
@@ -189,7 +189,7 @@ int StiffnessTimes(CEodeMemRec* ce, GuardWork* g, const char* func) {
   g->sig = sig;
   N_VLinearSum(1, ce->xcur, sig, g->q, g->xp);
   const int rv = CallRhs(ce, ce->tcur, g->xp, ce->D[1], g->w);
-  ++ce->nfe_guard;
+  ++ce->guard.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                         "f failed (returned %d) in the stability guard at t = %.17g.", rv,
@@ -462,8 +462,8 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
 // matrix type without a guard solver, f independent of x).
 int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   *omega = 0;
-  if (ce->omega_user > 0) {
-    *omega = ce->omega_user;
+  if (ce->guard.omega_user > 0) {
+    *omega = ce->guard.omega_user;
     return CE_SUCCESS;
   }
   if (HasConstraints(ce)) return CE_SUCCESS;  // constrained frequencies need the user's value
@@ -473,7 +473,7 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   if (flag == CE_SUCCESS) flag = GuardMass(ce, g, func, &usable);
   if (flag != CE_SUCCESS || !usable) return flag;
   const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], g->f0);
-  ++ce->nfe_guard;
+  ++ce->guard.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                         "f failed (returned %d) in the stability guard at t = %.17g.", rv,
@@ -482,7 +482,7 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   g->f0_norm = std::sqrt(N_VDotProd(g->f0, g->f0));
   g->arnoldi = false;
   sunrealtype lam = 0;
-  flag = LanczosTop(ce, g, ce->M != nullptr, func, &lam);
+  flag = LanczosTop(ce, g, ce->ls.M != nullptr, func, &lam);
   if (flag == CE_SUCCESS && lam > 0 && std::isfinite(lam)) *omega = std::sqrt(lam);
   return flag;
 }
@@ -490,16 +490,16 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
 // The method's limit, once per method: a named set's from the table, other parameters
 // computed: -1 when unstable for every step.
 sunrealtype Limit(CEodeMemRec* ce) {
-  if (ce->omega_limit == 0) {
+  if (ce->guard.omega_limit == 0) {
     sunrealtype lim = 0;
     if (const MethodSet* m = NamedSetWithParams(ce->degree, ce->params)) {
       lim = m->omega_max;
     } else if (MethodStabilityLimit(ce->degree, ce->params, &lim) != CE_SUCCESS) {
       return 0;
     }
-    ce->omega_limit = lim > 0 ? lim : -1;
+    ce->guard.omega_limit = lim > 0 ? lim : -1;
   }
-  return ce->omega_limit;
+  return ce->guard.omega_limit;
 }
 
 // Named sets stable at Omega (with the recommendation's margin), into out.
@@ -567,26 +567,26 @@ std::string SetAdvice(const CEodeMemRec* ce, sunrealtype Omega) {
   std::snprintf(buf, sizeof buf,
                 "; G3_CD, the named set whose energy error stays bounded over long runs, needs "
                 "h <= %.6g",
-                static_cast<double>(kRecommendSafety * kCdLimit / ce->omega_est));
+                static_cast<double>(kRecommendSafety * kCdLimit / ce->guard.omega_est));
   return out + buf;
 }
 
 void Report(CEodeMemRec* ce, const char* func, sunrealtype Omega, sunrealtype rho, bool refuse) {
   const int flag = refuse ? CE_UNSTABLE : CE_WARNING;
   const GuardWork* g = Work(ce);
-  const char* source = ce->omega_user > 0 ? "given by CEodeSetMaxFrequency"
+  const char* source = ce->guard.omega_user > 0 ? "given by CEodeSetMaxFrequency"
                        : g != nullptr && g->arnoldi
                            ? "estimated by Arnoldi, as df/dx is not symmetric: the square root of "
                              "the spectral radius of M^{-1} df/dx, not a bound"
                            : "an upper estimate by Lanczos";
   const char* tail = refuse ? "" : " (CE_GUARD_REFUSE stops instead of warning)";
   const std::string growth = GrowthText(ce, rho);
-  if (ce->omega_limit < 0) {
+  if (ce->guard.omega_limit < 0) {
     ProcessError(ce, flag, func,
                  "At t = %.9g (step %ld): %s is unstable for every step size. With omega_max = %g "
                  "(%s) and h = %g, Omega = %g: %s. %s%s.",
                  static_cast<double>(ce->tcur), ce->nst, ce->method_name.c_str(),
-                 static_cast<double>(ce->omega_est), source, static_cast<double>(ce->h),
+                 static_cast<double>(ce->guard.omega_est), source, static_cast<double>(ce->h),
                  static_cast<double>(Omega), growth.c_str(), SetAdvice(ce, Omega).c_str(), tail);
     return;
   }
@@ -595,10 +595,10 @@ void Report(CEodeMemRec* ce, const char* func, sunrealtype Omega, sunrealtype rh
                "Omega_max = %.6g of %s (omega_max %s): %s. h <= %.6g (%g Omega_max / omega_max) is "
                "stable%s.",
                static_cast<double>(ce->tcur), ce->nst, static_cast<double>(ce->h),
-               static_cast<double>(ce->omega_est), static_cast<double>(Omega),
-               static_cast<double>(ce->omega_limit), ce->method_name.c_str(), source,
+               static_cast<double>(ce->guard.omega_est), static_cast<double>(Omega),
+               static_cast<double>(ce->guard.omega_limit), ce->method_name.c_str(), source,
                growth.c_str(),
-               static_cast<double>(kRecommendSafety * ce->omega_limit / ce->omega_est),
+               static_cast<double>(kRecommendSafety * ce->guard.omega_limit / ce->guard.omega_est),
                static_cast<double>(kRecommendSafety), tail);
 }
 
@@ -632,11 +632,25 @@ void GuardFree(CEodeMemRec* ce) {
   for (N_Vector v : g->basis) N_VDestroy(v);
   FreeMass(g);
   delete g;
-  ce->guard = nullptr;
+  ce->guard.work = nullptr;
 }
 
-void GuardRestart(CEodeMemRec* ce) {
-  if (ce->guard != nullptr) Work(ce)->mass_ready = false;
+void GuardReset(CEodeMemRec* ce, bool counters) {
+  GuardMem& g = ce->guard;
+  if (g.work != nullptr) Work(ce)->mass_ready = false;
+  if (!counters) return;
+  g.warned = false;
+  g.nfe = g.nme = g.nsetups = 0;
+}
+
+void GuardMethodChanged(CEodeMemRec* ce) { ce->guard.omega_limit = 0; }
+
+void GuardRequestCheck(CEodeMemRec* ce) { ce->guard.pending = true; }
+
+int GuardCheckPending(CEodeMemRec* ce, const char* func) {
+  if (!ce->guard.pending) return CE_SUCCESS;
+  ce->guard.pending = false;
+  return GuardCheck(ce, func);
 }
 
 }  // namespace ceode
@@ -644,21 +658,21 @@ void GuardRestart(CEodeMemRec* ce) {
 namespace ceode {
 
 int GuardCheck(CEodeMemRec* ce, const char* func) {
-  if (ce->guard_mode == CE_GUARD_OFF) return CE_SUCCESS;
-  const int flag = Estimate(ce, func, &ce->omega_est);
+  if (ce->guard.mode == CE_GUARD_OFF) return CE_SUCCESS;
+  const int flag = Estimate(ce, func, &ce->guard.omega_est);
   if (flag != CE_SUCCESS) return flag;
   // No oscillation to resolve (f independent of x), or no estimate possible.
-  if (!(ce->omega_est > 0) || !std::isfinite(ce->omega_est)) return CE_SUCCESS;
+  if (!(ce->guard.omega_est > 0) || !std::isfinite(ce->guard.omega_est)) return CE_SUCCESS;
   const sunrealtype lim = Limit(ce);
-  const sunrealtype Omega = ce->h * ce->omega_est;
+  const sunrealtype Omega = ce->h * ce->guard.omega_est;
   // omega_est >= omega_max, so Omega <= lim keeps the true h * omega_max inside too.
   if (lim == 0 || (lim > 0 && Omega <= lim)) return CE_SUCCESS;
   sunrealtype rho = 1;
   if (CEodeSpectralRadius(ce->degree, ce->params, Omega, 0, &rho) != CE_SUCCESS) rho = 1;
   if (lim < 0 && !(RunSteps(ce) * std::log(rho) >= std::log(2.0))) return CE_SUCCESS;
-  const bool refuse = ce->guard_mode == CE_GUARD_REFUSE;
-  if (!refuse && ce->guard_warned) return CE_SUCCESS;  // warn once per run
-  ce->guard_warned = true;
+  const bool refuse = ce->guard.mode == CE_GUARD_REFUSE;
+  if (!refuse && ce->guard.warned) return CE_SUCCESS;  // warn once per run
+  ce->guard.warned = true;
   Report(ce, func, Omega, rho, refuse);
   if (!refuse) return CE_SUCCESS;
   // The next CEodeEvolve restarts here and checks again, so a refused run cannot
@@ -683,12 +697,12 @@ int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax) {
                                static_cast<double>(safety),
                                static_cast<double>(ceode::kRecommendSafety));
   }
-  if (ceode::HasConstraints(ce) && !(ce->omega_user > 0)) {
+  if (ceode::HasConstraints(ce) && !(ce->guard.omega_user > 0)) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "With constraints the guard cannot estimate omega_max: give it "
                                "with CEodeSetMaxFrequency.");
   }
-  flag = ceode::Estimate(ce, __func__, &ce->omega_est);
+  flag = ceode::Estimate(ce, __func__, &ce->guard.omega_est);
   if (flag != CE_SUCCESS) return flag;
   const sunrealtype lim = ceode::Limit(ce);
   if (lim == 0) {
@@ -699,7 +713,7 @@ int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax) {
   if (lim < 0) {
     *hmax = 0;  // unstable for every step
   } else {
-    *hmax = ce->omega_est > 0 ? safety * lim / ce->omega_est : SUN_BIG_REAL;
+    *hmax = ce->guard.omega_est > 0 ? safety * lim / ce->guard.omega_est : SUN_BIG_REAL;
   }
   return CE_SUCCESS;
 }
@@ -720,8 +734,8 @@ int CEodeSetGuardMass(void* mem, N_Vector mass) {
     if (g->wts == nullptr) return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
     N_VScale(1, mass, g->wts);
   }
-  ce->guard_warned = false;
-  ce->guard_pending = true;  // checked again at the next CEodeEvolve
+  ce->guard.warned = false;
+  ce->guard.pending = true;  // checked again at the next CEodeEvolve
   return CE_SUCCESS;
 }
 
@@ -732,9 +746,45 @@ int CEodeGetGuardStats(void* mem, long int* nfevals, long int* nmevals, long int
   if (nfevals == nullptr || nmevals == nullptr || nlinsetups == nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "An output pointer is NULL.");
   }
-  *nfevals = ce->nfe_guard;
-  *nmevals = ce->nme_guard;
-  *nlinsetups = ce->nsetups_guard;
+  *nfevals = ce->guard.nfe;
+  *nmevals = ce->guard.nme;
+  *nlinsetups = ce->guard.nsetups;
+  return CE_SUCCESS;
+}
+
+int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (mode != CE_GUARD_OFF && mode != CE_GUARD_WARN && mode != CE_GUARD_REFUSE) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "mode = %d: use CE_GUARD_OFF, CE_GUARD_WARN or CE_GUARD_REFUSE.",
+                               mode);
+  }
+  if (every < 0) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "every = %ld: use 0 (check at start only) or a positive step count.",
+                               every);
+  }
+  ce->guard.mode = mode;
+  ce->guard.every = every;
+  ce->guard.warned = false;
+  ce->guard.pending = true;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(omega_max >= 0) || !std::isfinite(omega_max)) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "omega_max = %g: pass a non-negative frequency (0: estimate it).",
+                               static_cast<double>(omega_max));
+  }
+  ce->guard.omega_user = omega_max;
+  ce->guard.warned = false;
+  ce->guard.pending = true;  // a new estimate is checked at the next CEodeEvolve
   return CE_SUCCESS;
 }
 

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "ceode_sundials.hpp"
 
@@ -145,6 +146,115 @@ struct Adapters {
 
 }  // namespace ceode
 
+namespace ceode {
+
+// Each record below belongs to one module and is written only by that module's file, as
+// SUNDIALS hangs CVLsMemRec off cv_lmem; the others read it.
+
+// Mass matrix, linear solver and velocity Jacobian (ceode_ls.cpp).
+struct LsMem {
+  CEodeMassFn mfn = nullptr;
+  SUNMatrix M = nullptr;
+  bool mass_constant = true;
+  bool mass_evaluated = false;      // M holds M(x, t) at least once
+  bool mass_dirty = true;           // M changed since A was last factored from it
+  Holds a_holds = Holds::kNothing;  // what the factored A is
+  SUNLinearSolver LS = nullptr;
+  SUNMatrix A = nullptr;
+  SUNMatrix Jsave = nullptr;
+  CEodeVelJacFn jac = nullptr;
+  bool matrix_free = false;
+  bool jac_current = false;
+  long int nst_lastsetup = -1;
+  sunrealtype kappa_setup = 0;  // kappa of the last Newton matrix setup
+  long int msbj = kDefaultJacEvalFrequency;
+  bool msbj_set = false;  // CEodeSetJacEvalFrequency called with msbj > 0 (see MatrixUsable)
+  bool own_lu = false;    // the Newton matrix is factored with pivots below (LsUseOwnLu)
+  std::vector<sunindextype> pivots;
+  long int nsetups = 0;
+  long int nsolves = 0;
+  long int nje = 0;
+  long int nfeDQ = 0;
+  long int nme = 0;
+};
+
+// The nonlinear solve of the velocity-dependent step (ceode_nls.cpp).
+struct NlsMem {
+  SUNNonlinearSolver NLS = nullptr;
+  bool own = false;
+  int maxcor = 6;
+  bool maxcor_set = false;  // the constrained solve keeps its own default until set
+  sunrealtype reltol = 1e-12;
+  sunrealtype abstol = 0;  // 0: relative to the acceleration's max norm
+  bool tol_set = false;    // the constrained solve keeps its own default until set
+  sunrealtype crate = 1;
+  sunrealtype delp = 0;
+  sunrealtype t_eval = 0;     // time of the current implicit system
+  N_Vector x_eval = nullptr;  // position of the current implicit system (not owned)
+  int cb_flag = 0;            // CE_* flag of a callback failure inside the NLS
+  bool direct = false;        // the serial backend (ceode_nls_direct.cpp) runs the iteration
+  bool jcur = false;          // its "matrix is current"
+  N_Vector delta = nullptr;   // its correction vector
+  long int nni = 0;
+  long int nnf = 0;
+  long int nsteps = 0;  // steps solved by the nonlinear solver
+};
+
+// Prediction-correction, CE_IMPLICIT_AUTO and velocity-dependence detection (ceode_pc.cpp).
+struct PcMem {
+  int mode = CE_IMPLICIT_AUTO;         // the library chooses (docs/theory.md section 4.3)
+  bool mode_set = false;               // CEodeSetImplicitMode called
+  bool active = false;                 // AUTO: the step in use is prediction-correction
+  long int nst_check = 0;              // AUTO: nst at the last check of the choice
+  N_Vector dir = nullptr;              // AUTO: the power iteration's direction, kept warm
+  int corrections = 0;                 // 0: k_default
+  int k_default = 1;                   // with the method (DefaultPCCorrections)
+  int vel_request = -1;                // CEodeSetVelocityDependence's value; -1: never called
+  CEodeRhsFn vel_checked_f = nullptr;  // f already probed for an undeclared dependence
+  sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
+  sunrealtype theta = 0;               // last measured contraction of the corrections (0: none)
+  bool theta_last = false;             // theta is newer than coupling
+  long int nsteps = 0;                 // steps solved by prediction-correction
+  long int nfe = 0;                    // f evaluations of the detection and the checks
+};
+
+// The runtime stability guard (ceode_guard.cpp).
+struct GuardMem {
+  int mode = CE_GUARD_WARN;
+  long int every = 0;  // 0: at start only
+  sunrealtype omega_user = 0;
+  sunrealtype omega_est = 0;
+  sunrealtype omega_limit = 0;  // Omega_max of the method, computed lazily
+  bool warned = false;
+  bool pending = false;  // check at the next CEodeEvolve (start, new omega or mode)
+  long int nfe = 0;      // f evaluations of its Lanczos iteration
+  long int nme = 0;      // mass evaluations into its own copy of M
+  long int nsetups = 0;  // factorisations of its own copy of M
+  void* work = nullptr;  // scratch, M copy and solver
+};
+
+// Index-3 constraints (ceode_constraints.cpp).
+struct ConstrMem {
+  CEodeConstrFn phi_fn = nullptr;
+  CEodeConstrJacFn G_fn = nullptr;
+  sunindextype nc = 0;
+  N_Vector lambda = nullptr;
+  N_Vector phi = nullptr;
+  bool template_checked = false;  // Phi seen to write every template entry
+  bool schur = true;              // Schur complement for small saddle systems (SaddleSetup)
+  long int nce = 0;
+  long int nge = 0;  // constraint Jacobian (CEodeConstrJacFn) evaluations
+  // The saddle-point solver's own statistics (CEODE's getters add them to the other solvers').
+  long int nni = 0;
+  long int nnf = 0;
+  long int nje = 0;
+  long int nsetups = 0;
+  long int nsolves = 0;
+  void* work = nullptr;  // the saddle-point workspace
+};
+
+}  // namespace ceode
+
 // The solver memory. Named like SUNDIALS' CVodeMemRec so users reading a
 // debugger recognise it.
 struct CEodeMemRec {
@@ -215,100 +325,26 @@ struct CEodeMemRec {
   sunrealtype tstop = 0;
   bool tstop_set = false;
   long int mxstep = ceode::kDefaultMaxSteps;
-  int maxcor = 6;
-  bool maxcor_set = false;  // the constrained solve keeps its own default until set
-  sunrealtype nls_reltol = 1e-12;
-  sunrealtype nls_abstol = 0;  // 0: relative to the acceleration's max norm
-  bool nls_tol_set = false;    // the constrained solve keeps its own default until set
-  long int msbj = ceode::kDefaultJacEvalFrequency;
-  bool msbj_set = false;  // CEodeSetJacEvalFrequency called with msbj > 0 (see MatrixUsable)
 
   // The acceleration solve of every step, chosen when the run starts (StartMethod):
   // explicit, implicit (velocity dependent) or constrained.
   int (*solve_accel)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                      const char* func) = nullptr;
-
-  // Velocity dependence, nonlinear solver
-  bool vel_dependent = false;
-  SUNNonlinearSolver NLS = nullptr;
-  bool own_nls = false;
-  sunrealtype crate = 1;
-  sunrealtype delp = 0;
-  sunrealtype kappa_setup = 0;  // kappa of the last Newton matrix setup
-  long int nst_lastsetup = -1;
-  bool jac_current = false;
-  sunrealtype t_eval = 0;     // time of the current implicit system
-  N_Vector x_eval = nullptr;  // position of the current implicit system (not owned)
-  int cb_flag = 0;            // CE_* flag of a callback failure inside the NLS
-
-  // Mass matrix, linear solver, velocity Jacobian
-  CEodeMassFn mfn = nullptr;
-  SUNMatrix M = nullptr;
-  bool mass_constant = true;
-  bool schur = true;  // constraints: Schur complement for small saddle systems (SaddleSetup)
-  bool mass_evaluated = false;                    // M holds M(x, t) at least once
-  bool mass_dirty = true;                         // M changed since A was last factored from it
-  ceode::Holds a_holds = ceode::Holds::kNothing;  // what the factored A is
-  N_Vector lstmp = nullptr;                       // solution vector of linear solves
-  SUNLinearSolver LS = nullptr;
-  SUNMatrix A = nullptr;
-  SUNMatrix Jsave = nullptr;
-  CEodeVelJacFn jac = nullptr;
-  bool ls_matrix_free = false;
-
-  // Constraints (ceode_constraints.cpp)
-  CEodeConstrFn phifn = nullptr;
-  CEodeConstrJacFn Gfn = nullptr;
-  sunindextype nc = 0;
-  N_Vector lambda = nullptr;
-  N_Vector phi = nullptr;
-  bool phi_template_checked = false;  // Phi seen to write every template entry
-  void* con = nullptr;                // private saddle-point workspace (ceode_constraints.cpp)
-
-  // Stability guard
-  int guard_mode = CE_GUARD_WARN;
-  long int guard_every = 0;  // 0: at start only
-  sunrealtype omega_user = 0;
-  sunrealtype omega_est = 0;
-  sunrealtype omega_limit = 0;  // Omega_max of the method, computed lazily
-  bool guard_warned = false;
-  bool guard_pending = false;  // check at the next CEodeEvolve (start, new omega or mode)
+  bool vel_dependent = false;  // the step solves for the acceleration (velocity dependence)
+  N_Vector lstmp = nullptr;    // solution vector of linear solves
   sunrealtype xl1_start = 0;   // ||x||_1 at the last (re)start, reference for explosive growth
-  void* guard = nullptr;       // the guard's own scratch, M copy and solver (ceode_guard.cpp)
 
-  // Counters
+  // The modules' records
+  ceode::LsMem ls;
+  ceode::NlsMem nls;
+  ceode::PcMem pc;
+  ceode::GuardMem guard;
+  ceode::ConstrMem con;
+
+  // Counters of the integrator itself
   long int nst = 0;
   long int nfe = 0;
   long int nfe_start = 0;
-  long int nfe_guard = 0;      // f evaluations of the stability guard (its Lanczos iteration)
-  long int nme_guard = 0;      // mass evaluations into the guard's own copy of M
-  long int nsetups_guard = 0;  // factorisations of the guard's own copy of M
-  long int nni = 0;
-  long int nnf = 0;
-  long int nsetups = 0;
-  long int nls_solves = 0;
-  long int nje = 0;
-  long int nfeDQ = 0;
-  long int nme = 0;
-  long int nce = 0;
-  long int nge = 0;  // constraint Jacobian (CEodeConstrJacFn) evaluations
-
-  // Implicit-step mode and velocity-dependence detection (ceode_pc.cpp)
-  int implicit_mode = CE_IMPLICIT_AUTO;  // the library chooses (docs/theory.md section 4.3)
-  bool implicit_mode_set = false;        // CEodeSetImplicitMode called
-  bool pc_active = false;                // AUTO: the step in use is prediction-correction
-  long int nst_coupling = 0;             // AUTO: nst at the last coupling estimate
-  N_Vector pc_dir = nullptr;             // AUTO: the power iteration's direction, kept warm
-  int pc_corrections = 0;                // 0: pc_k_default
-  int pc_k_default = 1;                  // with the method (DefaultPCCorrections)
-  int vel_request = -1;                  // CEodeSetVelocityDependence's value; -1: never called
-  CEodeRhsFn vel_checked_f = nullptr;    // f already probed for an undeclared dependence
-  sunrealtype coupling = 0;              // last estimate of kappa ||M^{-1} df/dv|| (0: none)
-  long int npc_steps = 0;                // steps solved by prediction-correction
-  long int nnls_steps = 0;               // steps solved by the nonlinear solver
-  long int nfe_coupling = 0;             // f evaluations of the detection and the coupling estimate
-  bool nls_jcur = false;  // the direct Newton iteration's "matrix is current" (ceode_nls.cpp)
-  N_Vector nls_delta = nullptr;  // its correction vector
 
   // Error reporting
   CEodeErrHandlerFn ehfun = nullptr;
@@ -387,8 +423,18 @@ void FreeVectors(CEodeMemRec* ce);
 // ceode_ls.cpp
 int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func);
 int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func);  // b <- M^{-1} b
+// Forms and factors M - kappa df/dv; reports a failure and returns its flag.
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func);
+// The serial direct Newton iteration factors the Newton matrix with its own pivots when the
+// attached solver is SUNLinSol_Dense on a dense A (returns whether it does); then x <- A^{-1} x
+// on the raw array of x.
+bool LsUseOwnLu(CEodeMemRec* ce, bool use);
+void LsSolveOwnLu(CEodeMemRec* ce, sunrealtype* x);
+// Forgets what A holds; with counters, zeroes the module's counters too (CEodeReInit).
+void LsReset(CEodeMemRec* ce, bool counters);
+// Whether the factored Newton matrix must be formed again for this kappa.
+bool NewtonMatrixStale(const CEodeMemRec* ce, sunrealtype kappa);
 int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
 // df/dv at (t, x, v) with f(t, x, v) = fv into J: the user's CEodeVelJacFn, or difference
 // quotients (dense or band J, local data). Counted in nje; failures reported.
@@ -403,13 +449,33 @@ int NlsInitialize(CEodeMemRec* ce, const char* func);
 int SolveImplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                   const char* func);
 void NlsFree(CEodeMemRec* ce);
+void NlsReset(CEodeMemRec* ce, bool counters);  // with counters: zeroes them (CEodeReInit)
+// The velocity and f(t, x, v) of the last residual evaluation of the solve (its vtmp, ftmp).
+void NlsLastResidual(const CEodeMemRec* ce, N_Vector* v, N_Vector* fv);
+// Pieces of the iteration its serial backend shares: f inside the solve (counted, failures
+// recorded), the Newton matrix setup and solve as the SUNNonlinearSolver calls them, the test.
+int NlsRhs(CEodeMemRec* ce);
+int NlsLinearSetup(sunbooleantype jbad, sunbooleantype* jcur, void* mem);
+int NlsLinearSolve(N_Vector b, void* mem);
+int NlsConvTest(CEodeMemRec* ce, int m, sunrealtype delnrm, sunrealtype tol);
+
+// ceode_nls_direct.cpp: the iteration on raw arrays (serial vectors, a direct linear solver,
+// n small), chosen by NlsInitialize: offset, predictor and weights; one Newton solve from a zero
+// correction; the corrected acceleration.
+bool DirectNewtonApplies(const CEodeMemRec* ce);
+void DirectPrepare(CEodeMemRec* ce);
+int DirectSolve(CEodeMemRec* ce, bool setup);
+void DirectAccel(CEodeMemRec* ce, N_Vector a);
 
 // ceode_pc.cpp: after the unconstrained start, the velocity-dependence check and the choice of
 // the implicit solve (prediction-correction or the nonlinear solver); the PC solve itself.
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func);
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
             const char* func);
-void ImplicitStatsReset(CEodeMemRec* ce);  // CEodeReInit
+void PcReset(CEodeMemRec* ce, bool counters);  // its estimates; with counters, those too
+void PcFree(CEodeMemRec* ce);
+void PcMethodChanged(CEodeMemRec* ce);  // the default number of corrections of the new set
+void PcSetVelocityRequest(CEodeMemRec* ce, int request);  // CEodeSetVelocityDependence
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func);  // CE_IMPLICIT_AUTO: PC or the nonlinear solver, refreshed
 
@@ -420,11 +486,17 @@ int ConstrStart(CEodeMemRec* ce, const char* func);  // a0, lambda0 at t0, const
 int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                     const char* func);
 void ConstrFree(CEodeMemRec* ce);
+void ConstrReset(CEodeMemRec* ce);  // zeroes its counters (CEodeReInit)
 
 // ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);
-void GuardFree(CEodeMemRec* ce);     // its workspace (at CEodeInit and CEodeFree)
-void GuardRestart(CEodeMemRec* ce);  // its copy of M is re-evaluated (CEodeReInit)
+void GuardFree(CEodeMemRec* ce);  // its workspace (at CEodeInit and CEodeFree)
+// Its copy of M is re-evaluated; with counters (CEodeReInit), its warning may be given again and
+// its counters are zeroed (a Reset keeps both: one warning per run, not per restart).
+void GuardReset(CEodeMemRec* ce, bool counters);
+void GuardMethodChanged(CEodeMemRec* ce);                  // Omega_max is looked up again
+void GuardRequestCheck(CEodeMemRec* ce);                   // at the next CEodeEvolve (a start)
+int GuardCheckPending(CEodeMemRec* ce, const char* func);  // the requested check, once
 
 // ceode_stability.cpp
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);

@@ -12,14 +12,28 @@ using ceode::Restart;
 
 namespace {
 
-template <typename T>
-int GetCounter(void* mem, const char* func, T* out, T CEodeMemRec::*field) {
+// A value of the memory or of one of its modules' records (get reads it from the memory).
+template <typename T, typename Get>
+int GetValue(void* mem, const char* func, T* out, Get get) {
   CEodeMemRec* ce = nullptr;
   const int flag = Access(mem, func, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (out == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The output pointer is NULL.");
-  *out = ce->*field;
+  *out = get(*ce);
   return CE_SUCCESS;
+}
+
+// The solver statistics: the velocity-dependent step's solvers and the constrained step's
+// saddle-point solver count apart, the user sees their sums.
+long int Nni(const CEodeMemRec& ce) { return ce.nls.nni + ce.con.nni; }
+long int Nnf(const CEodeMemRec& ce) { return ce.nls.nnf + ce.con.nnf; }
+long int Nsetups(const CEodeMemRec& ce) { return ce.ls.nsetups + ce.con.nsetups; }
+long int Nsolves(const CEodeMemRec& ce) { return ce.ls.nsolves + ce.con.nsolves; }
+long int Nje(const CEodeMemRec& ce) { return ce.ls.nje + ce.con.nje; }
+
+template <typename T>
+int GetCounter(void* mem, const char* func, T* out, T CEodeMemRec::*field) {
+  return GetValue(mem, func, out, [field](const CEodeMemRec& ce) { return ce.*field; });
 }
 
 }  // namespace
@@ -35,13 +49,13 @@ int CEodeSetMethod(void* mem, int degree, const sunrealtype* params) {
     return ProcessError(ce, CE_ILL_INPUT, __func__, "%s.", why);
   ce->degree = degree;
   for (int i = 0; i < ceode::kMaxDegree; ++i) ce->params[i] = i < degree - 1 ? params[i] : 0;
-  ce->pc_k_default = ceode::DefaultPCCorrections(degree, params);
+  ceode::PcMethodChanged(ce);
   try {
     ce->method_name = "custom G" + std::to_string(degree);
   } catch (...) {
     return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
   }
-  ce->omega_limit = 0;
+  ceode::GuardMethodChanged(ce);
   Restart(ce);
   return CE_SUCCESS;
 }
@@ -138,9 +152,8 @@ int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp); any other nonzero value declares it.
-  ce->vel_request = depends;
+  ceode::PcSetVelocityRequest(ce, depends);
   ce->vel_dependent = depends != SUNFALSE && depends != CE_VELOCITY_DETECT;
-  ce->vel_checked_f = nullptr;
   Restart(ce);
   return CE_SUCCESS;
 }
@@ -182,41 +195,6 @@ int CEodeSetMaxNumSteps(void* mem, long int mxsteps) {
   return CE_SUCCESS;
 }
 
-int CEodeSetMaxNonlinIters(void* mem, int maxcor) {
-  CEodeMemRec* ce = nullptr;
-  int flag = Access(mem, __func__, &ce);
-  if (flag != CE_SUCCESS) return flag;
-  if (maxcor < 1) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__, "maxcor = %d: need at least 1 iteration.",
-                        maxcor);
-  }
-  ce->maxcor = maxcor;
-  ce->maxcor_set = true;
-  if (ce->NLS != nullptr) SUNNonlinSolSetMaxIters(ce->NLS, maxcor);
-  return CE_SUCCESS;
-}
-
-int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol) {
-  CEodeMemRec* ce = nullptr;
-  int flag = Access(mem, __func__, &ce);
-  if (flag != CE_SUCCESS) return flag;
-  if ((flag = ceode::ValidateNonlinTolerances(ce, __func__, reltol, abstol)) != CE_SUCCESS)
-    return flag;
-  ce->nls_reltol = reltol;
-  ce->nls_abstol = abstol;
-  ce->nls_tol_set = true;
-  return CE_SUCCESS;
-}
-
-int CEodeSetJacEvalFrequency(void* mem, long int msbj) {
-  CEodeMemRec* ce = nullptr;
-  int flag = Access(mem, __func__, &ce);
-  if (flag != CE_SUCCESS) return flag;
-  ce->msbj = msbj > 0 ? msbj : ceode::kDefaultJacEvalFrequency;
-  ce->msbj_set = msbj > 0;
-  return CE_SUCCESS;
-}
-
 int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
@@ -232,41 +210,6 @@ int CEodeSetErrFile(void* mem, FILE* errfp) {
   if (flag != CE_SUCCESS) return flag;
   ce->errfp = errfp;
   ce->to_context = false;  // SUNDIALS 7: this memory's messages leave the context's path
-  return CE_SUCCESS;
-}
-
-int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
-  CEodeMemRec* ce = nullptr;
-  int flag = Access(mem, __func__, &ce);
-  if (flag != CE_SUCCESS) return flag;
-  if (mode != CE_GUARD_OFF && mode != CE_GUARD_WARN && mode != CE_GUARD_REFUSE) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "mode = %d: use CE_GUARD_OFF, CE_GUARD_WARN or CE_GUARD_REFUSE.", mode);
-  }
-  if (every < 0) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "every = %ld: use 0 (check at start only) or a positive step count.",
-                        every);
-  }
-  ce->guard_mode = mode;
-  ce->guard_every = every;
-  ce->guard_warned = false;
-  ce->guard_pending = true;
-  return CE_SUCCESS;
-}
-
-int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
-  CEodeMemRec* ce = nullptr;
-  int flag = Access(mem, __func__, &ce);
-  if (flag != CE_SUCCESS) return flag;
-  if (!(omega_max >= 0) || !std::isfinite(omega_max)) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "omega_max = %g: pass a non-negative frequency (0: estimate it).",
-                        static_cast<double>(omega_max));
-  }
-  ce->omega_user = omega_max;
-  ce->guard_warned = false;
-  ce->guard_pending = true;  // a new estimate is checked at the next CEodeEvolve
   return CE_SUCCESS;
 }
 
@@ -301,37 +244,37 @@ int CEodeGetNumStartRhsEvals(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_start);
 }
 int CEodeGetNumGuardRhsEvals(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_guard);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.guard.nfe; });
 }
 int CEodeGetNumNonlinSolvIters(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nni);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nni(ce); });
 }
 int CEodeGetNumNonlinSolvConvFails(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nnf);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nnf(ce); });
 }
 int CEodeGetNumLinSolvSetups(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nsetups);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nsetups(ce); });
 }
 int CEodeGetNumLinSolves(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nls_solves);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nsolves(ce); });
 }
 int CEodeGetNumJacEvals(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nje);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nje(ce); });
 }
 int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfeDQ);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.ls.nfeDQ; });
 }
 int CEodeGetNumMassEvals(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nme);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.ls.nme; });
 }
 int CEodeGetNumConstrEvals(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nce);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.con.nce; });
 }
 int CEodeGetNumConstrJacEvals(void* mem, long int* n) {
-  return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nge);
+  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.con.nge; });
 }
 int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
-  return GetCounter<sunrealtype>(mem, __func__, omega_max, &CEodeMemRec::omega_est);
+  return GetValue<sunrealtype>(mem, __func__, omega_max, [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
 }
 
 int CEodeGetLastErrorMessage(void* mem, const char** msg) {
@@ -359,17 +302,17 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Step size", static_cast<double>(ce->h), false},
       {"RHS fn evals", static_cast<double>(ce->nfe), true},
       {"RHS fn evals in start", static_cast<double>(ce->nfe_start), true},
-      {"RHS fn evals in stability guard", static_cast<double>(ce->nfe_guard), true},
-      {"NLS iters", static_cast<double>(ce->nni), true},
-      {"NLS fails", static_cast<double>(ce->nnf), true},
-      {"LS setups", static_cast<double>(ce->nsetups), true},
-      {"LS solves", static_cast<double>(ce->nls_solves), true},
-      {"Jac fn evals", static_cast<double>(ce->nje), true},
-      {"RHS fn evals for Jac DQ", static_cast<double>(ce->nfeDQ), true},
-      {"Mass fn evals", static_cast<double>(ce->nme), true},
-      {"Constraint fn evals", static_cast<double>(ce->nce), true},
-      {"Constraint Jac evals", static_cast<double>(ce->nge), true},
-      {"Max frequency estimate", static_cast<double>(ce->omega_est), false},
+      {"RHS fn evals in stability guard", static_cast<double>(ce->guard.nfe), true},
+      {"NLS iters", static_cast<double>(Nni(*ce)), true},
+      {"NLS fails", static_cast<double>(Nnf(*ce)), true},
+      {"LS setups", static_cast<double>(Nsetups(*ce)), true},
+      {"LS solves", static_cast<double>(Nsolves(*ce)), true},
+      {"Jac fn evals", static_cast<double>(Nje(*ce)), true},
+      {"RHS fn evals for Jac DQ", static_cast<double>(ce->ls.nfeDQ), true},
+      {"Mass fn evals", static_cast<double>(ce->ls.nme), true},
+      {"Constraint fn evals", static_cast<double>(ce->con.nce), true},
+      {"Constraint Jac evals", static_cast<double>(ce->con.nge), true},
+      {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());

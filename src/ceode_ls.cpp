@@ -1,11 +1,14 @@
 // Mass matrix, linear solver and velocity Jacobian: the linear algebra glue.
 // The attached SUNLinearSolver factors either M (explicit path) or the Newton
 // matrix M - kappa df/dv (implicit path); a_holds records which one it holds.
+#include <sundials/sundials_dense.h>
+#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ceode_impl.hpp"
 
@@ -17,12 +20,12 @@ namespace {
 // df/dv w from one difference quotient at the current Newton iterate.
 int ATimes(void* data, N_Vector w, N_Vector z) {
   auto* ce = static_cast<CEodeMemRec*>(data);
-  if (ce->M != nullptr) {
-    if (SUNMatMatvec(ce->M, w, z) != 0) return -1;
+  if (ce->ls.M != nullptr) {
+    if (SUNMatMatvec(ce->ls.M, w, z) != 0) return -1;
   } else {
     N_VScale(1, w, z);
   }
-  if (ce->a_holds != Holds::kNewton) return 0;
+  if (ce->ls.a_holds != Holds::kNewton) return 0;
   // The increment perturbs the velocity, so it is scaled by |v| (as the dense
   // difference quotients are), not by the acceleration's error weights: those
   // carry the 1e-12 Newton tolerance and would put sig*w below v's round-off.
@@ -31,12 +34,12 @@ int ATimes(void* data, N_Vector w, N_Vector z) {
   const sunrealtype vmax = std::max(N_VMaxNorm(ce->vtmp), SUN_RCONST(1e-8));
   const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * vmax / wmax;
   N_VLinearSum(1, ce->vtmp, sig, w, ce->tmp1);
-  const int rv = CallRhs(ce, ce->t_eval, ce->x_eval, ce->tmp1, ce->tmp2);
-  ++ce->nfeDQ;
+  const int rv = CallRhs(ce, ce->nls.t_eval, ce->nls.x_eval, ce->tmp1, ce->tmp2);
+  ++ce->ls.nfeDQ;
   if (rv != 0) return rv;
   // z <- z - kappa (f(v + sig w) - f(v)) / sig
   N_VLinearSum(1, ce->tmp2, -1, ce->ftmp, ce->tmp2);
-  N_VLinearSum(1, z, -ce->kappa_setup / sig, ce->tmp2, z);
+  N_VLinearSum(1, z, -ce->ls.kappa_setup / sig, ce->tmp2, z);
   return 0;
 }
 
@@ -59,7 +62,7 @@ int DenseDqJac(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector 
     const sunrealtype inc = DqIncrement(vd[j], vscale);
     vpd[j] = vd[j] + inc;
     const int rv = CallRhs(ce, t, x, vp, fp);
-    ++ce->nfeDQ;
+    ++ce->ls.nfeDQ;
     vpd[j] = vd[j];
     if (rv != 0) return rv;
     N_VLinearSum(1 / inc, fp, -1 / inc, fv, fp);
@@ -85,7 +88,7 @@ int BandDqJac(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f
   for (sunindextype g = 0; g < width; ++g) {
     for (sunindextype j = g; j < n; j += width) vpd[j] = vd[j] + DqIncrement(vd[j], vscale);
     const int rv = CallRhs(ce, t, x, vp, fp);
-    ++ce->nfeDQ;
+    ++ce->ls.nfeDQ;
     if (rv != 0) return rv;
     const sunrealtype* fpd = N_VGetArrayPointer(fp);
     for (sunindextype j = g; j < n; j += width) {
@@ -104,46 +107,54 @@ bool HasLocalData(N_Vector v) { return N_VGetArrayPointer(v) != nullptr; }
 
 }  // namespace
 
+void LsReset(CEodeMemRec* ce, bool counters) {
+  LsMem& ls = ce->ls;
+  ls.a_holds = Holds::kNothing;
+  ls.mass_dirty = true;
+  ls.mass_evaluated = false;
+  ls.nst_lastsetup = -1;
+  ls.jac_current = false;
+  ls.own_lu = false;
+  if (counters) ls.nsetups = ls.nsolves = ls.nje = ls.nfeDQ = ls.nme = 0;
+}
+
 int LsInitialize(CEodeMemRec* ce, const char* func) {
-  ce->a_holds = Holds::kNothing;
-  ce->mass_dirty = true;
-  ce->mass_evaluated = false;
-  ce->nst_lastsetup = -1;
-  ce->jac_current = false;
+  LsReset(ce, false);
   if (HasConstraints(ce)) return CE_SUCCESS;  // the saddle-point solver owns the LS
-  if (ce->M != nullptr && ce->LS == nullptr) {
+  if (ce->ls.M != nullptr && ce->ls.LS == nullptr) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "A mass matrix is set but no linear solver: attach one with "
                         "CEodeSetLinearSolver (e.g. SUNLinSol_Dense with a dense matrix).");
   }
-  if (ce->LS == nullptr) return CE_SUCCESS;
-  if (ce->A == nullptr && !ce->ls_matrix_free) {
+  if (ce->ls.LS == nullptr) return CE_SUCCESS;
+  if (ce->ls.A == nullptr && !ce->ls.matrix_free) {
     return ProcessError(
         ce, CE_LINIT_FAIL, func,
         "The attached linear solver needs a matrix: pass A to CEodeSetLinearSolver.");
   }
-  if (ce->A != nullptr && SUNMatGetID(ce->A) != SUNMATRIX_DENSE &&
-      SUNMatGetID(ce->A) != SUNMATRIX_BAND && ce->vel_dependent && ce->jac == nullptr) {
+  if (ce->ls.A != nullptr && SUNMatGetID(ce->ls.A) != SUNMATRIX_DENSE &&
+      SUNMatGetID(ce->ls.A) != SUNMATRIX_BAND && ce->vel_dependent && ce->ls.jac == nullptr) {
     return ProcessError(
         ce, CE_LINIT_FAIL, func,
         "Difference-quotient Jacobians support dense and band matrices only: supply "
         "df/dv with CEodeSetVelJacFn for this matrix type (e.g. sparse/KLU).");
   }
-  if (ce->A != nullptr && ce->vel_dependent && ce->jac == nullptr && !HasLocalData(ce->xcur)) {
+  if (ce->ls.A != nullptr && ce->vel_dependent && ce->ls.jac == nullptr &&
+      !HasLocalData(ce->xcur)) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "Difference-quotient Jacobians need vectors with local data "
                         "(N_VGetArrayPointer): supply df/dv with CEodeSetVelJacFn.");
   }
-  if (ce->A != nullptr && ce->vel_dependent && ce->Jsave == nullptr) {
-    ce->Jsave = SUNMatClone(ce->A);
-    if (ce->Jsave == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  if (ce->ls.A != nullptr && ce->vel_dependent && ce->ls.Jsave == nullptr) {
+    ce->ls.Jsave = SUNMatClone(ce->ls.A);
+    if (ce->ls.Jsave == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
-  if (ce->ls_matrix_free && SUNLinSolSetATimes(ce->LS, ce, ATimes) != 0) {
+  if (ce->ls.matrix_free && SUNLinSolSetATimes(ce->ls.LS, ce, ATimes) != 0) {
     return ProcessError(
         ce, CE_LINIT_FAIL, func,
         "The linear solver does not accept a matrix-free product: attach a matrix.");
   }
-  return InitLinearSolver(ce, ce->LS, func);
+  return InitLinearSolver(ce, ce->ls.LS, func);
 }
 
 int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func) {
@@ -155,55 +166,55 @@ int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func) {
 }
 
 void LsFree(CEodeMemRec* ce) {
-  if (ce->Jsave != nullptr) SUNMatDestroy(ce->Jsave);
-  ce->Jsave = nullptr;
+  if (ce->ls.Jsave != nullptr) SUNMatDestroy(ce->ls.Jsave);
+  ce->ls.Jsave = nullptr;
 }
 
 int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func) {
-  if (ce->mfn == nullptr) return CE_SUCCESS;
-  if (ce->mass_constant && ce->mass_evaluated) return CE_SUCCESS;
-  SUNMatZero(ce->M);
-  const int rv = ce->mfn(t, x, ce->M, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
-  ++ce->nme;
+  if (ce->ls.mfn == nullptr) return CE_SUCCESS;
+  if (ce->ls.mass_constant && ce->ls.mass_evaluated) return CE_SUCCESS;
+  SUNMatZero(ce->ls.M);
+  const int rv = ce->ls.mfn(t, x, ce->ls.M, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
+  ++ce->ls.nme;
   if (rv != 0) {
     return ProcessError(ce, CE_MASSFUNC_FAIL, func,
                         "The mass matrix function failed (returned %d) at t = %.17g.", rv,
                         static_cast<double>(t));
   }
-  ce->mass_evaluated = true;
-  ce->mass_dirty = true;
+  ce->ls.mass_evaluated = true;
+  ce->ls.mass_dirty = true;
   return CE_SUCCESS;
 }
 
 int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
-  if (ce->M == nullptr) return CE_SUCCESS;
-  if (ce->a_holds != Holds::kMass || ce->mass_dirty) {
+  if (ce->ls.M == nullptr) return CE_SUCCESS;
+  if (ce->ls.a_holds != Holds::kMass || ce->ls.mass_dirty) {
     int rv = 0;
-    if (ce->A != nullptr) rv = SUNMatCopy(ce->M, ce->A);
-    ce->a_holds = Holds::kMass;
-    if (rv == 0) rv = SUNLinSolSetup(ce->LS, ce->A);
-    ++ce->nsetups;
+    if (ce->ls.A != nullptr) rv = SUNMatCopy(ce->ls.M, ce->ls.A);
+    ce->ls.a_holds = Holds::kMass;
+    if (rv == 0) rv = SUNLinSolSetup(ce->ls.LS, ce->ls.A);
+    ++ce->ls.nsetups;
     if (rv != 0) {
-      ce->a_holds = Holds::kNothing;
+      ce->ls.a_holds = Holds::kNothing;
       return ProcessError(ce, CE_LSETUP_FAIL, func,
                           "The mass matrix could not be factored (linear solver setup returned "
                           "%d): M is singular. Check CEodeMassFn; a system with massless "
                           "coordinates needs constraints (CEodeSetConstraints).",
                           rv);
     }
-    ce->mass_dirty = false;
-    ce->jac_current = false;  // A no longer holds the Newton matrix
+    ce->ls.mass_dirty = false;
+    ce->ls.jac_current = false;  // A no longer holds the Newton matrix
   }
   N_VConst(0, ce->lstmp);
   // Direct solvers ignore the tolerance; an iterative one must solve M a = f to
   // near round-off, unscaled, or the acceleration itself carries its residual.
   sunrealtype tol = 0;
-  if (SUNLinSolGetType(ce->LS) != SUNLINEARSOLVER_DIRECT) {
-    SUNLinSolSetScalingVectors(ce->LS, nullptr, nullptr);
+  if (SUNLinSolGetType(ce->ls.LS) != SUNLINEARSOLVER_DIRECT) {
+    SUNLinSolSetScalingVectors(ce->ls.LS, nullptr, nullptr);
     tol = SUN_RCONST(1e-13) * std::sqrt(N_VDotProd(b, b));
   }
-  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, b, tol);
-  ++ce->nls_solves;
+  const int rv = SUNLinSolSolve(ce->ls.LS, ce->ls.A, ce->lstmp, b, tol);
+  ++ce->ls.nsolves;
   if (rv != 0) {
     return ProcessError(ce, CE_LSOLVE_FAIL, func,
                         "The mass-matrix solve failed (linear solver returned %d).", rv);
@@ -215,15 +226,15 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
 int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
                 const char* func) {
   int rv;
-  if (ce->jac != nullptr) {
+  if (ce->ls.jac != nullptr) {
     SUNMatZero(J);
-    rv = ce->jac(t, x, v, fv, J, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
+    rv = ce->ls.jac(t, x, v, fv, J, ce->user_data, ce->tmp1, ce->tmp2, ce->tmp3);
   } else if (SUNMatGetID(J) == SUNMATRIX_DENSE) {
     rv = DenseDqJac(ce, t, x, v, fv, J);
   } else {
     rv = BandDqJac(ce, t, x, v, fv, J);
   }
-  ++ce->nje;
+  ++ce->ls.nje;
   if (rv != 0) {
     // A fixed step cannot retry with a smaller h, so every failure is final.
     return ProcessError(ce, CE_JACFUNC_FAIL, func,
@@ -234,50 +245,90 @@ int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector
   return CE_SUCCESS;
 }
 
+// Factors the dense A in place with pivots of this module's own (SUNDIALS' public
+// SUNDlsMat_denseGETRF, the factorisation SUNLinSol_Dense performs), so that the serial direct
+// Newton iteration solves with factors and pivots it owns.
+int FactorOwnLu(CEodeMemRec* ce) {
+  LsMem& ls = ce->ls;
+  const sunindextype n = SUNDenseMatrix_Columns(ls.A);
+  if (static_cast<sunindextype>(ls.pivots.size()) != n) ls.pivots.assign(n, 0);
+  return static_cast<int>(SUNDlsMat_denseGETRF(SUNDenseMatrix_Cols(ls.A), n, n, ls.pivots.data()));
+}
+
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func) {
-  ce->kappa_setup = kappa;
-  if (ce->A != nullptr) {
-    const int flag = VelJacobian(ce, t, x, v, fv, ce->Jsave, func);
-    if (flag != CE_SUCCESS) {
-      ce->cb_flag = flag;
-      return -1;
-    }
-    int rv;
-    rv = SUNMatCopy(ce->Jsave, ce->A);
-    if (rv == 0) rv = ce->M ? SUNMatScaleAdd(-kappa, ce->A, ce->M) : SUNMatScaleAddI(-kappa, ce->A);
+  LsMem& ls = ce->ls;
+  ls.kappa_setup = kappa;
+  if (ls.A != nullptr) {
+    const int flag = VelJacobian(ce, t, x, v, fv, ls.Jsave, func);
+    if (flag != CE_SUCCESS) return flag;
+    int rv = SUNMatCopy(ls.Jsave, ls.A);
+    if (rv == 0) rv = ls.M ? SUNMatScaleAdd(-kappa, ls.A, ls.M) : SUNMatScaleAddI(-kappa, ls.A);
     if (rv != 0) {
-      ce->cb_flag = ProcessError(ce, CE_LSETUP_FAIL, func,
-                                 "Forming M - kappa df/dv failed (%d): M, A and the Jacobian must "
-                                 "share a matrix type and size.",
-                                 rv);
-      return -1;
+      return ProcessError(ce, CE_LSETUP_FAIL, func,
+                          "Forming M - kappa df/dv failed (%d): M, A and the Jacobian must "
+                          "share a matrix type and size.",
+                          rv);
     }
   }
-  ce->mass_dirty = false;  // A is built from the current M
-  ce->a_holds = Holds::kNewton;
-  const int rv = SUNLinSolSetup(ce->LS, ce->A);
-  ++ce->nsetups;
-  ce->nst_lastsetup = ce->nst;
-  ce->jac_current = true;
+  ls.mass_dirty = false;  // A is built from the current M
+  ls.a_holds = Holds::kNewton;
+  const int rv = ls.own_lu ? FactorOwnLu(ce) : SUNLinSolSetup(ls.LS, ls.A);
+  ++ls.nsetups;
+  ls.nst_lastsetup = ce->nst;
+  ls.jac_current = true;
   if (rv != 0) {
-    ce->a_holds = Holds::kNothing;
-    ce->cb_flag = ProcessError(ce, CE_LSETUP_FAIL, func,
-                               "The Newton matrix M - kappa df/dv is singular or could not be "
-                               "factored (linear solver setup returned %d) at t = %.17g: check "
-                               "M and df/dv, or reduce h.",
-                               rv, static_cast<double>(t));
-    return -1;
+    ls.a_holds = Holds::kNothing;
+    return ProcessError(ce, CE_LSETUP_FAIL, func,
+                        "The Newton matrix M - kappa df/dv is singular or could not be "
+                        "factored (linear solver setup returned %d) at t = %.17g: check "
+                        "M and df/dv, or reduce h.",
+                        rv, static_cast<double>(t));
   }
-  return 0;
+  return CE_SUCCESS;
+}
+
+bool NewtonMatrixStale(const CEodeMemRec* ce, sunrealtype kappa) {
+  const LsMem& ls = ce->ls;
+  return ls.a_holds != Holds::kNewton || !ls.jac_current || ls.nst_lastsetup < 0 ||
+         ce->nst - ls.nst_lastsetup >= ls.msbj || ls.mass_dirty || ls.kappa_setup != kappa;
+}
+
+bool LsUseOwnLu(CEodeMemRec* ce, bool use) {
+  LsMem& ls = ce->ls;
+  ls.own_lu = use && ls.LS != nullptr && ls.A != nullptr &&
+              SUNLinSolGetID(ls.LS) == SUNLINEARSOLVER_DENSE &&
+              SUNMatGetID(ls.A) == SUNMATRIX_DENSE;
+  return ls.own_lu;
+}
+
+// SUNLinSolSolve_Dense's triangular solves on the factors FactorOwnLu left (SUNDlsMat_denseGETRS's
+// permutation and loops, in its order): the same numbers, without a call into SUNDIALS per
+// Newton iteration, which at n of a few costs more than the solve.
+void LsSolveOwnLu(CEodeMemRec* ce, sunrealtype* x) {
+  LsMem& ls = ce->ls;
+  sunrealtype** cols = SUNDenseMatrix_Cols(ls.A);
+  const auto n = static_cast<sunindextype>(ls.pivots.size());
+  for (sunindextype k = 0; k < n; ++k) std::swap(x[k], x[ls.pivots[k]]);
+  for (sunindextype k = 0; k + 1 < n; ++k) {
+    const sunrealtype* col = cols[k];
+    for (sunindextype i = k + 1; i < n; ++i) x[i] -= col[i] * x[k];
+  }
+  for (sunindextype k = n - 1; k > 0; --k) {
+    const sunrealtype* col = cols[k];
+    x[k] /= col[k];
+    for (sunindextype i = 0; i < k; ++i) x[i] -= col[i] * x[k];
+  }
+  x[0] /= cols[0][0];
+  ++ls.nsolves;
 }
 
 int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func) {
-  if (ce->ls_matrix_free) SUNLinSolSetScalingVectors(ce->LS, ce->ewt, ce->ewt);
+  if (ce->ls.matrix_free) SUNLinSolSetScalingVectors(ce->ls.LS, ce->ewt, ce->ewt);
   N_VConst(0, ce->lstmp);
   // Iterative solvers stop at a fraction of the Newton tolerance (weighted norm 1).
-  const int rv = SUNLinSolSolve(ce->LS, ce->A, ce->lstmp, b, SUN_RCONST(0.05));
-  ++ce->nls_solves;
+  const int rv = SUNLinSolSolve(ce->ls.LS, ce->ls.A, ce->lstmp, b, SUN_RCONST(0.05));
+  ++ce->ls.nsolves;
   if (rv != 0) {
     if (rv < 0) {
       ProcessError(ce, CE_LSOLVE_FAIL, func, "The Newton linear solve failed (returned %d).", rv);
@@ -302,9 +353,9 @@ int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M, sunbooleantype const
                                "remove the mass matrix.");
   }
   if ((flag = ceode::ValidateMassMatrix(ce, __func__, M)) != CE_SUCCESS) return flag;
-  ce->mfn = mfn;
-  ce->M = M;
-  ce->mass_constant = constant != SUNFALSE;
+  ce->ls.mfn = mfn;
+  ce->ls.M = M;
+  ce->ls.mass_constant = constant != SUNFALSE;
   ceode::Restart(ce);
   return CE_SUCCESS;
 }
@@ -323,13 +374,13 @@ int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A) {
                                "A direct linear solver needs its matrix: pass A.");
   }
   if ((flag = ceode::ValidateLinearSolver(ce, __func__, LS, A, false)) != CE_SUCCESS) return flag;
-  if (ce->own_nls) ceode::NlsFree(ce);  // CEODE's own choice (fixed point/Newton) is made anew
-  ce->LS = LS;
-  ce->A = A;
-  ce->ls_matrix_free = (A == nullptr);
-  if (ce->Jsave != nullptr) {
-    SUNMatDestroy(ce->Jsave);
-    ce->Jsave = nullptr;
+  if (ce->nls.own) ceode::NlsFree(ce);  // CEODE's own choice (fixed point/Newton) is made anew
+  ce->ls.LS = LS;
+  ce->ls.A = A;
+  ce->ls.matrix_free = (A == nullptr);
+  if (ce->ls.Jsave != nullptr) {
+    SUNMatDestroy(ce->ls.Jsave);
+    ce->ls.Jsave = nullptr;
   }
   ceode::Restart(ce);
   return CE_SUCCESS;
@@ -339,9 +390,18 @@ int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac) {
   CEodeMemRec* ce = nullptr;
   int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->jac = jac;
-  ce->jac_current = false;
+  ce->ls.jac = jac;
+  ce->ls.jac_current = false;
   ceode::Restart(ce);  // solver workspaces (e.g. the constrained Jacobian) are sized at start
+  return CE_SUCCESS;
+}
+
+int CEodeSetJacEvalFrequency(void* mem, long int msbj) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->ls.msbj = msbj > 0 ? msbj : ceode::kDefaultJacEvalFrequency;
+  ce->ls.msbj_set = msbj > 0;
   return CE_SUCCESS;
 }
 

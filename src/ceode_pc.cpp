@@ -26,7 +26,7 @@ constexpr int kPowerSteps = 3;  // power steps of the coupling estimate (one f e
 constexpr sunrealtype kDependenceUlps = 16;
 
 int PCCorrections(const CEodeMemRec* ce) {
-  return ce->pc_corrections > 0 ? ce->pc_corrections : ce->pc_k_default;
+  return ce->pc.corrections > 0 ? ce->pc.corrections : ce->pc.k_default;
 }
 
 // A fixed direction with unequal entries, so that no simple structure of df/dv (dampers on
@@ -44,22 +44,32 @@ void ProbeDirection(N_Vector w) {
   }
 }
 
+// f evaluations of the probes and checks, counted apart from the steps' (like the guard's).
 int CountedRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
                const char* func) {
   const int rv = CallRhs(ce, t, x, v, f);
-  ++ce->nfe_coupling;  // apart from the steps' evaluations, like the guard's
+  ++ce->pc.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                         "The right-hand side function failed (returned %d) at t = %.17g while "
-                        "CEODE probed its velocity dependence.",
+                        "CEODE probed its velocity dependence or checked the contraction of "
+                        "prediction-correction.",
                         rv, static_cast<double>(t));
   }
   return CE_SUCCESS;
 }
 
+// a = M^{-1} f(t, x, v) for a check, with f counted as CountedRhs counts it.
+int CheckAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+               const char* func) {
+  int flag = MassUpdate(ce, t, x, func);
+  if (flag == CE_SUCCESS) flag = CountedRhs(ce, t, x, v, a, func);
+  return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
+}
+
 // f(t0, x0, v0) itself (no mass solve) into fbase: the start's a0 when there is no M.
 int BaseForce(CEodeMemRec* ce, N_Vector fbase, const char* func) {
-  if (ce->M == nullptr) {
+  if (ce->ls.M == nullptr) {
     N_VScale(1, ce->D[2], fbase);
     return CE_SUCCESS;
   }
@@ -105,10 +115,17 @@ int PowerStep(CEodeMemRec* ce, N_Vector w, N_Vector u, sunrealtype* r, const cha
   return flag;
 }
 
+// A new coupling estimate, made at step nst.
+void SetCoupling(CEodeMemRec* ce, sunrealtype coupling) {
+  ce->pc.coupling = coupling;
+  ce->pc.theta_last = false;
+  ce->pc.nst_check = ce->nst;
+}
+
 // kappa ||M^{-1} df/dv||: power steps from the probe direction at the start, into pc_dir (kept
 // for the refreshes); atmp, ftmp are scratch.
 int EstimateCoupling(CEodeMemRec* ce, const char* func) {
-  N_Vector w = ce->pc_dir, u = ce->atmp, fbase = ce->ftmp;
+  N_Vector w = ce->pc.dir, u = ce->atmp, fbase = ce->ftmp;
   int flag = FirstProbe(ce, w, u, fbase, func);
   sunrealtype rho = 0;
   for (int i = 0; i < kPowerSteps && flag == CE_SUCCESS; ++i) {
@@ -120,8 +137,7 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
     if (!(r > 0)) break;
     rho = std::max(rho, r);
   }
-  ce->coupling = std::fabs(ce->co.kappa) * rho;
-  ce->nst_coupling = ce->nst;
+  SetCoupling(ce, std::fabs(ce->co.kappa) * rho);
   return flag;
 }
 
@@ -129,9 +145,9 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
 // switches the implicit step on (checked at every restart); a user who never declared anything
 // is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
 int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
-  const bool detect = ce->vel_request == CE_VELOCITY_DETECT;
+  const bool detect = ce->pc.vel_request == CE_VELOCITY_DETECT;
   if (ce->vel_dependent ||
-      !(detect || (ce->vel_request < 0 && ce->vel_checked_f != RhsIdentity(ce)))) {
+      !(detect || (ce->pc.vel_request < 0 && ce->pc.vel_checked_f != RhsIdentity(ce)))) {
     return CE_SUCCESS;
   }
   // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
@@ -139,12 +155,13 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
   // Once per right-hand side, not at every restart.
-  if (!detect) ce->vel_checked_f = RhsIdentity(ce);
+  if (!detect) ce->pc.vel_checked_f = RhsIdentity(ce);
   const sunrealtype sig = ProbeIncrement(ce->D[1]);
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
   const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
   if (!(df > floor)) return CE_SUCCESS;  // also for NaN: the start's checks report those
-  ce->coupling = std::fabs(ce->co.kappa) * MaxNormOrNaN(u);
+  ce->pc.coupling = std::fabs(ce->co.kappa) * MaxNormOrNaN(u);
+  ce->pc.theta_last = false;
   if (!detect) {
     ProcessError(ce, CE_WARNING, func,
                  "f depends on the velocity x' (a change of x' by %.2g changed f by %.2g at "
@@ -154,7 +171,7 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
                  "or CE_VELOCITY_DETECT to let CEODE switch the implicit step on; SUNFALSE "
                  "keeps the explicit step and silences this check.",
                  static_cast<double>(sig), static_cast<double>(df), static_cast<double>(ce->tcur),
-                 static_cast<double>(ce->coupling));
+                 static_cast<double>(ce->pc.coupling));
     return CE_SUCCESS;
   }
   ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
@@ -163,21 +180,21 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
 }
 
-// AUTO's check after a step of the nonlinear solver at (t, x): its last residual evaluation
-// f(t, x, vtmp) in ftmp is the base, so one power step from the kept direction costs one f.
+// AUTO's check after a step of the nonlinear solver at (t, x): the solver's last residual
+// evaluation (NlsLastResidual) is the base, so one power step from the kept direction costs one f.
 // Prediction-correction comes back only below kPcReturnLimit, so that an estimate near the limit
 // does not alternate the modes; its first step measures its contraction at once.
 int RefreshCoupling(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func) {
-  int flag =
-      DirectionalDifference(ce, t, x, ce->vtmp, ce->ycor, ce->pc_dir, ce->ftmp, ce->atmp, func);
+  N_Vector v = nullptr, fv = nullptr;
+  NlsLastResidual(ce, &v, &fv);
+  int flag = DirectionalDifference(ce, t, x, v, ce->ycor, ce->pc.dir, fv, ce->atmp, func);
   sunrealtype r = 0;
-  if (flag == CE_SUCCESS) flag = PowerStep(ce, ce->pc_dir, ce->atmp, &r, func);
+  if (flag == CE_SUCCESS) flag = PowerStep(ce, ce->pc.dir, ce->atmp, &r, func);
   if (flag != CE_SUCCESS) return flag;
-  ce->coupling = std::fabs(ce->co.kappa) * r;
-  ce->nst_coupling = ce->nst;
-  if (ce->coupling <= kPcReturnLimit) {
-    ce->pc_active = true;
-    ce->nst_coupling = -1;  // the first step of prediction-correction measures its contraction
+  SetCoupling(ce, std::fabs(ce->co.kappa) * r);
+  if (ce->pc.coupling <= kPcReturnLimit) {
+    ce->pc.active = true;
+    ce->pc.nst_check = -1;  // the first step of prediction-correction measures its contraction
   }
   return CE_SUCCESS;
 }
@@ -242,8 +259,8 @@ namespace {
 // The mode in use: AUTO unless the user chose one, or attached a nonlinear solver of their own
 // without choosing (that solver is then what the user asked for).
 int ImplicitMode(const CEodeMemRec* ce) {
-  if (!ce->implicit_mode_set && !ce->own_nls) return CE_IMPLICIT_NEWTON;
-  return ce->implicit_mode;
+  if (!ce->pc.mode_set && !ce->nls.own) return CE_IMPLICIT_NEWTON;
+  return ce->pc.mode;
 }
 
 }  // namespace
@@ -255,11 +272,11 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   const int mode = ImplicitMode(ce);
   ce->solve_accel = mode == CE_IMPLICIT_PC ? SolvePC : SolveImplicit;
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
-  if (ce->pc_dir == nullptr && (ce->pc_dir = N_VClone(ce->ycor)) == nullptr) {
+  if (ce->pc.dir == nullptr && (ce->pc.dir = N_VClone(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   flag = EstimateCoupling(ce, func);
-  ce->pc_active = flag == CE_SUCCESS && ce->coupling <= kPcContractionLimit;
+  ce->pc.active = flag == CE_SUCCESS && ce->pc.coupling <= kPcContractionLimit;
   ce->solve_accel = SolveAuto;
   return flag;
 }
@@ -289,7 +306,9 @@ int NextCorrection(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, bool 
   N_VScale(1, a, ce->atmp);
   CorrectedVelocity(ce, a);
   N_VLinearSum(1, ce->vtmp, -1, ce->ycor, ce->ycor);
-  const int flag = EvalAccel(ce, t, x, ce->vtmp, keep ? a : ce->atmp, func);
+  // keep: the step's own last correction; otherwise one more, for the check only.
+  const int flag = keep ? EvalAccel(ce, t, x, ce->vtmp, a, func)
+                        : CheckAccel(ce, t, x, ce->vtmp, ce->atmp, func);
   if (keep) {
     N_VLinearSum(1, a, -1, ce->atmp, ce->atmp);
   } else {
@@ -327,8 +346,6 @@ int CorrectPC(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k, sun
   if (flag != CE_SUCCESS || theta == nullptr) return flag;
   if (k == 1) {
     flag = NextCorrection(ce, t, x, a, false, func);
-    --ce->nfe;
-    ++ce->nfe_coupling;
     if (flag != CE_SUCCESS) return flag;
   }
   const sunrealtype first = MaxNormOrNaN(ce->ycor),
@@ -346,7 +363,7 @@ int CorrectPC(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k, sun
 // first, so that a step of k corrections makes k vector passes besides f and the update.
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
             const char* func) {
-  ++ce->npc_steps;
+  ++ce->pc.nsteps;
   return CorrectPC(ce, t, x, a, PCCorrections(ce), nullptr, func);
 }
 
@@ -358,28 +375,45 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
 // estimate (one power step per check) falls below kPcReturnLimit.
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func) {
-  const long int every = std::max(ce->msbj, kDefaultJacEvalFrequency);
-  const bool check = ce->nst - ce->nst_coupling >= every || ce->nst_coupling < 0;
-  if (!ce->pc_active) {
+  const long int every = std::max(ce->ls.msbj, kDefaultJacEvalFrequency);
+  const bool check = ce->nst - ce->pc.nst_check >= every || ce->pc.nst_check < 0;
+  if (!ce->pc.active) {
     const int flag = SolveImplicit(ce, t, tnext, x, a, func);
     return flag != CE_SUCCESS || !check ? flag : RefreshCoupling(ce, t, x, func);
   }
   if (!check) return SolvePC(ce, t, tnext, x, a, func);
   sunrealtype theta = 0;
   const int flag = CorrectPC(ce, t, x, a, PCCorrections(ce), &theta, func);
-  ce->coupling = theta;
-  ce->nst_coupling = ce->nst;
+  ce->pc.theta = theta;
+  ce->pc.theta_last = true;
+  ce->pc.nst_check = ce->nst;
   if (flag == CE_SUCCESS && theta <= kPcContractionLimit) {
-    ++ce->npc_steps;
+    ++ce->pc.nsteps;
     return flag;
   }
-  ce->pc_active = false;  // an f failure at a diverging velocity, too
+  ce->pc.active = false;  // an f failure at a diverging velocity, too
   return SolveImplicit(ce, t, tnext, x, a, func);
 }
 
-void ImplicitStatsReset(CEodeMemRec* ce) {
-  ce->npc_steps = ce->nnls_steps = ce->nfe_coupling = 0;
-  ce->coupling = 0;
+void PcReset(CEodeMemRec* ce, bool counters) {
+  PcMem& pc = ce->pc;
+  if (counters) pc.nsteps = pc.nfe = 0;
+  pc.coupling = pc.theta = 0;
+  pc.theta_last = false;
+}
+
+void PcFree(CEodeMemRec* ce) {
+  if (ce->pc.dir != nullptr) N_VDestroy(ce->pc.dir);
+  ce->pc.dir = nullptr;
+}
+
+void PcMethodChanged(CEodeMemRec* ce) {
+  ce->pc.k_default = DefaultPCCorrections(ce->degree, ce->params);
+}
+
+void PcSetVelocityRequest(CEodeMemRec* ce, int request) {
+  ce->pc.vel_request = request;
+  ce->pc.vel_checked_f = nullptr;
 }
 
 }  // namespace ceode
@@ -396,8 +430,8 @@ int CEodeSetImplicitMode(void* mem, int mode) {
                                "CE_IMPLICIT_AUTO.",
                                mode);
   }
-  ce->implicit_mode = mode;
-  ce->implicit_mode_set = true;
+  ce->pc.mode = mode;
+  ce->pc.mode_set = true;
   ceode::Restart(ce);  // the choice is made at the start
   return CE_SUCCESS;
 }
@@ -411,7 +445,7 @@ int CEodeSetPCCorrections(void* mem, int k) {
         ce, CE_ILL_INPUT, __func__,
         "k = %d: use 1 or 2 corrections (0: the set's default, docs/theory.md 4.3).", k);
   }
-  ce->pc_corrections = k;
+  ce->pc.corrections = k;
   return CE_SUCCESS;
 }
 
@@ -424,10 +458,10 @@ int CEodeGetImplicitStats(void* mem, long int* npcsteps, long int* nnlssteps, lo
       coupling == nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "An output pointer is NULL.");
   }
-  *npcsteps = ce->npc_steps;
-  *nnlssteps = ce->nnls_steps;
-  *nfecoupling = ce->nfe_coupling;
-  *coupling = ce->coupling;
+  *npcsteps = ce->pc.nsteps;
+  *nnlssteps = ce->nls.nsteps;
+  *nfecoupling = ce->pc.nfe;
+  *coupling = ce->pc.theta_last ? ce->pc.theta : ce->pc.coupling;  // the last figure measured
   return CE_SUCCESS;
 }
 

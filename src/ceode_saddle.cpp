@@ -26,7 +26,7 @@ sunindextype Cols(SUNMatrix A) {
 
 // No linear solver attached: a dense one of size n + nc, owned by CEODE.
 int CreateDenseSolver(CEodeMemRec* ce, Saddle* s, const char* func) {
-  if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_DENSE) {
+  if (ce->ls.M != nullptr && SUNMatGetID(ce->ls.M) != SUNMATRIX_DENSE) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "A sparse mass matrix with constraints needs a sparse saddle-point "
                         "solver: attach SUNLinSol_KLU with an (n+nc) x (n+nc) CSR "
@@ -45,8 +45,8 @@ int CreateDenseSolver(CEodeMemRec* ce, Saddle* s, const char* func) {
 
 // The user's solver and matrix factor the saddle-point matrix: dense or sparse, size n + nc.
 int AdoptUserSolver(CEodeMemRec* ce, Saddle* s, const char* func) {
-  s->LS = ce->LS;
-  s->A = ce->A;
+  s->LS = ce->ls.LS;
+  s->A = ce->ls.A;
   if (s->A == nullptr ||
       (SUNMatGetID(s->A) != SUNMATRIX_DENSE && SUNMatGetID(s->A) != SUNMATRIX_SPARSE)) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
@@ -73,12 +73,12 @@ void CollectEntries(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatr
   const sunindextype n = s->n;
   std::vector<SaddleEntry>& e = s->entries;
   e.clear();
-  if (ce->M != nullptr) {
-    ForEachEntry(ce->M, [&](sunindextype r, sunindextype c, sunrealtype v) {
+  if (ce->ls.M != nullptr) {
+    ForEachEntry(ce->ls.M, [&](sunindextype r, sunindextype c, sunrealtype v) {
       e.push_back({r, c, v});
     });
   }
-  const sunrealtype diag = ce->M != nullptr ? 0 : 1;  // no mass function: M = I
+  const sunrealtype diag = ce->ls.M != nullptr ? 0 : 1;  // no mass function: M = I
   for (sunindextype i = 0; i < n; ++i) e.push_back({i, i, diag});
   if (J != nullptr && kappa != 0) {
     ForEachEntry(J, [&](sunindextype r, sunindextype c, sunrealtype v) {
@@ -233,8 +233,8 @@ bool SchurRefresh(const CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix
   const sunindextype n = s->n, nc = s->nc;
   f->valid = false;
   std::vector<sunrealtype>& A = f->Binv;  // A until FactorB
-  if (ce->M != nullptr) {
-    ToDense(ce->M, n, n, &A);
+  if (ce->ls.M != nullptr) {
+    ToDense(ce->ls.M, n, n, &A);
   } else {
     A.assign(static_cast<size_t>(n * n), 0);
     for (sunindextype i = 0; i < n; ++i) A[i * n + i] = 1;
@@ -338,14 +338,14 @@ SUNLinearSolver DirectSolverFor(SUNMatrix A, N_Vector tmpl, SUNContext ctx) {
 
 int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
   s->n = ce->n;
-  s->nc = ce->nc;
-  s->N = ce->n + ce->nc;
+  s->nc = ce->con.nc;
+  s->N = ce->n + ce->con.nc;
   s->schur_fits = s->N <= kSchurMaxSize;
   s->sc = SchurFactor();
-  int flag = ce->LS == nullptr ? CreateDenseSolver(ce, s, func) : AdoptUserSolver(ce, s, func);
+  int flag = ce->ls.LS == nullptr ? CreateDenseSolver(ce, s, func) : AdoptUserSolver(ce, s, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->M != nullptr && SUNMatGetID(ce->M) != SUNMATRIX_SPARSE &&
-      SUNMatGetID(ce->M) != SUNMATRIX_DENSE) {
+  if (ce->ls.M != nullptr && SUNMatGetID(ce->ls.M) != SUNMATRIX_SPARSE &&
+      SUNMatGetID(ce->ls.M) != SUNMATRIX_DENSE) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "With constraints the mass matrix must be dense or sparse.");
   }
@@ -370,12 +370,12 @@ int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNM
                 SUNMatrix H, sunrealtype t, const char* func, bool reuse_a, bool* refreshed) {
   *refreshed = false;
   s->sc.active = false;
-  if (s->schur_fits && ce->schur) {
+  if (s->schur_fits && ce->con.schur) {
     if (!reuse_a || !s->sc.valid) *refreshed = SchurRefresh(ce, s, kappa, J, Gt);
     // A singular K means a singular saddle matrix: the full path below reports it.
     if (s->sc.valid && SchurFactorK(s, Gt, H)) {
       s->sc.active = true;
-      ++ce->nsetups;
+      ++ce->con.nsetups;
       return CE_SUCCESS;
     }
   }
@@ -387,7 +387,7 @@ int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNM
     if (flag != CE_SUCCESS) return flag;
   }
   const int rv = SUNLinSolSetup(s->LS, s->A);
-  ++ce->nsetups;
+  ++ce->con.nsetups;
   if (rv != 0) {
     return ProcessError(ce, CE_LSETUP_FAIL, func,
                         "The constraint saddle-point matrix [[M - kappa df/dv, G^T], [G, 0]] is "
@@ -414,7 +414,7 @@ int SaddleSolve(CEodeMemRec* ce, Saddle* s, sunrealtype top_scale, N_Vector top,
     N_VConst(0, s->sol);
     rv = SUNLinSolSolve(s->LS, s->A, s->sol, s->b, 0);
   }
-  ++ce->nls_solves;
+  ++ce->con.nsolves;
   if (rv != 0 || !IsFinite(s->sol)) {
     return ProcessError(
         ce, rv != 0 ? CE_LSOLVE_FAIL : CE_LSETUP_FAIL, func,

@@ -89,7 +89,7 @@ SUNLinearSolver DirectSolverFor(SUNMatrix A, N_Vector tmpl, SUNContext ctx);
 int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func);
 void SaddleFree(Saddle* s);
 // Factors [[M - kappa J, Gt^T], [H, 0]] (J = NULL: no damping term): by the Schur complement
-// when it fits and ce->schur (reuse_a: the block A is the one of the last call; *refreshed: B was
+// when it fits and ce->con.schur (reuse_a: the block A is the one of the last call; *refreshed: B was
 // formed anew), else assembled into the solver's matrix.
 int SaddleSetup(CEodeMemRec* ce, Saddle* s, sunrealtype kappa, SUNMatrix J, SUNMatrix Gt,
                 SUNMatrix H, sunrealtype t, const char* func, bool reuse_a, bool* refreshed);

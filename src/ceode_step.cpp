@@ -162,8 +162,9 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 }
 
 bool NeedsSolverWork(const CEodeMemRec* ce) {
-  return ce->LS != nullptr || ce->NLS != nullptr || ce->mfn != nullptr || ce->M != nullptr ||
-         ce->vel_dependent || ce->adapters.first_order != nullptr || HasConstraints(ce);
+  return ce->ls.LS != nullptr || ce->nls.NLS != nullptr || ce->ls.mfn != nullptr ||
+         ce->ls.M != nullptr || ce->vel_dependent || ce->adapters.first_order != nullptr ||
+         HasConstraints(ce);
 }
 
 // Each N_VClone costs about a thousand instructions in Debian's -O0 SUNDIALS (the operation
@@ -218,7 +219,7 @@ int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, 
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func) {
   // No mass matrix (M = I): MassUpdate and MassSolve would do nothing; skip their calls.
-  if (ce->mfn == nullptr && ce->M == nullptr) return EvalRhs(ce, t, x, v, a, func);
+  if (ce->ls.mfn == nullptr && ce->ls.M == nullptr) return EvalRhs(ce, t, x, v, a, func);
   int flag = MassUpdate(ce, t, x, func);
   if (flag == CE_SUCCESS) flag = EvalRhs(ce, t, x, v, a, func);
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
@@ -450,7 +451,7 @@ int StartMethod(CEodeMemRec* ce) {
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
   ce->plan_ix = 0;
-  ce->guard_pending = true;
+  ce->guard.pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
   ce->solve_accel = HasConstraints(ce)  ? ConstrSolveStep
                     : ce->vel_dependent ? SolveImplicit
@@ -625,7 +626,7 @@ int TakeStep(CEodeMemRec* ce) {
   }
   if (flag != CE_SUCCESS) return flag;
   Commit(ce, t);
-  if (ce->guard_every > 0 && ce->nst % ce->guard_every == 0) return GuardCheck(ce, func);
+  if (ce->guard.every > 0 && ce->nst % ce->guard.every == 0) return GuardCheck(ce, func);
   return CE_SUCCESS;
 }
 
@@ -648,7 +649,7 @@ constexpr long int kLeanMinSteps = 8;
 // that the loop knows its last step in advance.
 long int LeanStepCount(const CEodeMemRec* ce, sunrealtype target, long int max_steps) {
   long int cap = max_steps;
-  if (ce->guard_every > 0) cap = std::min(cap, ce->guard_every - ce->nst % ce->guard_every);
+  if (ce->guard.every > 0) cap = std::min(cap, ce->guard.every - ce->nst % ce->guard.every);
   const auto remains = [&](long int j) {
     const sunrealtype tj =
         j == 0 ? ce->tcur : ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + j) * ce->h;
@@ -712,7 +713,7 @@ int LeanExit(CEodeMemRec* ce, int ip, const LeanEnd& e, long int* taken) {
     if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
     return CheckState(ce, e.t, e.xl1, func, !e.failed_over);
   }
-  const bool guard_due = e.steps > 0 && ce->guard_every > 0 && ce->nst % ce->guard_every == 0;
+  const bool guard_due = e.steps > 0 && ce->guard.every > 0 && ce->nst % ce->guard.every == 0;
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
 }
 
@@ -777,7 +778,8 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
   // The distance first: a CE_ONE_STEP call decides on it alone.
   const bool lean = target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps &&
                     ce->fused && (ce->fused_ready || ce->fused_mpi) &&
-                    ce->solve_accel == SolveExplicit && ce->mfn == nullptr && ce->M == nullptr;
+                    ce->solve_accel == SolveExplicit && ce->ls.mfn == nullptr &&
+                    ce->ls.M == nullptr;
   if (lean) return LeanExplicitSteps(ce, target, max_steps, taken);
   const int flag = TakeStep(ce);
   *taken = flag == CE_SUCCESS ? 1 : 0;

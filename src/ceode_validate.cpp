@@ -104,7 +104,7 @@ const char* MatrixKind(SUNMatrix A) {
 }
 
 // The size the linear solver's matrix must have now: the saddle-point system with constraints.
-sunindextype SolverSize(const CEodeMemRec* ce) { return ce->n + (HasConstraints(ce) ? ce->nc : 0); }
+sunindextype SolverSize(const CEodeMemRec* ce) { return ce->n + (HasConstraints(ce) ? ce->con.nc : 0); }
 
 // SUNDIALS' dense and band solvers keep pivots of the length they were created with: a solver
 // made for a smaller matrix would write past them in its factorisation.
@@ -151,22 +151,6 @@ sunindextype NlsVectorLength(SUNNonlinearSolver NLS) {
     return y != nullptr ? N_VGetLength(y) : -1;
   }
   return -1;
-}
-
-// A NaN with a payload no arithmetic produces: an entry still holding it was not written.
-constexpr std::uint64_t kSentinelBits = 0x7FF80000000CE0DEULL;
-static_assert(sizeof(sunrealtype) == sizeof(kSentinelBits), "sunrealtype must be double");
-
-sunrealtype Sentinel() {
-  sunrealtype s;
-  std::memcpy(&s, &kSentinelBits, sizeof(s));
-  return s;
-}
-
-bool IsSentinel(sunrealtype v) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &v, sizeof(bits));
-  return bits == kSentinelBits;
 }
 
 }  // namespace
@@ -263,16 +247,16 @@ int ValidateMassMatrix(CEodeMemRec* ce, const char* func, SUNMatrix M) {
 // On the unconstrained path A receives copies of M (SUNMatCopy) and M - kappa J (SUNMatScaleAdd):
 // SUNDIALS refuses both for matrices of different type or size ("incompatible matrices").
 int ValidateMassAgainstSolver(CEodeMemRec* ce, const char* func) {
-  if (ce->M == nullptr || ce->A == nullptr || HasConstraints(ce)) return CE_SUCCESS;
+  if (ce->ls.M == nullptr || ce->ls.A == nullptr || HasConstraints(ce)) return CE_SUCCESS;
   sunindextype mr = 0, mc = 0, ar = 0, ac = 0;
-  const bool known = MatrixShape(ce->M, &mr, &mc) && MatrixShape(ce->A, &ar, &ac);
-  if (SUNMatGetID(ce->M) != SUNMatGetID(ce->A) || (known && (mr != ar || mc != ac))) {
+  const bool known = MatrixShape(ce->ls.M, &mr, &mc) && MatrixShape(ce->ls.A, &ar, &ac);
+  if (SUNMatGetID(ce->ls.M) != SUNMatGetID(ce->ls.A) || (known && (mr != ar || mc != ac))) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The mass matrix (%s, %ld x %ld) and the linear solver's matrix A (%s, "
                         "%ld x %ld) are incompatible: without constraints A holds copies of M, so "
                         "both must have the same type and size n x n (n = %ld).",
-                        MatrixKind(ce->M), static_cast<long>(mr), static_cast<long>(mc),
-                        MatrixKind(ce->A), static_cast<long>(ar), static_cast<long>(ac),
+                        MatrixKind(ce->ls.M), static_cast<long>(mr), static_cast<long>(mc),
+                        MatrixKind(ce->ls.A), static_cast<long>(ar), static_cast<long>(ac),
                         static_cast<long>(ce->n));
   }
   return CE_SUCCESS;
@@ -321,41 +305,13 @@ int ValidateNonlinearSolver(CEodeMemRec* ce, const char* func, SUNNonlinearSolve
   return CE_SUCCESS;
 }
 
-int ValidateConstraintTemplate(CEodeMemRec* ce, const char* func) {
-  if (!HasConstraints(ce) || ce->phi_template_checked || ce->phi == nullptr) return CE_SUCCESS;
-  sunrealtype* pd = N_VGetArrayPointer(ce->phi);
-  if (pd == nullptr) return CE_SUCCESS;  // no local data: refused later by the constraint solver
-  const sunindextype nc = N_VGetLength(ce->phi);
-  for (sunindextype i = 0; i < nc; ++i) pd[i] = Sentinel();
-  const int rv = ce->phifn(ce->tcur, ce->xcur, ce->phi, ce->user_data);
-  ++ce->nce;
-  if (rv != 0) return CE_SUCCESS;  // the start reports the failure with its own message
-  sunindextype untouched = 0, first = -1;
-  for (sunindextype i = 0; i < nc; ++i) {
-    if (IsSentinel(pd[i])) {
-      if (first < 0) first = i;
-      ++untouched;
-    }
-  }
-  if (untouched > 0) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The constraint template has nc = %ld entries but the constraint "
-                        "function wrote only %ld of them (entry %ld and %ld more left unset): the "
-                        "template's length must equal the number of constraints Phi writes.",
-                        static_cast<long>(nc), static_cast<long>(nc - untouched),
-                        static_cast<long>(first), static_cast<long>(untouched - 1));
-  }
-  ce->phi_template_checked = true;
-  return CE_SUCCESS;
-}
-
 int ValidateConfiguration(CEodeMemRec* ce, const char* func) {
   int flag = ValidateStep(ce, func);
-  if (flag == CE_SUCCESS) flag = ValidateMassMatrix(ce, func, ce->M);
-  if (flag == CE_SUCCESS) flag = ValidateLinearSolver(ce, func, ce->LS, ce->A, true);
+  if (flag == CE_SUCCESS) flag = ValidateMassMatrix(ce, func, ce->ls.M);
+  if (flag == CE_SUCCESS) flag = ValidateLinearSolver(ce, func, ce->ls.LS, ce->ls.A, true);
   if (flag == CE_SUCCESS) flag = ValidateMassAgainstSolver(ce, func);
   if (flag == CE_SUCCESS && ce->vel_dependent && !HasConstraints(ce)) {
-    flag = ValidateNonlinearSolver(ce, func, ce->NLS);
+    flag = ValidateNonlinearSolver(ce, func, ce->nls.NLS);
   }
   if (flag == CE_SUCCESS) flag = ValidateConstraintTemplate(ce, func);
   return flag;

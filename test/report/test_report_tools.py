@@ -116,7 +116,7 @@ class RatiosAndSummary(unittest.TestCase):
 
     def test_puts_the_o3_rows_of_a_scene_first(self):
         builds = [r["sundials_build"] for r in self.rows if r["scene"] == "toy"]
-        self.assertEqual(builds, ["6.4.1 -O3"] * 3 + ["Debian 6.4.1 -O0"] * 3)
+        self.assertEqual(builds, ["6.4.1 -O3"] * 3 + ["6.4.1 -O0"] * 3)
 
     def test_divides_the_best_ceode_by_the_best_sundials_and_the_best_peer_at_equal_error(self):
         r = self.row("toy", "6.4.1 -O3", "1e-09")
@@ -132,9 +132,9 @@ class RatiosAndSummary(unittest.TestCase):
 
     def test_picks_the_sundials_curve_that_is_fastest_at_each_level(self):
         # Debian's first-order CVODE curve beats ARKODE at 1e-6 and never reaches 1e-9.
-        self.assertEqual(self.row("toy", "Debian 6.4.1 -O0", "1e-06")["sundials_best"],
+        self.assertEqual(self.row("toy", "6.4.1 -O0", "1e-06")["sundials_best"],
                          "CVODE-BDF adaptive")
-        self.assertEqual(self.row("toy", "Debian 6.4.1 -O0", "1e-09")["sundials_best"],
+        self.assertEqual(self.row("toy", "6.4.1 -O0", "1e-09")["sundials_best"],
                          "ARKODE-ERK order4")
 
     def test_reports_a_level_one_side_never_reaches_without_a_ratio(self):
@@ -142,7 +142,7 @@ class RatiosAndSummary(unittest.TestCase):
         self.assertEqual(r["ceode_best"], "CEODE G4_A34")
         self.assertEqual(r["sundials_best"], "not reached")
         self.assertEqual(r["ratio_ceode_over_sundials"], "")
-        r = self.row("fe_toy", "Debian 6.4.1 -O0", "1e-04")
+        r = self.row("fe_toy", "6.4.1 -O0", "1e-04")
         self.assertAlmostEqual(float(r["ratio_ceode_over_sundials"]), 1.0 / 3, places=2)
         self.assertEqual(r["peer_best"], "")  # the scene has no peers
 
@@ -158,10 +158,10 @@ class RatiosAndSummary(unittest.TestCase):
         self.assertEqual(cells[:3], ["toy", "1e-09", "G4_A34"])
         self.assertEqual(cells[6], "**" + self.row("toy", "6.4.1 -O3", "1e-09")[
             "ratio_ceode_over_sundials"] + "**")
-        self.assertEqual(cells[10], self.row("toy", "Debian 6.4.1 -O0", "1e-09")[
+        self.assertEqual(cells[10], self.row("toy", "6.4.1 -O0", "1e-09")[
             "ratio_ceode_over_sundials"])
         self.assertAlmostEqual(float(cells[11]), 1 / 0.8, places=2)
-        self.assertIn("(Debian)", lines[3])  # the FE scene has only the Debian half
+        self.assertIn("(-O0)", lines[3])  # the FE scene has only the Debian half
 
 
 if __name__ == "__main__":
