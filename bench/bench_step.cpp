@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+#include "ceode_testing.h"          // CEodeSetFusedKernel, CEodeSetInPlaceUpdate
 
 namespace {
 

@@ -83,7 +83,8 @@ Outcome Run(SUNContext ctx, const Grid& g, const char* set, double h, int mode, 
   o.flag = CEodeEvolve(mem, steps * h, x, v, &t, CE_NORMAL);
   CEodeGetNumSteps(mem, &o.steps);
   CEodeGetMaxFrequencyEstimate(mem, &o.omega_est);
-  CEodeGetNumGuardRhsEvals(mem, &o.nfe_guard);
+  long int nme_guard = 0, nsetups_guard = 0;
+  CEodeGetGuardStats(mem, &o.nfe_guard, &nme_guard, &nsetups_guard);
   o.xmax = N_VMaxNorm(x);
   CEodeFree(&mem);
   N_VDestroy(x);

@@ -150,7 +150,8 @@ static RunOut run(SUNContext ctx, const Config* cf, const char* kind, double hin
   }
   if (is_ceode(kind)) {
     sunrealtype w = 0;
-    CEodeGetNumGuardRhsEvals(imem, &r.nguard);
+    long nme_guard = 0, nsetups_guard = 0;
+    CEodeGetGuardStats(imem, &r.nguard, &nme_guard, &nsetups_guard);
     CEodeGetMaxFrequencyEstimate(imem, &w);
     r.omega_est = w;
     CEodeFreeMRIStepInnerStepper(&inner);

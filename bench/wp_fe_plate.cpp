@@ -198,13 +198,15 @@ bool ApiFigures(SUNContext ctx, Scene* s, StepFigures* f) {
   sunrealtype hmax = 0, lim = 0;
   int deg = 0;
   sunrealtype par[8];
+  long int guard_me = 0, guard_setups = 0;
   const bool ok =
       !wp::Failed(CEodeInit(o.mem, Rhs2, 0, o.x, o.v), "CEodeInit") &&
       !wp::Failed(CEodeSetUserData(o.mem, s), "CEodeSetUserData") &&
       !wp::Failed(CEodeSetMethodByName(o.mem, "G3_CD"), "CEodeSetMethodByName") &&
       !wp::Failed(CEodeSetGuardMass(o.mem, m), "CEodeSetGuardMass") &&
       !wp::Failed(CEodeGetStableStep(o.mem, 1, &hmax), "CEodeGetStableStep") &&
-      !wp::Failed(CEodeGetNumGuardRhsEvals(o.mem, &f->guard_fe), "CEodeGetNumGuardRhsEvals") &&
+      !wp::Failed(CEodeGetGuardStats(o.mem, &f->guard_fe, &guard_me, &guard_setups),
+                  "CEodeGetGuardStats") &&
       !wp::Failed(CEodeGetFrequencyBound(o.mem, K, m, &f->gershgorin), "CEodeGetFrequencyBound") &&
       !wp::Failed(CEodeGetMethodParams("G3_CD", &deg, par, 8), "CEodeGetMethodParams") &&
       !wp::Failed(CEodeStabilityLimit(deg, par, 0, &lim), "CEodeStabilityLimit");

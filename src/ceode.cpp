@@ -65,6 +65,16 @@ bool IsFinite(N_Vector v) {
 
 namespace {
 
+// Every object whose size is the problem's: the modules' workspaces and the vectors.
+void FreeSized(CEodeMemRec* ce) {
+  NlsFree(ce);
+  PcFree(ce);
+  LsFree(ce);
+  ConstrFree(ce);
+  GuardFree(ce);
+  FreeVectors(ce);
+}
+
 int CheckInitialData(CEodeMemRec* ce, const char* func, N_Vector x0, N_Vector v0) {
   if (x0 == nullptr || v0 == nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -211,15 +221,7 @@ int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0,
   if (!std::isfinite(t0)) return ProcessError(ce, CE_ILL_INPUT, func, "t0 is not finite.");
   int flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->initialized) {
-    // A second Init replaces the problem: drop every size-dependent object.
-    NlsFree(ce);
-    PcFree(ce);
-    LsFree(ce);
-    ConstrFree(ce);
-    GuardFree(ce);
-    FreeVectors(ce);
-  }
+  if (ce->initialized) FreeSized(ce);  // a second Init replaces the problem
   flag = AllocVectors(ce, x0);
   if (flag != CE_SUCCESS) return ProcessError(ce, flag, func, "Out of memory.");
   ce->n = N_VGetLength(x0);
@@ -290,7 +292,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
   flag = ceode::Prepare(ce, __func__);
-  if (flag == CE_SUCCESS) flag = ceode::GuardCheckPending(ce, __func__);
+  if (flag == CE_SUCCESS && ce->guard.pending) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {
     // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
     *tret = ce->tcur;
@@ -352,12 +354,7 @@ void CEodeFree(void** mem) {
   if (mem == nullptr || *mem == nullptr) return;
   auto* ce = static_cast<CEodeMemRec*>(*mem);
   ceode::FirstOrderFree(ce);
-  ceode::NlsFree(ce);
-  ceode::PcFree(ce);
-  ceode::LsFree(ce);
-  ceode::ConstrFree(ce);
-  ceode::GuardFree(ce);
-  ceode::FreeVectors(ce);
+  ceode::FreeSized(ce);
   delete ce;
   *mem = nullptr;
 }

@@ -22,12 +22,13 @@
 #include <nvector/nvector_serial.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <cmath>
 #include <new>
 
 #include "ceode_saddle.hpp"
+#include "ceode_testing.h"
 
 namespace ceode {
 
@@ -335,7 +336,8 @@ int Residual(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, N_Vector a, N_Vec
 // is reused (for msbj steps, the same kappa, until the iteration contracts slowly), as CVODE
 // reuses its Jacobian: forming it costs n evaluations of f, G costs one call.
 bool JacUsable(const CEodeMemRec* ce, const ConWork* w, const SolveSpec& sp) {
-  return sp.reuse && w->nst_jac >= 0 && w->kappa_jac == sp.kappa && ce->nst - w->nst_jac < ce->ls.msbj;
+  return sp.reuse && w->nst_jac >= 0 && w->kappa_jac == sp.kappa &&
+         ce->nst - w->nst_jac < ce->ls.msbj;
 }
 
 // The Newton matrix at the current iterate: H = G(x_i), df/dv when f depends on v (evaluated
@@ -355,7 +357,8 @@ int LinSetup(CEodeMemRec* ce, ConWork* w, const SolveSpec& sp, bool fresh_jac) {
   }
   if (flag == CE_SUCCESS) flag = Setup(ce, w, sp.kappa, sp.vdep ? w->J : nullptr, w->Gh, sp.t);
   if (flag != CE_SUCCESS) return flag;
-  if (!sp.vdep && !w->sad.sc.active) ++ce->con.nje;  // the full saddle matrix, G in it, is refreshed
+  // The full saddle matrix, G in it, is refreshed.
+  if (!sp.vdep && !w->sad.sc.active) ++ce->con.nje;
   w->factored = true;
   w->kappa_fact = sp.kappa;
   w->mu_fact = sp.mu;
@@ -619,7 +622,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   return CE_SUCCESS;
 }
 
-// The signature of every acceleration solve (CEodeMemRec::solve_accel); the errors name kFunc.
+// The signature of every acceleration solve (the step module's SolveFn); the errors name kFunc.
 int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                     const char* /*func*/) {
   ConWork* w = Work(ce);

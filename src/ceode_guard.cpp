@@ -677,7 +677,7 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (!refuse) return CE_SUCCESS;
   // The next CEodeEvolve restarts here and checks again, so a refused run cannot
   // be resumed by simply calling CEodeEvolve once more.
-  ce->started = false;
+  Restart(ce);
   return CE_UNSTABLE;
 }
 

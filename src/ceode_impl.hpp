@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,7 @@ namespace ceode {
 constexpr int kMaxDegree = 8;
 constexpr int kMinDegree = 3;
 
-// One named parameter set of docs/theory.md section 5 (table in ceode_step.cpp).
+// One named parameter set of docs/theory.md section 5 (table in ceode_method.cpp).
 struct MethodSet {
   const char* name;
   int degree;
@@ -64,50 +65,16 @@ void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w);
 // The same for every order 0..q at once (q < kMaxDegree): w[k] holds order k.
 void FornbergTable(int q, int m, const sunrealtype* x, sunrealtype (*w)[2 * kMaxDegree + 1]);
 
-// One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
-// for a quantity that accumulates). Zero coefficients are dropped when the plan
-// is built, so they cost no memory pass.
-struct Combo {
-  int m = 0;  // only the first m entries below are set
-  sunrealtype c[kMaxDegree + 2];
-  N_Vector X[kMaxDegree + 2];
-  N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
-  int level = 0;           // compensation slot of an accumulated quantity
-  N_Vector out = nullptr;
-
-  void Add(sunrealtype coef, N_Vector v) {
-    if (coef != 0) {
-      c[m] = coef;
-      X[m++] = v;
-    }
-  }
+struct UpdatePlan;  // ceode_kernels.hpp
+struct StepMem;     // ceode_step.hpp: the step module's record
+struct StepMemFree {
+  void operator()(StepMem* sm) const;
 };
 
-// The update after the solve, in order: z, the lower derivatives, x(t + h).
-struct UpdatePlan {
-  int n = 0;
-  Combo combos[kMaxDegree];
-};
-
-// The same plan on raw arrays, for the one-pass kernel on serial vectors.
-struct FusedTerms {
-  int m;
-  int form;       // the arithmetic of the sum, fixed when the plan is built (ceode_fused.cpp)
-  bool in_place;  // out is also the accumulated term X[m - 1] (an in-place plan)
-  sunrealtype c[kMaxDegree + 3];
-  sunrealtype* X[kMaxDegree + 3];
-  sunrealtype* old;
-  sunrealtype* compnew;
-  sunrealtype* out;
-};
-struct FusedPlan {
-  int n = 0;
-  // 1 + the index of the plan's shape among those with a kernel of their own (ceode_fused.cpp,
-  // kShapes: every term count a compile-time constant), 0 for none.
-  int shape = 0;
-  bool compensated = false;  // the sums carry Kahan compensations (FusedTerms::old)
-  FusedTerms terms[kMaxDegree];
-};
+// The acceleration solve of a step, chosen once per start: explicit (docs/theory.md section
+// 4.1), the nonlinear solver (4.2), prediction-correction (4.3), either by the coupling (AUTO,
+// 4.3), or the constrained solve (section 8).
+enum class SolveKind { kExplicit, kNewton, kPC, kAuto, kConstrained };
 
 // What the factored matrix of the attached linear solver holds.
 enum class Holds { kNothing, kMass, kNewton };
@@ -171,6 +138,7 @@ struct LsMem {
   bool msbj_set = false;  // CEodeSetJacEvalFrequency called with msbj > 0 (see MatrixUsable)
   bool own_lu = false;    // the Newton matrix is factored with pivots below (LsUseOwnLu)
   std::vector<sunindextype> pivots;
+  sunrealtype** lu_cols = nullptr;  // the factored columns of A
   long int nsetups = 0;
   long int nsolves = 0;
   long int nje = 0;
@@ -178,7 +146,14 @@ struct LsMem {
   long int nme = 0;
 };
 
-// The nonlinear solve of the velocity-dependent step (ceode_nls.cpp).
+// The data of the nonlinear solve's work vectors for its serial backend (ceode_nls_direct.cpp).
+struct NlsRaw {
+  sunindextype n = 0;
+  sunrealtype *apred = nullptr, *atmp = nullptr, *vtmp = nullptr, *V0 = nullptr, *ftmp = nullptr,
+              *lstmp = nullptr, *ewt = nullptr, *ycor = nullptr, *delta = nullptr;
+};
+
+// The nonlinear solve of the velocity-dependent step (ceode_nls.cpp, ceode_nls_direct.cpp).
 struct NlsMem {
   SUNNonlinearSolver NLS = nullptr;
   bool own = false;
@@ -194,6 +169,7 @@ struct NlsMem {
   int cb_flag = 0;            // CE_* flag of a callback failure inside the NLS
   bool direct = false;        // the serial backend (ceode_nls_direct.cpp) runs the iteration
   bool jcur = false;          // its "matrix is current"
+  NlsRaw raw;                 // its arrays
   N_Vector delta = nullptr;   // its correction vector
   long int nni = 0;
   long int nnf = 0;
@@ -272,23 +248,9 @@ struct CEodeMemRec {
   std::string method_name = "G3_CD";
   bool zero_start = false;
   bool compensated = false;
-  bool fused = true;             // one-pass update kernel for serial vectors
-  bool in_place = true;          // CEodeSetInPlaceUpdate: in-place plans allowed
-  bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place
-  bool fused_ready = false;      // serial vectors: fused_plans valid, raw arrays of length n
-  bool fused_mpi = false;        // NVECTOR_PARALLEL: fused_plans valid on the local part
-  bool reduce_failed = false;    // the last update's global norm (an MPI reduction) failed
-  sunindextype fused_len = 0;    // entries the fused update runs over (local on NVECTOR_PARALLEL)
-  std::array<ceode::UpdatePlan, ceode::kNumPlans> plans;  // step update, by plan_ix
-  std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans;
-  // The same plans writing x(t + 2h) over x(t + h) (docs/theory.md, "In-place update"): the lean
-  // loop's steps before its last one, when xin_ready.
-  std::array<ceode::FusedPlan, ceode::kNumPlans> fused_plans_xin;
-  bool xin_ready = false;
-  // The configuration of the vectors: the history's phase (period 2) is plan_ix % 2 and the
-  // positions' (period 3) plan_ix % 3. A step advances both (+1); an in-place-position step
-  // only the history's (+3).
-  int plan_ix = 0;
+  // The step module's record (ceode_step.hpp): the update options, plans and kernels, and the
+  // step chosen at the start. Created with the first option or CEodeInit.
+  std::unique_ptr<ceode::StepMem, ceode::StepMemFree> step;
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep
   ceode::StepCoeffs co;
 
@@ -326,10 +288,6 @@ struct CEodeMemRec {
   bool tstop_set = false;
   long int mxstep = ceode::kDefaultMaxSteps;
 
-  // The acceleration solve of every step, chosen when the run starts (StartMethod):
-  // explicit, implicit (velocity dependent) or constrained.
-  int (*solve_accel)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
-                     const char* func) = nullptr;
   bool vel_dependent = false;  // the step solves for the acceleration (velocity dependence)
   N_Vector lstmp = nullptr;    // solution vector of linear solves
   sunrealtype xl1_start = 0;   // ||x||_1 at the last (re)start, reference for explosive growth
@@ -379,46 +337,62 @@ inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
-int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur
+// The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
+// plans from the current vectors with their kernel, and the many-step loop. At the end of every
+// start (restart: the vectors are in their first configuration) and after an update option
+// changes (the run goes on from the current vectors).
+void ChooseStep(CEodeMemRec* ce, bool restart);
+// ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
+void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
+int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
+            const char* func);  // f(t, x, v), counted, failures reported
+int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+              const char* func);  // a = M^{-1} f(t, x, v)
+// The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
+int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
+
+// ceode_step_plans.cpp: the step module's record and options
+bool AllocStepRecord(CEodeMemRec* ce);                             // false: out of memory
+int SetFusedKernel(CEodeMemRec* ce, bool on, const char* func);    // CEodeSetFusedKernel
+int SetInPlaceUpdate(CEodeMemRec* ce, bool on, const char* func);  // CEodeSetInPlaceUpdate
+bool FusedKernelOn(const CEodeMemRec* ce);
+// The step's vectors are all NVECTOR_SERIAL and its update runs on their raw arrays (the serial
+// backend of ceode_kernels.hpp), as set by the last ChooseStep.
+bool SerialBackend(const CEodeMemRec* ce);
+
+// ceode_method.cpp
+sunrealtype Factorial(int n);
 // w[i] = s^i / i!, i = 0 .. m-1, by the recurrence w[i] = w[i-1] * (s / i).
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w);
 // The predicted acceleration at t: the Taylor polynomial of the history from t - h.
 void PredictAccel(const CEodeMemRec* ce, N_Vector a);
 // V0 of v(a) = V0 + kappa a: the part of the velocity at t the history fixes.
 void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0);
-// The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
-int SolveExplicit(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
-                  const char* func);
-// Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
-// the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
-// (the symmetric stencil cancels the curve's own error). xs, vs, as: scratch vectors.
-int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
-                     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
-// Degrees >= kHighStartDegree: the same derivatives to the order of the high-degree sets
-// (src/ceode_start_high.cpp); StartDerivatives hands over to it.
-constexpr int kHighStartDegree = 6;
-int StartDerivativesHigh(
-    CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
-    const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
 // The step's update after the solve, for the history D, the new derivatives Dn (the acceleration
 // in Dn[2]), x(t + h) in xnext and x(t + 2h) into xnew: the integrator's plans and the
 // stability analysis's step map are built by this one routine.
 void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
                      N_Vector xnew, UpdatePlan* plan);
-// The step's update plans for the current vectors (plan (plan_ix + i) % kNumPlans is the
-// configuration i steps ahead), after every (re)start and every change of the update options.
-void BuildPlans(CEodeMemRec* ce);
-int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
-            const char* func);  // f(t, x, v), counted, failures reported
-int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
-              const char* func);  // a = M^{-1} f(t, x, v)
-void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
+
+// ceode_start.cpp
+int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur, then ChooseStep
+// Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
+// the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
+// (the symmetric stencil cancels the curve's own error); from kHighStartDegree on, Picard sweeps
+// of one wide stencil to the order of the high-degree sets. xs, vs, as: scratch vectors.
+constexpr int kHighStartDegree = 6;
+int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+                     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);
 int AllocVectors(CEodeMemRec* ce, N_Vector tmpl);
 // The work vectors of the linear, nonlinear and constraint solvers and the mass solve, cloned
 // when a (re)start first needs them (Prepare).
 bool NeedsSolverWork(const CEodeMemRec* ce);
 int AllocSolverWork(CEodeMemRec* ce, const char* func);
 void FreeVectors(CEodeMemRec* ce);
+
+// ceode_dense.cpp
+void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
 
 // ceode_ls.cpp
 int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func);
@@ -463,6 +437,7 @@ int NlsConvTest(CEodeMemRec* ce, int m, sunrealtype delnrm, sunrealtype tol);
 // n small), chosen by NlsInitialize: offset, predictor and weights; one Newton solve from a zero
 // correction; the corrected acceleration.
 bool DirectNewtonApplies(const CEodeMemRec* ce);
+void DirectArrays(CEodeMemRec* ce);  // the arrays, once the work vectors exist
 void DirectPrepare(CEodeMemRec* ce);
 int DirectSolve(CEodeMemRec* ce, bool setup);
 void DirectAccel(CEodeMemRec* ce, N_Vector a);

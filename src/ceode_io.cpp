@@ -4,9 +4,9 @@
 #include <cstring>
 
 #include "ceode_impl.hpp"
+#include "ceode_testing.h"
 
 using ceode::Access;
-using ceode::BuildPlans;
 using ceode::ProcessError;
 using ceode::Restart;
 
@@ -119,18 +119,14 @@ int CEodeSetFusedKernel(void* mem, sunbooleantype on) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->fused = on != SUNFALSE;
-  if (ce->started) BuildPlans(ce);  // in-place plans run on the fused kernel only
-  return CE_SUCCESS;
+  return ceode::SetFusedKernel(ce, on != SUNFALSE, __func__);
 }
 
 int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  ce->in_place = on != SUNFALSE;
-  if (ce->started) BuildPlans(ce);  // from the current vectors: the run goes on unchanged
-  return CE_SUCCESS;
+  return ceode::SetInPlaceUpdate(ce, on != SUNFALSE, __func__);
 }
 
 int CEodeSetFixedStep(void* mem, sunrealtype h) {
@@ -147,15 +143,36 @@ int CEodeSetFixedStep(void* mem, sunrealtype h) {
   return CE_SUCCESS;
 }
 
+int CEodeSetVelocityMode(void* mem, CEodeVelocityMode mode) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  const int m = static_cast<int>(mode);
+  if (m != CE_VELOCITY_INDEPENDENT && m != CE_VELOCITY_DEPENDENT && m != CE_VELOCITY_DETECT) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "mode = %d: use CE_VELOCITY_INDEPENDENT, CE_VELOCITY_DEPENDENT or "
+                        "CE_VELOCITY_DETECT.",
+                        m);
+  }
+  // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp).
+  ceode::PcSetVelocityRequest(ce, m);
+  ce->vel_dependent = m == CE_VELOCITY_DEPENDENT;
+  Restart(ce);
+  return CE_SUCCESS;
+}
+
 int CEodeSetVelocityDependence(void* mem, sunbooleantype depends) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  // CE_VELOCITY_DETECT: the start decides (ceode_pc.cpp); any other nonzero value declares it.
-  ceode::PcSetVelocityRequest(ce, depends);
-  ce->vel_dependent = depends != SUNFALSE && depends != CE_VELOCITY_DETECT;
-  Restart(ce);
-  return CE_SUCCESS;
+  if (depends != SUNTRUE && depends != SUNFALSE) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "depends = %d: this setter takes SUNTRUE or SUNFALSE; detection of the "
+                        "dependence is CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT).",
+                        static_cast<int>(depends));
+  }
+  return CEodeSetVelocityMode(mem,
+                              depends == SUNTRUE ? CE_VELOCITY_DEPENDENT : CE_VELOCITY_INDEPENDENT);
 }
 
 int CEodeSetUserData(void* mem, void* user_data) {
@@ -243,9 +260,6 @@ int CEodeGetNumRhsEvals(void* mem, long int* n) {
 int CEodeGetNumStartRhsEvals(void* mem, long int* n) {
   return GetCounter<long int>(mem, __func__, n, &CEodeMemRec::nfe_start);
 }
-int CEodeGetNumGuardRhsEvals(void* mem, long int* n) {
-  return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.guard.nfe; });
-}
 int CEodeGetNumNonlinSolvIters(void* mem, long int* n) {
   return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return Nni(ce); });
 }
@@ -274,7 +288,8 @@ int CEodeGetNumConstrJacEvals(void* mem, long int* n) {
   return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.con.nge; });
 }
 int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
-  return GetValue<sunrealtype>(mem, __func__, omega_max, [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
+  return GetValue<sunrealtype>(mem, __func__, omega_max,
+                               [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
 }
 
 int CEodeGetLastErrorMessage(void* mem, const char** msg) {

@@ -13,7 +13,7 @@ namespace ceode {
 
 namespace {
 
-// Ordered as the method table (ceode_step.cpp).
+// Ordered as the method table (ceode_method.cpp).
 constexpr LongRunBehaviour kLongRun[] = {
     {"G3_CD", kLongRunBounded, 0, 0, 2.0},
     {"G3_A43", kLongRunLinearDrift, 8.63e-8, 3, 1.549193338},

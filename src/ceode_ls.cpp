@@ -252,6 +252,7 @@ int FactorOwnLu(CEodeMemRec* ce) {
   LsMem& ls = ce->ls;
   const sunindextype n = SUNDenseMatrix_Columns(ls.A);
   if (static_cast<sunindextype>(ls.pivots.size()) != n) ls.pivots.assign(n, 0);
+  ls.lu_cols = SUNDenseMatrix_Cols(ls.A);
   return static_cast<int>(SUNDlsMat_denseGETRF(SUNDenseMatrix_Cols(ls.A), n, n, ls.pivots.data()));
 }
 
@@ -307,7 +308,7 @@ bool LsUseOwnLu(CEodeMemRec* ce, bool use) {
 // Newton iteration, which at n of a few costs more than the solve.
 void LsSolveOwnLu(CEodeMemRec* ce, sunrealtype* x) {
   LsMem& ls = ce->ls;
-  sunrealtype** cols = SUNDenseMatrix_Cols(ls.A);
+  sunrealtype* const* cols = ls.lu_cols;
   const auto n = static_cast<sunindextype>(ls.pivots.size());
   for (sunindextype k = 0; k < n; ++k) std::swap(x[k], x[ls.pivots[k]]);
   for (sunindextype k = 0; k + 1 < n; ++k) {

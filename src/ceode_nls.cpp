@@ -170,6 +170,7 @@ int NlsInitialize(CEodeMemRec* ce, const char* func) {
   if (rv == 0) rv = SUNNonlinSolInitialize(ce->nls.NLS);
   // The serial backend, when it applies, from here to the next restart.
   ce->nls.direct = DirectNewtonApplies(ce);
+  if (ce->nls.direct) DirectArrays(ce);
   LsUseOwnLu(ce, ce->nls.direct);
   if (rv != 0) {
     return ProcessError(ce, CE_NLS_INIT_FAIL, func,

@@ -4,13 +4,13 @@
 // residual, setup and test, on raw arrays in N_Vector serial's order of operations. The
 // numbers are those of the generic path (test_implicit compares them bit for bit); at n of a
 // few the generic path's vector dispatch costs more than f (docs/performance.md).
-#include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "ceode_impl.hpp"
+#include "ceode_kernels.hpp"
 
 namespace ceode {
 
@@ -18,47 +18,9 @@ namespace {
 
 constexpr sunindextype kDirectNewtonMaxN = 64;
 
-// The raw arrays of the iteration, looked up once per step. The backend runs on serial vectors
-// only, so the data pointers are read from the vectors' content (NV_DATA_S) rather than through
-// the vector operations' dispatch (a sixth of a Newton step at n of a few).
-struct Raw {
-  sunindextype n;
-  sunrealtype *apred, *atmp, *vtmp, *V0, *ftmp, *lstmp, *ewt, *ycor, *delta;
-};
-
-Raw RawArrays(const CEodeMemRec* ce) {
-  return Raw{ce->n,
-             NV_DATA_S(ce->apred),
-             NV_DATA_S(ce->atmp),
-             NV_DATA_S(ce->vtmp),
-             NV_DATA_S(ce->V0),
-             NV_DATA_S(ce->ftmp),
-             NV_DATA_S(ce->lstmp),
-             NV_DATA_S(ce->ewt),
-             NV_DATA_S(ce->ycor),
-             NV_DATA_S(ce->nls.delta)};
-}
-
-// z = sum_j c_j X_j (j < m) on raw arrays, with N_VLinearCombination_Serial's values: its
-// m = 1 and m = 2 cases are N_VScale and N_VLinearSum, whose a = b and a = -b branches factor.
-void RawCombination(sunindextype n, int m, const sunrealtype* c, N_Vector* X, sunrealtype* z) {
-  const sunrealtype* x0 = NV_DATA_S(X[0]);
-  const sunrealtype* x1 = m >= 2 ? NV_DATA_S(X[1]) : nullptr;
-  if (m == 2 && (c[0] == c[1] || c[0] == -c[1])) {
-    const sunrealtype sgn = c[0] == c[1] ? 1 : -1;
-    for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * (x0[i] + (sgn * x1[i]));
-    return;
-  }
-  for (sunindextype i = 0; i < n; ++i) z[i] = c[0] * x0[i];
-  for (int j = 1; j < m; ++j) {
-    const sunrealtype* xj = NV_DATA_S(X[j]);
-    for (sunindextype i = 0; i < n; ++i) z[i] += c[j] * xj[i];
-  }
-}
-
 // ewt = 1 / (reltol |apred| + atol), atol from max |apred| (ErrorWeights' N_VMaxNorm, N_VAbs,
 // N_VScale, N_VAddConst, N_VInv, in their order).
-void Weights(const CEodeMemRec* ce, const Raw& r) {
+void Weights(const CEodeMemRec* ce, const NlsRaw& r) {
   sunrealtype amax = 0;
   for (sunindextype i = 0; i < r.n; ++i) amax = std::max(amax, std::fabs(r.apred[i]));
   const sunrealtype atol =
@@ -69,7 +31,7 @@ void Weights(const CEodeMemRec* ce, const Raw& r) {
 }
 
 // F(ycor) = M a - f(t, x, V0 + kappa a), a = apred + ycor (the generic residual's operations).
-int Residual(CEodeMemRec* ce, const Raw& r) {
+int Residual(CEodeMemRec* ce, const NlsRaw& r) {
   const sunrealtype* y = r.ycor;
   const sunrealtype kappa = ce->co.kappa;
   for (sunindextype i = 0; i < r.n; ++i) {
@@ -86,11 +48,11 @@ int Residual(CEodeMemRec* ce, const Raw& r) {
 }
 
 // delta <- (M - kappa J)^{-1} (-delta), ycor += delta, then the test (one Newton iteration).
-int Iterate(CEodeMemRec* ce, const Raw& r, bool own_lu, int m) {
+int Iterate(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, int m) {
   sunrealtype* d = r.delta;
   for (sunindextype i = 0; i < r.n; ++i) d[i] = -d[i];
   if (own_lu) {
-    std::copy(d, d + r.n, r.lstmp);
+    for (sunindextype i = 0; i < r.n; ++i) r.lstmp[i] = d[i];
     LsSolveOwnLu(ce, r.lstmp);
   } else {
     const int rv = NlsLinearSolve(ce->nls.delta, ce);
@@ -107,7 +69,7 @@ int Iterate(CEodeMemRec* ce, const Raw& r, bool own_lu, int m) {
 }
 
 // One SUNNonlinSolSolve: the Newton loop and its one retry with a fresh matrix.
-int Newton(CEodeMemRec* ce, const Raw& r, bool own_lu, bool setup) {
+int Newton(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, bool setup) {
   bool jbad = false;
   bool& jcur = ce->nls.jcur;  // kept between solves, as SUNNonlinSol_Newton keeps its own
   for (;;) {
@@ -142,29 +104,44 @@ int Newton(CEodeMemRec* ce, const Raw& r, bool own_lu, bool setup) {
 }  // namespace
 
 bool DirectNewtonApplies(const CEodeMemRec* ce) {
-  return ce->nls.own && ce->fused && N_VGetVectorID(ce->ycor) == SUNDIALS_NVEC_SERIAL &&
+  return ce->nls.own && FusedKernelOn(ce) && N_VGetVectorID(ce->ycor) == SUNDIALS_NVEC_SERIAL &&
          ce->n <= kDirectNewtonMaxN && ce->ls.A != nullptr && ce->ls.LS != nullptr &&
          SUNLinSolGetType(ce->ls.LS) == SUNLINEARSOLVER_DIRECT &&
          SUNNonlinSolGetType(ce->nls.NLS) == SUNNONLINEARSOLVER_ROOTFIND;
 }
 
+void DirectArrays(CEodeMemRec* ce) {
+  // The solve's work vectors keep their buffers from one (re)start to the next, so their data
+  // pointers are looked up once, here.
+  ce->nls.raw = NlsRaw{ce->n,
+                       SerialData(ce->apred),
+                       SerialData(ce->atmp),
+                       SerialData(ce->vtmp),
+                       SerialData(ce->V0),
+                       SerialData(ce->ftmp),
+                       SerialData(ce->lstmp),
+                       SerialData(ce->ewt),
+                       SerialData(ce->ycor),
+                       SerialData(ce->nls.delta)};
+}
+
 void DirectPrepare(CEodeMemRec* ce) {
-  const Raw r = RawArrays(ce);
+  const NlsRaw& r = ce->nls.raw;
   const int d = ce->degree;
-  RawCombination(r.n, d - 1, ce->co.V0 + 1, ce->D + 1, r.V0);
-  RawCombination(r.n, d - 2, ce->co.pred, ce->D + 2, r.apred);
+  CombineSerial(r.n, d - 1, ce->co.V0 + 1, ce->D + 1, r.V0);
+  CombineSerial(r.n, d - 2, ce->co.pred, ce->D + 2, r.apred);
   Weights(ce, r);
 }
 
 int DirectSolve(CEodeMemRec* ce, bool setup) {
-  const Raw r = RawArrays(ce);
+  const NlsRaw& r = ce->nls.raw;
   std::fill(r.ycor, r.ycor + r.n, SUN_RCONST(0.0));
   return Newton(ce, r, ce->ls.own_lu, setup);
 }
 
 void DirectAccel(CEodeMemRec* ce, N_Vector a) {
-  const Raw r = RawArrays(ce);
-  sunrealtype* ad = NV_DATA_S(a);
+  const NlsRaw& r = ce->nls.raw;
+  sunrealtype* ad = SerialData(a);
   for (sunindextype i = 0; i < r.n; ++i) ad[i] = r.apred[i] + r.ycor[i];
 }
 

@@ -1,12 +1,12 @@
 // The velocity-dependent step without a nonlinear solve (docs/theory.md section 4.3):
 // prediction-correction P(EC)^k, the choice between it and the nonlinear solver
 // (CE_IMPLICIT_AUTO), and the start's check that f depends on x' at all.
-#include <nvector/nvector_serial.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "ceode_impl.hpp"
+#include "ceode_kernels.hpp"
 
 namespace ceode {
 
@@ -168,8 +168,8 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
                  "t0 = %.17g; kappa*|df/dv w| = %.2g) but CEodeSetVelocityDependence was not "
                  "called: the explicit step feeds f the previous step's velocity, which drops "
                  "every method to first order. Call CEodeSetVelocityDependence(mem, SUNTRUE), "
-                 "or CE_VELOCITY_DETECT to let CEODE switch the implicit step on; SUNFALSE "
-                 "keeps the explicit step and silences this check.",
+                 "or CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT) to let CEODE switch the "
+                 "implicit step on; SUNFALSE keeps the explicit step and silences this check.",
                  static_cast<double>(sig), static_cast<double>(df), static_cast<double>(ce->tcur),
                  static_cast<double>(ce->pc.coupling));
     return CE_SUCCESS;
@@ -199,42 +199,16 @@ int RefreshCoupling(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func
   return CE_SUCCESS;
 }
 
-// o = sum_j c_j x_j entry by entry, the terms in order; M a constant, so the sum unrolls.
-template <int M>
-void CombineEntries(const sunrealtype* c, const sunrealtype* const* x, sunindextype n,
-                    sunrealtype* o) {
-  for (sunindextype i = 0; i < n; ++i) {
-    sunrealtype s = c[0] * x[0][i];
-    for (int j = 1; j < M; ++j) s += c[j] * x[j][i];
-    o[i] = s;
-  }
-}
-
-// out = sum_j c_j X_j. On serial vectors one loop of the library's own code, with the
-// additions in N_VLinearCombination_Serial's order: at n of a few, a generic vector operation
-// (Debian's SUNDIALS is built -O0) costs more than the step's f (bench_implicit_step), and so
-// does a data-pointer call per vector (fused_ready: every vector is serial, NV_DATA_S is its data).
+// out = sum_j c_j X_j: on the serial backend one pass of the library's own kernel (with the
+// reference's values), since at n of a few a generic vector operation in an unoptimised SUNDIALS
+// build costs more than the step's f (bench_implicit_step).
 void VelocityCombination(const CEodeMemRec* ce, int m, const sunrealtype* c, N_Vector* X,
                          N_Vector out) {
-  if (!ce->fused_ready || m < 2 || m > kMaxDegree) {
+  if (!SerialBackend(ce)) {
     N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
     return;
   }
-  const sunrealtype* x[kMaxDegree] = {};
-  for (int j = 0; j < m; ++j) x[j] = NV_DATA_S(X[j]);
-  sunrealtype* o = NV_DATA_S(out);
-  using Fn = void (*)(const sunrealtype*, const sunrealtype* const*, sunindextype, sunrealtype*);
-  static constexpr Fn kByTerms[kMaxDegree + 1] = {nullptr,
-                                                  nullptr,
-                                                  &CombineEntries<2>,
-                                                  &CombineEntries<3>,
-                                                  &CombineEntries<4>,
-                                                  &CombineEntries<5>,
-                                                  &CombineEntries<6>,
-                                                  &CombineEntries<7>,
-                                                  &CombineEntries<8>};
-  static_assert(kMaxDegree == 8, "kByTerms lists every term count");
-  kByTerms[m](c, x, ce->n, o);
+  CombineSerial(ce->n, m, c, X, SerialData(out));
 }
 
 }  // namespace
@@ -270,14 +244,14 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   int flag = CheckVelocityDependence(ce, func);
   if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
   const int mode = ImplicitMode(ce);
-  ce->solve_accel = mode == CE_IMPLICIT_PC ? SolvePC : SolveImplicit;
+  SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
   if (ce->pc.dir == nullptr && (ce->pc.dir = N_VClone(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   flag = EstimateCoupling(ce, func);
   ce->pc.active = flag == CE_SUCCESS && ce->pc.coupling <= kPcContractionLimit;
-  ce->solve_accel = SolveAuto;
+  SetImplicitSolve(ce, SolveKind::kAuto);
   return flag;
 }
 

@@ -11,7 +11,7 @@
 #include <memory>
 #include <vector>
 
-#include "ceode_fused.hpp"
+#include "ceode_kernels.hpp"
 
 namespace ceode {
 

@@ -104,7 +104,9 @@ const char* MatrixKind(SUNMatrix A) {
 }
 
 // The size the linear solver's matrix must have now: the saddle-point system with constraints.
-sunindextype SolverSize(const CEodeMemRec* ce) { return ce->n + (HasConstraints(ce) ? ce->con.nc : 0); }
+sunindextype SolverSize(const CEodeMemRec* ce) {
+  return ce->n + (HasConstraints(ce) ? ce->con.nc : 0);
+}
 
 // SUNDIALS' dense and band solvers keep pivots of the length they were created with: a solver
 // made for a smaller matrix would write past them in its factorisation.
@@ -320,7 +322,7 @@ int ValidateConfiguration(CEodeMemRec* ce, const char* func) {
 int ValidateStart(CEodeMemRec* ce, const char* func) {
   for (int k = 1; k < ce->degree; ++k) {
     if (!IsFinite(ce->D[k])) {
-      ce->started = false;
+      Restart(ce);
       return ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
                           "The %s start produced a non-finite derivative D_%d (%s) at t0 = %.17g: "
                           "f (or the mass solve) returned NaN or Inf %s. The initial data are "
@@ -335,7 +337,7 @@ int ValidateStart(CEodeMemRec* ce, const char* func) {
     }
   }
   if (!IsFinite(ce->xnext)) {
-    ce->started = false;
+    Restart(ce);
     return ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
                         "The start produced a non-finite first position x(t0 + h) at t0 = %.17g: "
                         "the initial derivatives overflow over one step of h = %g; reduce h or "

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetSchurComplement
 #include "test_util.hpp"
 
 namespace {

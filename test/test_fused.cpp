@@ -1,6 +1,6 @@
 // The one-pass update kernel for serial vectors must give exactly the numbers
 // of the generic N_Vector path it replaces, with and without compensation: end to end through
-// the integrator, and kernel against reference (src/ceode_fused.hpp).
+// the integrator, and kernel against reference (src/ceode_kernels.hpp).
 #include <ceode/ceode.h>
 #include <gtest/gtest.h>
 #include <nvector/nvector_serial.h>
@@ -15,8 +15,9 @@
 #include <utility>
 #include <vector>
 
-#include "../src/ceode_fused.hpp"
+#include "../src/ceode_kernels.hpp"
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+#include "ceode_testing.h"          // CEodeSetFusedKernel, CEodeSetInPlaceUpdate
 
 namespace {
 
@@ -261,7 +262,7 @@ TEST(LeanExplicitLoop, LeavesTheStateOfTheStepByStepPathOnEveryEarlyExit) {
 }
 
 // One unknown: the entry-by-entry kernel, which also runs the high-degree start's Taylor samples
-// and stencil sums (src/ceode_start_high.cpp). The pendulum theta'' = -9.81 cos theta.
+// and stencil sums (src/ceode_start.cpp). The pendulum theta'' = -9.81 cos theta.
 int PendulumRhs(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector f, void* /*data*/) {
   N_VGetArrayPointer(f)[0] = -9.81 * std::cos(N_VGetArrayPointer(x)[0]);
   return 0;
@@ -453,6 +454,40 @@ TEST_P(FusedKernelAgainstReference, GivesBitwiseTheSameOutputsForEveryTermCount)
   EXPECT_EQ(differing, 0) << "of " << ref.size() << " entries";
   plan.combos[0].Add(0.5, plan.combos[0].out);  // reads its own output
   EXPECT_FALSE(ceode::BuildFusedPlan(plan, cs, &fp));
+}
+
+// The raw combination (CombineSerial) against Combine on the vectors, for every term count and
+// the N_VLinearSum shortcuts (a = b, a = -b, unit coefficients), and the output copy.
+TEST_P(FusedKernelAgainstReference, RawCombinationAndCopyGiveBitwiseTheReferenceNumbers) {
+  const sunindextype n = GetParam().n;
+  Fill();
+  const std::vector<std::vector<sunrealtype>> weights = {
+      {}, {0.7}, {0.3, 0.3}, {0.3, -0.3}, {1.0, -1.0}, {-1.0, 0.25}, {0.1, 0.2, -0.3}};
+  std::vector<std::vector<sunrealtype>> all = weights;
+  for (int m = 4; m <= 11; ++m) {
+    std::vector<sunrealtype> c;
+    for (int j = 0; j < m; ++j) c.push_back(0.37 * (j + 1) - 0.9 + 0.01 * m);
+    all.push_back(c);
+  }
+  for (const std::vector<sunrealtype>& c : all) {
+    const int m = static_cast<int>(c.size());
+    N_Vector X[11];
+    const sunrealtype* x[11];
+    for (int j = 0; j < m; ++j) {
+      X[j] = pool_[j % 8 + (j >= 8 ? 16 : 0)];
+      x[j] = N_VGetArrayPointer(X[j]);
+    }
+    ceode::Combine(m, c.data(), X, pool_[8]);
+    ceode::CombineSerial(n, m, c.data(), x, N_VGetArrayPointer(pool_[9]));
+    const sunrealtype* ref = N_VGetArrayPointer(pool_[8]);
+    const sunrealtype* raw = N_VGetArrayPointer(pool_[9]);
+    EXPECT_TRUE(std::equal(ref, ref + n, raw)) << m << " terms";
+    ceode::CombineSerial(n, m, c.data(), X, N_VGetArrayPointer(pool_[9]));
+    EXPECT_TRUE(std::equal(ref, ref + n, raw)) << m << " terms, from the vectors";
+  }
+  ceode::CopyVector(pool_[0], pool_[10]);
+  EXPECT_TRUE(std::equal(N_VGetArrayPointer(pool_[0]), N_VGetArrayPointer(pool_[0]) + n,
+                         N_VGetArrayPointer(pool_[10])));
 }
 
 std::vector<KernelCase> Cases() {

@@ -1,6 +1,6 @@
 // The high-degree sets (d = 6..8): order conditions (CEodeMethodOrder, src/ceode_order.cpp)
 // against the orders measured by log-log fits on the IFToMM pendulum and on a damped
-// driven pendulum, and the accuracy of the high-degree start (src/ceode_start_high.cpp).
+// driven pendulum, and the accuracy of the high-degree start (src/ceode_start.cpp).
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>

@@ -124,7 +124,8 @@ OrderRun RunProblemA(SUNContext ctx, int nslow, const char* method = "G4_A34",
   r.err = std::max({std::fabs(x[0] - q), std::fabs(x[1] - s), std::fabs(v[0] - p) / kOmega});
   CEodeGetNumSteps(ce.get(), &r.nst);
   CEodeGetNumInnerRestarts(ce.get(), &r.nrestarts);
-  CEodeGetNumGuardRhsEvals(ce.get(), &r.nfe_guard);
+  long int nme_guard = 0, nsetups_guard = 0;
+  CEodeGetGuardStats(ce.get(), &r.nfe_guard, &nme_guard, &nsetups_guard);
   CEodeGetNumStartRhsEvals(ce.get(), &r.nfe_start);
   return r;
 }

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,8 +37,10 @@ struct Config {
   sunrealtype tend = 10;
   int mode = CE_IMPLICIT_NEWTON;
   int corrections = 0;
-  int vel = SUNTRUE;  // CEodeSetVelocityDependence's argument; -1: never called
-  long int msbj = 0;  // 0: default
+  int vel = CE_VELOCITY_DEPENDENT;  // CEodeSetVelocityMode's argument; -1: no velocity setter
+  bool vel_boolean = false;         // vel through CEodeSetVelocityDependence (SUNTRUE/SUNFALSE)
+  long int msbj = 0;                // 0: default
+  std::function<bool(void*)> then;  // further calls after the setup; false abandons the run
 };
 
 struct Outcome {
@@ -77,7 +80,13 @@ Outcome Integrate(const ExactProblem& prob, const Config& c) {
       fail(CEodeSetImplicitMode(mem.get(), c.mode)) ||
       fail(CEodeSetPCCorrections(mem.get(), c.corrections)) ||
       (c.msbj > 0 && fail(CEodeSetJacEvalFrequency(mem.get(), c.msbj))) ||
-      (c.vel >= 0 && fail(CEodeSetVelocityDependence(mem.get(), c.vel)))) {
+      (c.vel >= 0 && !c.vel_boolean &&
+       fail(CEodeSetVelocityMode(mem.get(), static_cast<CEodeVelocityMode>(c.vel)))) ||
+      (c.vel >= 0 && c.vel_boolean && fail(CEodeSetVelocityDependence(mem.get(), c.vel)))) {
+    return r;
+  }
+  if (c.then && !c.then(mem.get())) {
+    r.flag = CE_ILL_INPUT;
     return r;
   }
   const long int nsteps = std::lround(c.tend / c.h);
@@ -547,7 +556,7 @@ TEST(DirectNewtonIteration, GivesSUNNonlinSolNewtonsNumbersBitForBit) {
 TEST(UndeclaredVelocityDependence, IsReportedOnceWithTheSetterToCall) {
   DampedForced prob;
   Config c;
-  c.vel = -1;  // CEodeSetVelocityDependence never called
+  c.vel = -1;  // no velocity setter called
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
   ASSERT_EQ(r.warnings.size(), 1u);
@@ -595,7 +604,7 @@ TEST(UndeclaredVelocityDependence, IsNotReportedForAVelocityIndependentForce) {
 TEST(UndeclaredVelocityDependence, IsNotProbedWhenTheUserDeclaredNone) {
   DampedForced prob;
   Config c;
-  c.vel = SUNFALSE;
+  c.vel = CE_VELOCITY_INDEPENDENT;
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
   EXPECT_TRUE(r.warnings.empty());
@@ -637,6 +646,86 @@ TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
   ASSERT_EQ(r.flag, CE_SUCCESS);
   EXPECT_EQ(r.npc + r.nnls, 0);
   EXPECT_TRUE(r.warnings.empty());
+}
+
+// The velocity mode: each value of CEodeVelocityMode gives the step it names, the boolean setter
+// is the same as its two modes, and a value outside the enum is refused without harm.
+TEST(VelocityMode, GivesEachModeTheStepItNames) {
+  DampedForced damped;  // f depends on x'
+  Harmonic harmonic;    // f does not
+  // vel through CEodeSetVelocityMode, or (boolean) through CEodeSetVelocityDependence
+  auto run = [](const ExactProblem& prob, int vel, bool boolean) {
+    Config c;
+    c.vel = vel;
+    c.vel_boolean = boolean;
+    return Integrate(prob, c);
+  };
+  const Outcome indep = run(damped, CE_VELOCITY_INDEPENDENT, false);
+  const Outcome dep = run(damped, CE_VELOCITY_DEPENDENT, false);
+  const Outcome detect = run(damped, CE_VELOCITY_DETECT, false);
+  const Outcome detect_harmonic = run(harmonic, CE_VELOCITY_DETECT, false);
+  const Outcome dep_boolean = run(damped, SUNTRUE, true);
+  const Outcome indep_boolean = run(damped, SUNFALSE, true);
+  for (const Outcome* r : {&indep, &dep, &detect, &detect_harmonic, &dep_boolean, &indep_boolean}) {
+    ASSERT_EQ(r->flag, CE_SUCCESS);
+    EXPECT_TRUE(r->warnings.empty());
+  }
+  // independent: the explicit step, no probe of f
+  EXPECT_EQ(indep.npc + indep.nnls, 0);
+  EXPECT_EQ(indep.nfe_coupling, 0);
+  // dependent: every step solved by the nonlinear solver (CE_IMPLICIT_NEWTON), no probe
+  EXPECT_EQ(dep.nnls, dep.nst);
+  EXPECT_EQ(dep.nfe_coupling, 0);
+  // detect: one probe, then the implicit step on the damped force (the same numbers as declared)
+  // and the explicit step on the harmonic one
+  EXPECT_EQ(detect.nfe_coupling, 1);
+  EXPECT_EQ(detect.nnls, detect.nst);
+  EXPECT_EQ(MaxDiff(detect.x, dep.x), 0);
+  EXPECT_EQ(detect_harmonic.npc + detect_harmonic.nnls, 0);
+  EXPECT_EQ(detect_harmonic.nfe_coupling, 1);
+  // CEodeSetVelocityDependence(SUNTRUE / SUNFALSE) is CE_VELOCITY_DEPENDENT / _INDEPENDENT
+  EXPECT_EQ(MaxDiff(dep_boolean.x, dep.x), 0);
+  EXPECT_EQ(MaxDiff(dep_boolean.v, dep.v), 0);
+  EXPECT_EQ(MaxDiff(indep_boolean.x, indep.x), 0);
+  EXPECT_EQ(MaxDiff(indep_boolean.v, indep.v), 0);
+  EXPECT_EQ(dep_boolean.nfe, dep.nfe);
+  EXPECT_EQ(indep_boolean.nfe, indep.nfe);
+}
+
+TEST(VelocityMode, RefusesAValueOutsideTheEnumAndKeepsTheMemoryUsable) {
+  DampedForced prob;
+  Config c;
+  c.vel = CE_VELOCITY_DEPENDENT;
+  const Outcome clean = Integrate(prob, c);
+  std::vector<std::string> refusals;
+  c.then = [&refusals](void* mem) {
+    const char* msg = nullptr;
+    // 3 is inside the range of values of the enum type, outside its enumerators
+    if (CEodeSetVelocityMode(mem, static_cast<CEodeVelocityMode>(3)) != CE_ILL_INPUT) return false;
+    CEodeGetLastErrorMessage(mem, &msg);
+    refusals.push_back(msg);
+    // the boolean setter takes SUNTRUE and SUNFALSE only; detection has its own setter
+    for (int b : {static_cast<int>(CE_VELOCITY_DETECT), -1, 7}) {
+      if (CEodeSetVelocityDependence(mem, b) != CE_ILL_INPUT) return false;
+      CEodeGetLastErrorMessage(mem, &msg);
+      refusals.push_back(msg);
+    }
+    return true;
+  };
+  const Outcome after = Integrate(prob, c);
+  ASSERT_EQ(after.flag, CE_SUCCESS);
+  ASSERT_EQ(refusals.size(), 4u);
+  EXPECT_TRUE(ceode_test::Contains(refusals[0], "CE_VELOCITY_DETECT"));
+  for (size_t i = 1; i < refusals.size(); ++i) {
+    EXPECT_TRUE(ceode_test::Contains(refusals[i], "CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT)"))
+        << refusals[i];
+  }
+  // the refusals changed nothing: still the declared dependence, the same numbers
+  EXPECT_EQ(after.nnls, after.nst);
+  EXPECT_EQ(after.nfe, clean.nfe);
+  EXPECT_EQ(MaxDiff(after.x, clean.x), 0);
+  EXPECT_EQ(MaxDiff(after.v, clean.v), 0);
+  EXPECT_EQ(CEodeSetVelocityMode(nullptr, CE_VELOCITY_DETECT), CE_MEM_NULL);
 }
 
 TEST(ImplicitModeSetters, RefuseUnknownValuesWithAClearMessage) {

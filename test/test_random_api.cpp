@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
@@ -145,7 +146,11 @@ class Sequence {
         SetMethod();
         return 0;
       case 5:
-        CEodeSetVelocityDependence(m, Int(0, 1) ? SUNTRUE : SUNFALSE);
+        if (Int(0, 1)) {
+          CEodeSetVelocityDependence(m, Int(-1, 2));  // -1 and 2 are refused
+        } else {  // 3: inside the enum type's range of values, outside its enumerators
+          CEodeSetVelocityMode(m, static_cast<CEodeVelocityMode>(Int(0, 3)));
+        }
         return 0;
       case 6:
         SetSolvers();

@@ -1,4 +1,4 @@
-// The consistent start for degrees >= 6 (src/ceode_start_high.cpp): the error of every start
+// The consistent start for degrees >= 6 (src/ceode_start.cpp): the error of every start
 // derivative D_3 .. D_7 of G8_O8, against its exact Taylor coefficients, must fall at least as
 // fast as h^(2R+3-k) (R = 4 at d = 8), faster than an order-8 set needs (docs/theory.md section
 // 6.3): on the damped driven pendulum (f reads the velocity: d - 3 = 5 sweeps) and on a driven

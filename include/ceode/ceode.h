@@ -5,7 +5,19 @@
  *   M(x,t) x'' + G(x)^T lambda = f(t, x, x'),   Phi(x, t) = 0
  *
  * The C API follows CVODE/ARKODE/IDA: opaque memory, Create/Init/Set/Get/
- * Evolve/Free, integer return flags. See docs/api.md for every function.
+ * Evolve/Free, integer return flags. This header is laid out as cvode.h is:
+ *
+ *   1. constants (version, itask, return flags, modes)
+ *   2. user-supplied function types
+ *   3. creation and initialisation
+ *   4. optional inputs (CEodeSet*)
+ *   5. solver functions (CEodeEvolve, dense output)
+ *   6. optional outputs (CEodeGet*)
+ *   7. utilities (method table, frequency bound, statistics, flag names, CEodeFree)
+ *
+ * docs/api.md documents every function in the same order. The stability
+ * analysis (ceode_stability.h) and ARKODE's inner stepper (ceode_stepper.h)
+ * have headers of their own.
  * ---------------------------------------------------------------------------*/
 #ifndef CEODE_CEODE_H_
 #define CEODE_CEODE_H_
@@ -21,6 +33,10 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* =============================================================================
+ * 1. Constants
+ * ===========================================================================*/
 
 #define CEODE_VERSION_MAJOR 0
 #define CEODE_VERSION_MINOR 1
@@ -60,7 +76,40 @@ extern "C" {
 #define CE_GUARD_WARN 1
 #define CE_GUARD_REFUSE 2
 
-/* Problem callbacks: return 0 on success, > 0 recoverable, < 0 unrecoverable. */
+/* How f's dependence on the velocity x' is handled (CEodeSetVelocityMode).
+ *   CE_VELOCITY_INDEPENDENT  explicit step: f receives the previous step's velocity.
+ *   CE_VELOCITY_DEPENDENT    implicit step: the acceleration is solved for as
+ *                            CEodeSetImplicitMode says.
+ *   CE_VELOCITY_DETECT       at every (re)start one directional difference of f in
+ *                            x' decides: the implicit step when f depends on x', the
+ *                            explicit one otherwise.
+ * When no velocity mode is set, the step is explicit and the first start checks
+ * once per right-hand side whether f depends on x'; if it does, CEODE warns
+ * (CE_WARNING) and keeps the explicit step. */
+typedef enum {
+  CE_VELOCITY_INDEPENDENT = 0,
+  CE_VELOCITY_DEPENDENT = 1,
+  CE_VELOCITY_DETECT = 2
+} CEodeVelocityMode;
+
+/* Implicit-step modes (CEodeSetImplicitMode): how a velocity-dependent step solves
+ * for the acceleration.
+ *   CE_IMPLICIT_NEWTON  the nonlinear solver (Newton with a linear solver attached,
+ *                       fixed point otherwise).
+ *   CE_IMPLICIT_PC      prediction-correction, a fixed number of corrections and no
+ *                       convergence test (CEodeSetPCCorrections).
+ *   CE_IMPLICIT_AUTO    (default) estimates kappa ||M^{-1} df/dv|| at every (re)start
+ *                       and every msbj steps and takes PC while it is small, the
+ *                       nonlinear solver otherwise (docs/api.md). */
+#define CE_IMPLICIT_NEWTON 0
+#define CE_IMPLICIT_PC 1
+#define CE_IMPLICIT_AUTO 2
+
+/* =============================================================================
+ * 2. User-supplied function types
+ *    Return 0 on success, > 0 recoverable, < 0 unrecoverable.
+ * ===========================================================================*/
+
 typedef int (*CEodeRhsFn)(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* user_data);
 typedef int (*CEodeMassFn)(sunrealtype t, N_Vector x, SUNMatrix M, void* user_data, N_Vector tmp1,
                            N_Vector tmp2, N_Vector tmp3);
@@ -70,67 +119,116 @@ typedef int (*CEodeConstrFn)(sunrealtype t, N_Vector x, N_Vector phi, void* user
 typedef int (*CEodeConstrJacFn)(sunrealtype t, N_Vector x, SUNMatrix G, void* user_data);
 typedef void (*CEodeErrHandlerFn)(int error_code, const char* module, const char* function,
                                   char* msg, void* eh_data);
+/* A first-order right-hand side F(t, y, ydot), unchanged from ARKODE/CVODE, with
+ * y = [x; v] and ydot = [v; a] (CEodeInitFirstOrder). */
+typedef int (*CEodeFirstOrderRhsFn)(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
 
-/* Creation, initialisation, integration, destruction (ceode.cpp) */
+/* =============================================================================
+ * 3. Creation and initialisation
+ * ===========================================================================*/
+
 SUNDIALS_EXPORT void* CEodeCreate(SUNContext sunctx);
 SUNDIALS_EXPORT int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0);
 SUNDIALS_EXPORT int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0);
-SUNDIALS_EXPORT int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout,
-                                sunrealtype* tret, int itask);
-SUNDIALS_EXPORT int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky);
-SUNDIALS_EXPORT void CEodeFree(void** mem);
 
-/* Method selection (ceode_io.cpp). params holds degree-1 values: alpha, beta, gamma, zeta, ... */
+/* First-order adapter: y an NVECTOR_MANYVECTOR of two equal parts [x; v] or a serial
+ * vector of length 2n. CEODE integrates x'' = a; F's first half must be v (checked
+ * at the first CEodeEvolveFirstOrder after an init). */
+SUNDIALS_EXPORT int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0,
+                                        N_Vector y0);
+SUNDIALS_EXPORT int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0);
+
+/* =============================================================================
+ * 4. Optional inputs
+ * ===========================================================================*/
+
+/* Method. params holds degree-1 values: alpha, beta, gamma, zeta, ... */
 SUNDIALS_EXPORT int CEodeSetMethod(void* mem, int degree, const sunrealtype* params);
 SUNDIALS_EXPORT int CEodeSetMethodByName(void* mem, const char* name);
-SUNDIALS_EXPORT int CEodeGetMethodParams(const char* name, int* degree, sunrealtype* params,
-                                         int max_params);
-SUNDIALS_EXPORT int CEodeGetNumMethods(void);
-SUNDIALS_EXPORT const char* CEodeGetMethodName(int index);
 SUNDIALS_EXPORT int CEodeSetZeroStart(void* mem, sunbooleantype zero_start);
 SUNDIALS_EXPORT int CEodeSetCompensatedSummation(void* mem, sunbooleantype on);
-SUNDIALS_EXPORT int CEodeSetFusedKernel(void* mem, sunbooleantype on);
-SUNDIALS_EXPORT int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on);
 
-/* Optional inputs (ceode_io.cpp) */
+/* Step, stop time, work limit, user data */
 SUNDIALS_EXPORT int CEodeSetFixedStep(void* mem, sunrealtype h);
-SUNDIALS_EXPORT int CEodeSetVelocityDependence(void* mem, sunbooleantype depends);
-SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
 SUNDIALS_EXPORT int CEodeSetStopTime(void* mem, sunrealtype tstop);
 SUNDIALS_EXPORT int CEodeClearStopTime(void* mem);
 SUNDIALS_EXPORT int CEodeSetMaxNumSteps(void* mem, long int mxsteps);
+SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
+
+/* Velocity dependence. CEodeSetVelocityDependence is the SUNDIALS-style boolean:
+ * SUNTRUE is CE_VELOCITY_DEPENDENT, SUNFALSE CE_VELOCITY_INDEPENDENT, any other
+ * value CE_ILL_INPUT (CE_VELOCITY_DETECT is set by CEodeSetVelocityMode). */
+SUNDIALS_EXPORT int CEodeSetVelocityMode(void* mem, CEodeVelocityMode mode);
+SUNDIALS_EXPORT int CEodeSetVelocityDependence(void* mem, sunbooleantype depends);
+
+/* Implicit step: the solve for the acceleration when f depends on x' */
+SUNDIALS_EXPORT int CEodeSetImplicitMode(void* mem, int mode);
+/* k = 1 or 2; 0 = the set's default: 2 for sets of order d and from degree 5 on, 1 otherwise */
+SUNDIALS_EXPORT int CEodeSetPCCorrections(void* mem, int k);
 SUNDIALS_EXPORT int CEodeSetMaxNonlinIters(void* mem, int maxcor);
 SUNDIALS_EXPORT int CEodeSetNonlinTolerances(void* mem, sunrealtype reltol, sunrealtype abstol);
 SUNDIALS_EXPORT int CEodeSetJacEvalFrequency(void* mem, long int msbj);
-SUNDIALS_EXPORT int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data);
-SUNDIALS_EXPORT int CEodeSetErrFile(void* mem, FILE* errfp);
-SUNDIALS_EXPORT int CEodeSetStabilityGuard(void* mem, int mode, long int every);
-SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
 
-/* Mass matrix, linear and nonlinear solvers (ceode_ls.cpp, ceode_nls.cpp) */
+/* Mass matrix, linear and nonlinear solvers, velocity Jacobian */
 SUNDIALS_EXPORT int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M,
                                    sunbooleantype constant);
 SUNDIALS_EXPORT int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A);
 SUNDIALS_EXPORT int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS);
 SUNDIALS_EXPORT int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac);
 
-/* Constraints (ceode_constraints.cpp) */
+/* Position constraints Phi(x, t) = 0 with Jacobian G (phi = G = NULL removes them) */
 SUNDIALS_EXPORT int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi,
                                         CEodeConstrJacFn G);
-SUNDIALS_EXPORT int CEodeGetMultipliers(void* mem, N_Vector lambda);
-/* SUNTRUE (default): saddle systems with n + nc <= 200 are solved by the Schur complement of
- * a block factored once and kept across steps (docs/theory.md section 8.3); SUNFALSE: the full
- * saddle-point matrix is assembled and factored by the linear solver at every setup. */
-SUNDIALS_EXPORT int CEodeSetSchurComplement(void* mem, sunbooleantype use);
 
-/* Optional outputs (ceode_io.cpp) */
+/* Stability guard. A check compares h * omega_max with the method's stability limit.
+ * omega_max is CEodeSetMaxFrequency's value when one is given, otherwise an estimate
+ * at the current state by Lanczos on M^{-1} df/dx (directional differences of f):
+ * the top Ritz value plus its residual norm, an upper bound of omega_max^2 for a
+ * symmetric stiffness (at most 0.1 % above it). When df/dx is not symmetric in that
+ * product (tested at every Lanczos step, at no extra evaluation) the guard continues
+ * by Arnoldi: omega_max^2 is then the largest |Ritz value| with a positive real part
+ * (the spectral radius of M^{-1} df/dx when converged), an estimate and not a bound;
+ * the warning names the estimator. The guard's f and mass evaluations and the
+ * factorisations of its own copy of M are counted apart from the integration's
+ * (CEodeGetGuardStats) and reset by CEodeReInit. */
+SUNDIALS_EXPORT int CEodeSetStabilityGuard(void* mem, int mode, long int every);
+SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
+/* When f returns accelerations M^{-1} force with a lumped (diagonal) M and no mass matrix
+ * is attached, M^{-1} K is symmetric only in the M inner product: give the lumped masses
+ * here (after CEodeInit; NULL clears) and the guard's Lanczos works in that product, so its
+ * estimate is again an upper bound within 0.1 %. Ignored when CEodeSetMassFn is used. */
+SUNDIALS_EXPORT int CEodeSetGuardMass(void* mem, N_Vector mass);
+
+/* Error reporting */
+SUNDIALS_EXPORT int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data);
+SUNDIALS_EXPORT int CEodeSetErrFile(void* mem, FILE* errfp);
+
+/* =============================================================================
+ * 5. Solver functions
+ * ===========================================================================*/
+
+SUNDIALS_EXPORT int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout,
+                                sunrealtype* tret, int itask);
+/* As CEodeEvolve, writing [x; v] into yout (the shape of CEodeInitFirstOrder's y0) */
+SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout,
+                                          sunrealtype* tret, int itask);
+/* Dense output: the k-th derivative of the current step's polynomial at t */
+SUNDIALS_EXPORT int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky);
+
+/* =============================================================================
+ * 6. Optional outputs
+ * ===========================================================================*/
+
+/* Solution */
 SUNDIALS_EXPORT int CEodeGetAccel(void* mem, N_Vector a);
+SUNDIALS_EXPORT int CEodeGetMultipliers(void* mem, N_Vector lambda);
 SUNDIALS_EXPORT int CEodeGetCurrentTime(void* mem, sunrealtype* tcur);
 SUNDIALS_EXPORT int CEodeGetCurrentStep(void* mem, sunrealtype* hcur);
+
+/* Counters (reset by CEodeInit and CEodeReInit) */
 SUNDIALS_EXPORT int CEodeGetNumSteps(void* mem, long int* nsteps);
 SUNDIALS_EXPORT int CEodeGetNumRhsEvals(void* mem, long int* nfevals);
 SUNDIALS_EXPORT int CEodeGetNumStartRhsEvals(void* mem, long int* nfevals);
-SUNDIALS_EXPORT int CEodeGetNumGuardRhsEvals(void* mem, long int* nfevals);
 SUNDIALS_EXPORT int CEodeGetNumNonlinSolvIters(void* mem, long int* nniters);
 SUNDIALS_EXPORT int CEodeGetNumNonlinSolvConvFails(void* mem, long int* nnfails);
 SUNDIALS_EXPORT int CEodeGetNumLinSolvSetups(void* mem, long int* nlinsetups);
@@ -140,83 +238,43 @@ SUNDIALS_EXPORT int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* nfevalsLS);
 SUNDIALS_EXPORT int CEodeGetNumMassEvals(void* mem, long int* nmevals);
 SUNDIALS_EXPORT int CEodeGetNumConstrEvals(void* mem, long int* ncevals);
 SUNDIALS_EXPORT int CEodeGetNumConstrJacEvals(void* mem, long int* ngevals);
-SUNDIALS_EXPORT int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max);
-SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
-SUNDIALS_EXPORT int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt);
-SUNDIALS_EXPORT char* CEodeGetReturnFlagName(long int flag);
-
-/* -----------------------------------------------------------------------------
- * First-order adapter (ceode_first_order.cpp): an unchanged ARKODE/CVODE
- * right-hand side F(t, y, ydot) with y = [x; v], ydot = [v; a], y an
- * NVECTOR_MANYVECTOR of two equal parts or a serial vector of length 2n. CEODE
- * integrates x'' = a; F's first half must be v (checked once at the start).
- * ---------------------------------------------------------------------------*/
-typedef int (*CEodeFirstOrderRhsFn)(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
-SUNDIALS_EXPORT int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0,
-                                        N_Vector y0);
-SUNDIALS_EXPORT int CEodeReInitFirstOrder(void* mem, sunrealtype t0, N_Vector y0);
-SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector yout,
-                                          sunrealtype* tret, int itask);
-/* ------------------------------------------------- end of the first-order adapter */
-
-/* ---- Stability guard: stable step and the guard's own counters (ceode_guard.cpp) ----
- * The guard estimates omega_max at the current state by Lanczos on M^{-1} df/dx
- * (directional differences of f) as theta + r: the top Ritz value plus its
- * residual norm, an upper bound of omega_max^2 for a symmetric stiffness (at
- * most 0.1 % above it), or CEodeSetMaxFrequency's value when one is given.
- * When df/dx is not symmetric in that product (tested at every Lanczos step, at no
- * extra evaluation) the guard continues by Arnoldi: omega_max^2 is then the largest
- * |Ritz value| with a positive real part (the spectral radius of M^{-1} df/dx when
- * converged), an estimate and not a bound; the warning names the estimator.
- * CEodeGetStableStep returns hmax = safety * Omega_max / omega_max for the chosen
- * set; safety in (0, 1], 0 selects the default 0.99 (the guard's own recommended
- * step uses 0.99 too). hmax = 0 for a set unstable for every step, SUN_BIG_REAL
- * when f does not depend on x. The guard's f and mass evaluations and the
- * factorisations of its own copy of M are counted apart from the integration's
- * (CEodeGetGuardStats; nfevals is CEodeGetNumGuardRhsEvals) and reset by CEodeReInit. */
-SUNDIALS_EXPORT int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax);
-/* When f returns accelerations M^{-1} force with a lumped (diagonal) M and no mass matrix
- * is attached, M^{-1} K is symmetric only in the M inner product: give the lumped masses
- * here (after CEodeInit; NULL clears) and the guard's Lanczos works in that product, so its
- * estimate is again an upper bound within 0.1 %. Ignored when CEodeSetMassFn is used. */
-SUNDIALS_EXPORT int CEodeSetGuardMass(void* mem, N_Vector mass);
-SUNDIALS_EXPORT int CEodeGetGuardStats(void* mem, long int* nfevals, long int* nmevals,
-                                       long int* nlinsetups);
-/* ---- end of the stability guard block ---- */
-
-/* ---- Implicit-step modes and velocity-dependence detection (ceode_pc.cpp) ----
- * CEodeSetImplicitMode chooses how a velocity-dependent step solves for the
- * acceleration: CE_IMPLICIT_NEWTON hands it to the nonlinear solver (Newton with
- * a linear solver attached, fixed point otherwise); CE_IMPLICIT_PC predicts and
- * corrects a fixed number of times, no convergence test (CEodeSetPCCorrections:
- * k = 1 or 2, 0 = the set's default: 2 for sets of order d and from degree 5
- * on, 1 otherwise); CE_IMPLICIT_AUTO (default)
- * estimates kappa ||M^{-1} df/dv|| at every (re)start and every msbj steps and
- * takes PC when it is at most 0.05, the nonlinear solver above (docs/api.md).
- * CE_VELOCITY_DETECT (CEodeSetVelocityDependence) switches the implicit step on
- * when one directional difference at the start shows that f depends on x'; if the
- * setter was never called and f depends on x', CEODE warns (CE_WARNING). */
-#define CE_IMPLICIT_NEWTON 0
-#define CE_IMPLICIT_PC 1
-#define CE_IMPLICIT_AUTO 2
-#define CE_VELOCITY_DETECT 2
-SUNDIALS_EXPORT int CEodeSetImplicitMode(void* mem, int mode);
-SUNDIALS_EXPORT int CEodeSetPCCorrections(void* mem, int k);
 SUNDIALS_EXPORT int CEodeGetImplicitStats(void* mem, long int* npcsteps, long int* nnlssteps,
                                           long int* nfecoupling, sunrealtype* coupling);
-/* ---- end of the implicit-step block ---- */
 
-/* ---- Guaranteed frequency bound (ceode_bound.cpp) ----
- * omega_bound >= omega_max of M x'' = -K x with a lumped (diagonal) M: Gershgorin's
- * theorem on M^{-1} K and on M^{-1/2} K M^{-1/2} (the smaller of the two row-sum
- * bounds), from the assembled stiffness K (dense, band, or sparse CSR/CSC) and the
- * lumped masses (NULL: M = I). Never below omega_max, whatever K is; one pass over
- * K's entries. Give it to CEodeSetMaxFrequency for a stable step that needs no
- * f evaluations and is guaranteed: CEodeGetStableStep then returns
+/* Stability guard: its own counters, the omega_max of its last check, and the stable
+ * step hmax = safety * Omega_max / omega_max for the chosen set; safety in (0, 1], 0
+ * selects the default 0.99 (the guard's own recommended step uses 0.99 too). hmax = 0
+ * for a set unstable for every step, SUN_BIG_REAL when f does not depend on x. */
+SUNDIALS_EXPORT int CEodeGetGuardStats(void* mem, long int* nfevals, long int* nmevals,
+                                       long int* nlinsetups);
+SUNDIALS_EXPORT int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max);
+SUNDIALS_EXPORT int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax);
+
+SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
+
+/* =============================================================================
+ * 7. Utilities
+ * ===========================================================================*/
+
+/* The named parameter sets; no memory needed */
+SUNDIALS_EXPORT int CEodeGetMethodParams(const char* name, int* degree, sunrealtype* params,
+                                         int max_params);
+SUNDIALS_EXPORT int CEodeGetNumMethods(void);
+SUNDIALS_EXPORT const char* CEodeGetMethodName(int index);
+
+/* Guaranteed frequency bound: omega_bound >= omega_max of M x'' = -K x with a lumped
+ * (diagonal) M, by Gershgorin's theorem on M^{-1} K and on M^{-1/2} K M^{-1/2} (the
+ * smaller of the two row-sum bounds), from the assembled stiffness K (dense, band, or
+ * sparse CSR/CSC) and the lumped masses (NULL: M = I). Never below omega_max, whatever
+ * K is; one pass over K's entries. Given to CEodeSetMaxFrequency it makes a stable step
+ * that needs no f evaluations and is guaranteed: CEodeGetStableStep then returns
  * safety * Omega_max / omega_bound. Only an error path needs mem (CEodeCreate). */
 SUNDIALS_EXPORT int CEodeGetFrequencyBound(void* mem, SUNMatrix K, N_Vector mass,
                                            sunrealtype* omega_bound);
-/* ---- end of the frequency bound block ---- */
+
+SUNDIALS_EXPORT int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt);
+SUNDIALS_EXPORT char* CEodeGetReturnFlagName(long int flag);
+SUNDIALS_EXPORT void CEodeFree(void** mem);
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
+
 namespace mpi_gtest {
 
 struct Case {

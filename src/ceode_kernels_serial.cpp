@@ -1,65 +1,25 @@
-// The step's update kernel: the reference on generic N_Vectors and the fused serial backend
-// (the whole update in one sweep through memory with the growth check's norm folded in: for the
-// named sets' shapes two entries at a time through every sum, otherwise block by block;
-// docs/results.md, "Per-step cost"). Both perform the same floating-point operations in
-// the same order, so the state they produce is bit for bit the same.
-#include "ceode_fused.hpp"
-
+// The serial backend of the kernels (ceode_kernels.hpp) on raw arrays: the step's whole update
+// in one sweep through memory with the growth check's norm folded in (for the named sets' shapes
+// two entries at a time through every sum, otherwise block by block), the raw combinations and
+// the output copy. Each performs the reference's floating-point operations in the same order,
+// so the state it produces is bit for bit the same.
 #include <nvector/nvector_serial.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
+#include "ceode_kernels.hpp"
+
 namespace ceode {
 
-void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
-  if (m == 0) {
-    N_VConst(0, z);
-  } else if (m == 1) {
-    N_VScale(c[0], X[0], z);
-  } else if (m == 2) {
-    N_VLinearSum(c[0], X[0], c[1], X[1], z);
-  } else {
-    N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, z);
-  }
-}
-
 namespace {
-
-// The increment is summed first and the large accumulated term last, so that
-// quantity is rounded once per step; with compensated summation its rounding
-// error is carried forward in comp -> compnew (Kahan).
-void RunCombo(const Combo& cb, const Compensation& cs) {
-  if (cb.old == nullptr) {
-    Combine(cb.m, cb.c, const_cast<N_Vector*>(cb.X), cb.out);
-    return;
-  }
-  sunrealtype c[kMaxDegree + 3];
-  N_Vector X[kMaxDegree + 3];
-  std::copy(cb.c, cb.c + cb.m, c);
-  std::copy(cb.X, cb.X + cb.m, X);
-  int m = cb.m;
-  if (!cs.on) {
-    c[m] = 1;
-    X[m++] = cb.old;
-    Combine(m, c, X, cb.out);
-    return;
-  }
-  N_Vector y = cs.tmp;
-  c[m] = -1;
-  X[m++] = cs.comp[cb.level];
-  Combine(m, c, X, y);  // y = increment - comp
-  N_Vector comp_new = cs.compnew[cb.level];
-  N_VLinearSum(1, cb.old, 1, y, cb.out);
-  N_VLinearSum(1, cb.out, -1, cb.old, comp_new);
-  N_VLinearSum(1, comp_new, -1, y, comp_new);
-}
 
 // The arithmetic of one sum, decided when the plan is built so that the step only dispatches:
 // FusedTerms::form is kZero, a term count 1 .. kMaxTerms (sum term by term in order, as
@@ -485,7 +445,7 @@ sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
 template <int D, unsigned Ones>
 sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
   // A position written over its last value stays in cache until written back, as in a hand loop:
-  // streaming it (and the history beside it) measured slower at 10^6 entries (docs/results.md).
+  // streaming it (and the history beside it) measured slower at 10^6 entries (bench_step).
   const FusedTerms& last = fp.terms[StepSums(D) - 1];
   const bool stream =
       n >= kStreamSystem && !last.in_place && reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
@@ -510,14 +470,6 @@ constexpr std::array<SerialKernelFn, kNumShapes> kPairs =
 // Systems smaller than this take the entry-by-entry kernel.
 constexpr sunindextype kSmallSystem = 16;
 
-}  // namespace
-
-void UpdateReference(const UpdatePlan& plan, const Compensation& cs) {
-  for (int k = 0; k < plan.n; ++k) RunCombo(plan.combos[k], cs);
-}
-
-namespace {
-
 sunrealtype UpdateOne(const FusedPlan& fp, sunindextype /*n*/) {
   return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
 }
@@ -534,15 +486,11 @@ SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
 
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKernel(fp, n)(fp, n); }
 
+// Serial vectors (their array operation is N_VGetArrayPointer_Serial, so their content is
+// serial) without a call: every plan build takes a few hundred of these, and each call runs
+// through the vector's operation table (unoptimised in some SUNDIALS builds). Others through
+// the generic accessor.
 namespace {
-
-// A vector's data. Serial vectors (their array operation is N_VGetArrayPointer_Serial, so their
-// content is serial) without a call: every plan build takes a few hundred of these, and each
-// call runs through Debian's -O0 build. Others through the generic accessor.
-sunrealtype* DataOf(N_Vector v) {
-  if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
-  return N_VGetArrayPointer(v);
-}
 
 // 1 + the index in kShapes of the plan's shape (term counts), 0 for none.
 int ShapeOf(const FusedPlan& fp) {
@@ -569,20 +517,20 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     tk.m = cb.m;
     for (int j = 0; j < cb.m; ++j) {
       tk.c[j] = cb.c[j];
-      tk.X[j] = DataOf(cb.X[j]);
+      tk.X[j] = SerialData(cb.X[j]);
     }
     tk.old = nullptr;
     tk.compnew = nullptr;
     if (cb.old != nullptr && !cs.on) {
       tk.c[tk.m] = 1;
-      tk.X[tk.m++] = DataOf(cb.old);
+      tk.X[tk.m++] = SerialData(cb.old);
     } else if (cb.old != nullptr) {
       tk.c[tk.m] = -1;
-      tk.X[tk.m++] = DataOf(cs.comp[cb.level]);
-      tk.old = DataOf(cb.old);
-      tk.compnew = DataOf(cs.compnew[cb.level]);
+      tk.X[tk.m++] = SerialData(cs.comp[cb.level]);
+      tk.old = SerialData(cb.old);
+      tk.compnew = SerialData(cs.compnew[cb.level]);
     }
-    tk.out = DataOf(cb.out);
+    tk.out = SerialData(cb.out);
     tk.form = FormOf(tk.m, tk.c);
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
@@ -593,6 +541,52 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
   fp->compensated = cs.on;
   fp->shape = distinct ? ShapeOf(*fp) : 0;
   return distinct;
+}
+
+// The terms are copied into a FusedTerms only as far as the form reads them: at n of a few the
+// copy is most of the call.
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
+                   sunrealtype* out) {
+  FusedTerms tk;
+  for (int j = 0; j < m; ++j) {
+    tk.c[j] = c[j];
+    tk.X[j] = const_cast<sunrealtype*>(x[j]);
+  }
+  kBlock[FormOf(m, c)](tk, 0, n, out);
+}
+
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
+                   sunrealtype* out) {
+  const sunrealtype* x[kMaxTerms];
+  for (int j = 0; j < m; ++j) x[j] = SerialData(X[j]);
+  CombineSerial(n, m, c, x, out);
+}
+
+// Once both IDs say serial, the content is read directly (NV_DATA_S, NV_LENGTH_S): every getter
+// is two calls through SUNDIALS, and these copies run twice per CE_ONE_STEP call. N_VScale(1, ...)
+// elsewhere is a multiply loop with the same values.
+void CopyVector(N_Vector from, N_Vector to) {
+  if (N_VGetVectorID(from) == SUNDIALS_NVEC_SERIAL && N_VGetVectorID(to) == SUNDIALS_NVEC_SERIAL) {
+    const sunrealtype* src = NV_DATA_S(from);
+    sunrealtype* dst = NV_DATA_S(to);
+    if (src != nullptr && dst != nullptr) {
+      if (src != dst) std::memcpy(dst, src, sizeof(sunrealtype) * NV_LENGTH_S(from));
+      return;
+    }
+  }
+  N_VScale(1, from, to);
+}
+
+void PreparePlan(bool serial_allowed, KernelPlan* kp) {
+  kp->serial = serial_allowed && BuildFusedPlan(kp->plan, {}, &kp->fused);
+}
+
+void RunPlan(const KernelPlan& kp, sunindextype n) {
+  if (kp.serial) {
+    UpdateSerial(kp.fused, n);
+  } else {
+    UpdateReference(kp.plan, {});
+  }
 }
 
 }  // namespace ceode

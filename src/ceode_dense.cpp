@@ -1,0 +1,49 @@
+// Dense output: the interpolant of the step interval [tcur, tcur + h] from the history at tcur
+// and the position x(tcur + h) (docs/theory.md section 7).
+#include <cmath>
+
+#include "ceode_kernels.hpp"
+
+namespace ceode {
+
+namespace {
+
+// p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h). Apart from
+// Interpolate so that the copy at s = 0 (every CE_ONE_STEP output) does not set up its frame.
+__attribute__((noinline)) void InterpolatePolynomial(CEodeMemRec* ce, sunrealtype s, int k,
+                                                     N_Vector out) {
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  const sunrealtype e = Factorial(d) / Factorial(d - k) * std::pow(s, d - k) / std::pow(h, d);
+  sunrealtype ts[kMaxDegree + 1];
+  sunrealtype th[kMaxDegree + 1];
+  TaylorWeights(s, d, ts);
+  TaylorWeights(h, d, th);
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  int m = 0;
+  for (int i = 1; i < d; ++i) {
+    c[m] = (i >= k ? ts[i - k] : 0) - e * th[i];
+    X[m++] = ce->D[i];
+  }
+  N_VLinearSum(1, ce->xnext, -1, ce->xcur, ce->tmp3);
+  c[m] = e;
+  X[m++] = ce->tmp3;
+  if (k == 0) {
+    c[m] = 1;
+    X[m++] = ce->xcur;
+  }
+  Combine(m, c, X, out);
+}
+
+}  // namespace
+
+void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
+  if (s == 0 && k < ce->degree) {  // exactly the method's own values at tcur
+    CopyVector(k == 0 ? ce->xcur : ce->D[k], out);
+    return;
+  }
+  InterpolatePolynomial(ce, s, k, out);
+}
+
+}  // namespace ceode

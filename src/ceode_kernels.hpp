@@ -1,0 +1,123 @@
+// The vector kernels of the algorithms, private: linear combinations of whole vectors, the step's
+// update plan, the start's plans and the output copies. Two backends with the same operations in
+// the same order, so bit for bit equal results: the reference on N_Vector operations
+// (ceode_kernels_ref.cpp, every vector type) and the serial one on raw arrays
+// (ceode_kernels_serial.cpp: one sweep through memory, no dispatch per operation). test_fused
+// runs the serial backend against the reference. Algorithm files reach vector data only here.
+#ifndef CEODE_SRC_CEODE_KERNELS_HPP_
+#define CEODE_SRC_CEODE_KERNELS_HPP_
+
+#include <nvector/nvector_serial.h>
+
+#include "ceode_impl.hpp"
+
+namespace ceode {
+
+// One linear combination of the step's update: out = sum_i c[i] X[i] (+ old,
+// for a quantity that accumulates). Zero coefficients are dropped when the plan
+// is built, so they cost no memory pass.
+struct Combo {
+  int m = 0;  // only the first m entries below are set
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
+  int level = 0;           // compensation slot of an accumulated quantity
+  N_Vector out = nullptr;
+
+  void Add(sunrealtype coef, N_Vector v) {
+    if (coef != 0) {
+      c[m] = coef;
+      X[m++] = v;
+    }
+  }
+};
+
+// Combinations run in order (the step's update: z, the lower derivatives, x(t + h)).
+struct UpdatePlan {
+  int n = 0;
+  Combo combos[kMaxDegree];
+};
+
+// The same plan on raw arrays, for the serial backend.
+struct FusedTerms {
+  int m;
+  int form;       // the arithmetic of the sum, fixed when the plan is built (kernels_serial)
+  bool in_place;  // out is also the accumulated term X[m - 1] (an in-place plan)
+  sunrealtype c[kMaxDegree + 3];
+  sunrealtype* X[kMaxDegree + 3];
+  sunrealtype* old;
+  sunrealtype* compnew;
+  sunrealtype* out;
+};
+struct FusedPlan {
+  int n = 0;
+  // 1 + the index of the plan's shape among those with a kernel of their own
+  // (ceode_kernels_serial.cpp, kShapes: every term count a compile-time constant), 0 for none.
+  int shape = 0;
+  bool compensated = false;  // the sums carry Kahan compensations (FusedTerms::old)
+  FusedTerms terms[kMaxDegree];
+};
+
+// Compensation vectors of the accumulated quantities (index = Combo::level), and the scratch
+// vector the reference needs when compensating.
+struct Compensation {
+  bool on = false;
+  N_Vector* comp = nullptr;
+  N_Vector* compnew = nullptr;
+  N_Vector tmp = nullptr;
+};
+
+// ---- Reference backend: N_Vector operations (ceode_kernels_ref.cpp) ----
+
+// z = sum c_i X_i through N_VScale / N_VLinearSum / N_VLinearCombination (by term count).
+void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z);
+// Every combination of the plan, one N_Vector operation per term.
+void UpdateReference(const UpdatePlan& plan, const Compensation& cs);
+
+// ---- Serial backend: raw arrays (ceode_kernels_serial.cpp) ----
+
+// The data of a vector that exposes it (NVECTOR_SERIAL's content without a call). Inline: the
+// serial backends look up several vectors per step, and at n of a few a call each is visible.
+inline sunrealtype* SerialData(N_Vector v) {
+  if (v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial) return NV_DATA_S(v);
+  return N_VGetArrayPointer(v);
+}
+// out[0 .. n) = sum_j c[j] x[j][0 .. n), j < m (0 <= m <= kMaxDegree + 3), with the values of
+// Combine on serial vectors (N_VLinearSum's a = +-b shortcuts included). out is not an input.
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
+                   sunrealtype* out);
+// The same on the data of the vectors X (SerialData): the local data on NVECTOR_PARALLEL.
+void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
+                   sunrealtype* out);
+// to = from: memcpy on serial vectors, N_VScale(1, ...) on others; the same values either way.
+void CopyVector(N_Vector from, N_Vector to);
+// The plan on its raw-pointer form (vectors of length n): one pass over the vectors (entry by
+// entry for small n). Returns the L1 norm of the last combination's output (the new position)
+// for the growth check, summed in four interleaved partial sums, so it may differ from
+// N_VL1Norm by rounding (n * unit round-off relative); the outputs are bitwise those of
+// UpdateReference.
+sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
+// The kernel UpdateSerial runs on the plan at length n, for a caller that runs it many times.
+using SerialKernelFn = sunrealtype (*)(const FusedPlan&, sunindextype);
+SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
+// The raw-pointer form of a plan (vectors that expose their data). Returns false when some
+// combination writes a vector it also reads, other than its own accumulated quantity without
+// compensation (an in-place plan's, read entry by entry before it is written): the serial
+// backend must not run that plan.
+bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
+
+// ---- A plan with its backend fixed when it is prepared ----
+
+// The serial backend when allowed (every vector NVECTOR_SERIAL, the fused kernel on) and the
+// plan can run on it, the reference otherwise: the same numbers either way.
+struct KernelPlan {
+  UpdatePlan plan;
+  FusedPlan fused;
+  bool serial = false;
+};
+void PreparePlan(bool serial_allowed, KernelPlan* kp);
+void RunPlan(const KernelPlan& kp, sunindextype n);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_KERNELS_HPP_

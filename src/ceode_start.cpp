@@ -1,0 +1,254 @@
+// The start of the method (docs/theory.md section 6): the vectors of a run, the history at t0
+// (consistent: the higher derivatives by central differences of the acceleration, for high
+// degrees by Picard sweeps of one wide stencil; or the zero start), the first position step,
+// and StartMethod, which ends by choosing the step (ChooseStep, ceode_step.cpp).
+#include <algorithm>
+
+#include "ceode_kernels.hpp"
+
+namespace ceode {
+
+int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
+  if (!AllocStepRecord(ce)) return CE_MEM_FAIL;
+  N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->vtmp, &ce->atmp,    &ce->tmp1,
+                     &ce->tmp2, &ce->tmp3,  &ce->D[1], &ce->D[2], &ce->Dnew[1], &ce->Dnew[2]};
+  for (N_Vector* v : all) {
+    *v = N_VClone(tmpl);
+    if (*v == nullptr) return CE_MEM_FAIL;
+  }
+  return CE_SUCCESS;
+}
+
+bool NeedsSolverWork(const CEodeMemRec* ce) {
+  return ce->ls.LS != nullptr || ce->nls.NLS != nullptr || ce->ls.mfn != nullptr ||
+         ce->ls.M != nullptr || ce->vel_dependent || ce->adapters.first_order != nullptr ||
+         HasConstraints(ce);
+}
+
+// Each N_VClone costs about a thousand instructions in an unoptimised SUNDIALS build (the
+// operation table is copied entry by entry): an explicit run without a mass matrix, linear or
+// nonlinear solver never clones these seven.
+int AllocSolverWork(CEodeMemRec* ce, const char* func) {
+  if (ce->zero != nullptr) return CE_SUCCESS;
+  N_Vector* work[] = {&ce->ftmp, &ce->V0, &ce->apred, &ce->ycor, &ce->ewt, &ce->lstmp, &ce->zero};
+  for (N_Vector* v : work) {
+    if (*v == nullptr) *v = N_VClone(ce->xcur);
+    if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
+  N_VConst(0, ce->zero);
+  return CE_SUCCESS;
+}
+
+void FreeVectors(CEodeMemRec* ce) {
+  N_Vector* all[] = {&ce->xcur,  &ce->xnext, &ce->xnew, &ce->ftmp, &ce->vtmp,
+                     &ce->atmp,  &ce->tmp1,  &ce->tmp2, &ce->tmp3, &ce->V0,
+                     &ce->apred, &ce->ycor,  &ce->ewt,  &ce->zero, &ce->lstmp};
+  for (N_Vector* v : all) {
+    if (*v != nullptr) N_VDestroy(*v);
+    *v = nullptr;
+  }
+  for (int k = 0; k < kMaxDegree; ++k) {
+    if (ce->D[k] != nullptr) N_VDestroy(ce->D[k]);
+    if (ce->Dnew[k] != nullptr) N_VDestroy(ce->Dnew[k]);
+    if (ce->comp[k] != nullptr) N_VDestroy(ce->comp[k]);
+    if (ce->compnew[k] != nullptr) N_VDestroy(ce->compnew[k]);
+    ce->D[k] = ce->Dnew[k] = ce->comp[k] = ce->compnew[k] = nullptr;
+  }
+  ce->initialized = false;
+}
+
+namespace {
+
+// Half width R of the stencil: the q-th derivative of the acceleration on 2R + 1 nodes
+// spaced h errs by O(h^(2R+1-q)), so D_k = a^(k-2) errs by O(h^(2R+3-k)); an order-p set
+// keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p. Orders reach d (never d + 1).
+int HalfWidth(int d) { return d / 2; }
+
+// Sweeps until only the stencil's truncation is left (see StartDerivativesHigh): d - 3 when f
+// reads the velocity (the samples lose one power of s to it); when it does not, the samples are
+// as accurate as the polynomial and a sweep gains two powers (x'' = a), so R sweeps reach the
+// same O(h^(2R+3-k)) (docs/theory.md section 6.3).
+int Sweeps(int d, bool vel_dependent) {
+  return vel_dependent ? d - 3 : std::min(d - 3, HalfWidth(d));
+}
+
+// The Taylor curve at s: xs = sum_{i<d} D_i s^i/i! (D_0 = x), vs its derivative (the same
+// weights, shifted).
+void TaylorPlan(const CEodeMemRec* ce, sunrealtype s, N_Vector xs, N_Vector vs, KernelPlan* sp) {
+  const int d = ce->degree;
+  UpdatePlan& p = sp->plan;
+  p.n = 2;
+  p.combos[0] = Combo{};
+  p.combos[1] = Combo{};
+  sunrealtype w = 1;  // s^i / i!
+  for (int i = 0; i < d; ++i) {
+    p.combos[0].Add(w, i == 0 ? ce->xcur : ce->D[i]);
+    if (i < d - 1) p.combos[1].Add(w, ce->D[i + 1]);
+    w *= s / (i + 1);
+  }
+  p.combos[0].out = xs;
+  p.combos[1].out = vs;
+}
+
+// Each sweep evaluates the acceleration on the 2R nodes s = jh, j = -R..R, j != 0, along the
+// Taylor polynomial of all current derivatives, and replaces D_3..D_{d-1} by the stencil's
+// derivatives of those samples. If the polynomial is right to O(s^m), the samples are right to
+// O(s^(m-1)) (the velocity loses one power), and a stencil exact on polynomials of degree 2R
+// returns derivatives below m - 1 unchanged by that error: every sweep fixes at least one more
+// derivative, so d - 3 sweeps leave only the stencil's own O(h^(2R+1-q)) truncation.
+// The 2R samples of a sweep are kept (in Dnew[1..d-1] and as: 2R <= d vectors, all free
+// before the first step) and combined once at the sweep's end, term for term in the order of a
+// running sum, so the derivatives come out as if accumulated node by node.
+int StartDerivativesHigh(
+    CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+    const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  const int R = HalfWidth(d);
+  const int npts = 2 * R + 1;
+  sunrealtype nodes[2 * kMaxDegree + 1] = {};
+  sunrealtype wts[kMaxDegree][2 * kMaxDegree + 1];  // wts[q]: the q-th derivative
+  for (int j = 0; j < npts; ++j) nodes[j] = (j - R) * h;
+  FornbergTable(d - 3, npts, nodes, wts);
+  N_Vector sample[2 * kMaxDegree];
+  for (int i = 0; i < 2 * R; ++i) sample[i] = i + 1 < d ? ce->Dnew[i + 1] : as;
+  KernelPlan taylor[2 * kMaxDegree];
+  KernelPlan stencil;
+  stencil.plan.n = d - 3;
+  for (int k = 3; k < d; ++k) {
+    Combo& cb = stencil.plan.combos[k - 3];
+    cb = Combo{};
+    cb.Add(wts[k - 2][R], ce->D[2]);
+    for (int j = 0; j < npts; ++j) {
+      if (j != R) cb.Add(wts[k - 2][j], sample[j < R ? j : j - 1]);
+    }
+    cb.out = ce->D[k];
+  }
+  // The start's combinations on the serial backend where the step's update would run on it.
+  const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
+  PreparePlan(serial, &stencil);
+  for (int j = 0; j < 2 * R; ++j) {
+    TaylorPlan(ce, nodes[j < R ? j : j + 1], xs, vs, &taylor[j]);
+    PreparePlan(serial, &taylor[j]);
+  }
+  for (int k = 3; k < d; ++k) N_VConst(0, ce->D[k]);
+  int flag = CE_SUCCESS;
+  const int sweeps = Sweeps(d, ce->vel_dependent);
+  for (int sweep = 0; sweep < sweeps && flag == CE_SUCCESS; ++sweep) {
+    for (int j = 0; j < 2 * R && flag == CE_SUCCESS; ++j) {
+      RunPlan(taylor[j], ce->n);
+      flag = accel(t0 + nodes[j < R ? j : j + 1], xs, vs, sample[j]);
+    }
+    if (flag == CE_SUCCESS) RunPlan(stencil, ce->n);
+  }
+  return flag;
+}
+
+}  // namespace
+
+int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
+                     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
+  const int d = ce->degree;
+  if (d >= kHighStartDegree) return StartDerivativesHigh(ce, t0, xs, vs, as, accel);
+  const sunrealtype h = ce->h;
+  int flag = CE_SUCCESS;
+  for (int m = 2; flag == CE_SUCCESS && m <= d - 2; ++m) {
+    N_Vector out = ce->D[m + 1];
+    const int q = m - 1;  // D_{m+1} is the q-th derivative of the acceleration
+    const int r = (q + 1) / 2;
+    const int npts = 2 * r + 1;
+    sunrealtype nodes[2 * kMaxDegree + 1];
+    sunrealtype wts[2 * kMaxDegree + 1];
+    for (int j = 0; j < npts; ++j) nodes[j] = (j - r) * h;
+    FornbergWeights(q, npts, nodes, wts);
+    N_VScale(wts[r], ce->D[2], out);
+    for (int j = 0; j < npts && flag == CE_SUCCESS; ++j) {
+      if (j == r || wts[j] == 0) continue;
+      const sunrealtype s = nodes[j];
+      sunrealtype cx[kMaxDegree + 1];
+      N_Vector vx[kMaxDegree + 1];
+      TaylorWeights(s, m + 1, cx);
+      for (int i = 0; i <= m; ++i) vx[i] = (i == 0) ? ce->xcur : ce->D[i];
+      N_VLinearCombination(m + 1, cx, vx, xs);
+      N_VLinearCombination(m, cx, vx + 1, vs);  // the curve's derivative: same weights, shifted
+      flag = accel(t0 + s, xs, vs, as);
+      if (flag == CE_SUCCESS) N_VLinearSum(1, out, wts[j], as, out);
+    }
+  }
+  return flag;
+}
+
+namespace {
+
+bool CloneIfMissing(N_Vector* v, N_Vector tmpl) {
+  if (*v == nullptr) *v = N_VClone(tmpl);
+  return *v != nullptr;
+}
+
+// The derivative vectors of the degree (and their compensations) exist once per degree.
+int AllocHistory(CEodeMemRec* ce, const char* func) {
+  const int d = ce->degree;
+  bool ok = true;
+  for (int k = 1; k < d; ++k) {
+    ok = ok && CloneIfMissing(&ce->D[k], ce->xcur) && CloneIfMissing(&ce->Dnew[k], ce->xcur);
+  }
+  for (int k = 0; ce->compensated && k <= d - 2; ++k) {
+    ok = ok && CloneIfMissing(&ce->comp[k], ce->xcur) && CloneIfMissing(&ce->compnew[k], ce->xcur);
+    if (ok) N_VConst(0, ce->comp[k]);
+  }
+  return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+// The unconstrained start: a0 = M^{-1} f(t0, x0, v0), the higher derivatives (consistent start)
+// or zeros (the paper's zero start), then the first position step: the Taylor polynomial of
+// every derivative known at t0.
+int OdeStart(CEodeMemRec* ce, const char* func) {
+  const int d = ce->degree;
+  const sunrealtype t = ce->tcur;
+  const bool preset = ce->adapters.history_preset;  // from Reset (an adapter's restart)
+  ce->adapters.history_preset = false;
+  int flag = preset ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
+  if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
+    flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
+                        "The initial acceleration is NaN or Inf: f (or the mass solve) returned "
+                        "non-finite values at t0 = %.17g.",
+                        static_cast<double>(t));
+  }
+  if (flag == CE_SUCCESS && !ce->zero_start && !preset) {
+    flag = StartDerivatives(ce, t, ce->xnew, ce->vtmp, ce->atmp,
+                            [&](sunrealtype ts, N_Vector xs, N_Vector vs, N_Vector as) {
+                              return EvalAccel(ce, ts, xs, vs, as, func);
+                            });
+  }
+  if (flag != CE_SUCCESS) return flag;
+  for (int k = 3; ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
+  sunrealtype cw[kMaxDegree];
+  N_Vector vw[kMaxDegree];
+  TaylorWeights(ce->h, d, cw);
+  for (int i = 1; i < d; ++i) vw[i - 1] = ce->D[i];
+  N_VLinearCombination(d - 1, cw + 1, vw, ce->tmp1);
+  N_VLinearSum(1, ce->xcur, 1, ce->tmp1, ce->xnext);
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+int StartMethod(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  int flag = AllocHistory(ce, func);
+  if (flag != CE_SUCCESS) return flag;
+  ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
+  ce->t_start_h = ce->tcur;
+  ce->nsteps_h = 0;
+  ce->guard.pending = true;
+  ce->xl1_start = N_VL1Norm(ce->xcur);
+  const long int nfe0 = ce->nfe;
+  flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
+  ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
+  if (flag == CE_SUCCESS) flag = ChooseImplicitSolve(ce, func);  // PC, Newton or AUTO
+  if (flag == CE_SUCCESS) ChooseStep(ce, true);
+  if (flag == CE_SUCCESS) ce->started = true;
+  return flag;
+}
+
+}  // namespace ceode

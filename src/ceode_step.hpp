@@ -1,0 +1,63 @@
+// The step module's record (CEodeMemRec::step), private to ceode_step.cpp and
+// ceode_step_plans.cpp, which alone write it: the update options, and what ChooseStep decides
+// once per start (the solve, the update plans and their kernel, the many-step loop), so that a
+// step tests no configuration flag.
+#ifndef CEODE_SRC_CEODE_STEP_HPP_
+#define CEODE_SRC_CEODE_STEP_HPP_
+
+#include <array>
+
+#include "ceode_kernels.hpp"
+
+namespace ceode {
+
+// What the update of one step returns: CE_VECTOROP_ERR when the global reduction of the growth
+// check's norm failed (xl1 is then NaN), and ||x(t + h)||_1.
+struct UpdateResult {
+  int flag;
+  sunrealtype xl1;
+};
+
+using SolveFn = int (*)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                        const char* func);
+using UpdateFn = UpdateResult (*)(CEodeMemRec* ce, const StepMem& sm);
+using StepsFn = int (*)(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
+
+struct StepMem {
+  // Options
+  bool fused = true;     // CEodeSetFusedKernel: the serial backend where the vectors allow it
+  bool in_place = true;  // CEodeSetInPlaceUpdate: in-place plans allowed
+
+  // The step, chosen once (ChooseStep)
+  SolveKind implicit = SolveKind::kNewton;  // ceode_pc.cpp's choice for a velocity dependence
+  SolveKind solve_kind = SolveKind::kExplicit;
+  SolveFn solve = nullptr;    // the acceleration at t (TakeStep)
+  UpdateFn update = nullptr;  // the derivatives and x(t + h) after the solve (TakeStep)
+  StepsFn steps = nullptr;    // TakeSteps: the lean loop or one TakeStep
+
+  // The update plans (ceode_step_plans.cpp)
+  bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place
+  bool serial = false;           // serial vectors: fused_plans valid, raw arrays of length n
+  bool mpi = false;              // NVECTOR_PARALLEL: fused_plans valid on the local part
+  sunindextype len = 0;          // entries the serial backend runs over (local on NVECTOR_PARALLEL)
+  std::array<UpdatePlan, kNumPlans> plans;  // by plan_ix
+  std::array<FusedPlan, kNumPlans> fused_plans;
+  std::array<SerialKernelFn, kNumPlans> kernels{};  // SerialKernel of each fused plan at len
+  // The same plans writing x(t + 2h) over x(t + h) (docs/theory.md, "In-place update"): the lean
+  // loop's steps before its last one, when xin_ready.
+  std::array<FusedPlan, kNumPlans> fused_plans_xin;
+  std::array<SerialKernelFn, kNumPlans> kernels_xin{};
+  bool xin_ready = false;
+  // The configuration of the vectors: the history's phase (period 2) is plan_ix % 2 and the
+  // positions' (period 3) plan_ix % 3. A step advances both (+1); an in-place-position step
+  // only the history's (+3).
+  int plan_ix = 0;
+};
+
+// ceode_step_plans.cpp: the six plans (and their kernels) from the current vectors, and which
+// backend runs them (in_place_active, serial, mpi, len, xin_ready). Reads sm->solve_kind.
+void BuildPlans(CEodeMemRec* ce, StepMem* sm);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_STEP_HPP_
