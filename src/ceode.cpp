@@ -50,7 +50,10 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   return CE_SUCCESS;
 }
 
-void Restart(CEodeMemRec* ce) { ce->started = false; }
+void Restart(CEodeMemRec* ce) {
+  ce->started = false;
+  ce->adapters.history_preset = false;  // it holds for the configuration it was made for
+}
 
 bool IsFinite(N_Vector v) {
   // NaN propagates through the L1 norm; +Inf is either an Inf entry or the sum overflowing
@@ -184,7 +187,64 @@ int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
   return CE_SUCCESS;
 }
 
+// What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
+// with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
+int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+              bool counters) {
+  int flag = CheckInitialData(ce, func, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (N_VGetLength(x0) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "x0 has %ld entries, CEodeInit had %ld: use CEodeInit to resize.",
+                        static_cast<long>(N_VGetLength(x0)), static_cast<long>(ce->n));
+  }
+  N_VScale(1.0, x0, ce->xcur);
+  N_VScale(1.0, v0, ce->D[1]);
+  ce->tcur = t0;
+  ce->tretlast = t0;
+  Restart(ce);
+  if (counters) {
+    ce->nst = ce->nfe = ce->nfe_start = 0;
+    ConstrReset(ce);
+  }
+  LsReset(ce, counters);
+  NlsReset(ce, counters);
+  PcReset(ce, counters);
+  GuardReset(ce, counters);
+  return CE_SUCCESS;
+}
+
 }  // namespace
+
+int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
+                N_Vector v0) {
+  if (!std::isfinite(t0)) return ProcessError(ce, CE_ILL_INPUT, func, "t0 is not finite.");
+  int flag = CheckInitialData(ce, func, x0, v0);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->initialized) FreeSized(ce);  // a second Init replaces the problem
+  flag = AllocVectors(ce, x0);
+  if (flag != CE_SUCCESS) return ProcessError(ce, flag, func, "Out of memory.");
+  ce->n = N_VGetLength(x0);
+  ce->f = f;
+  ce->initialized = true;
+  return CEodeReInit(ce, t0, x0, v0);
+}
+
+int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+          const ResetOptions& opt) {
+  int flag = RestartAt(ce, func, t0, x0, v0, false);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype omega = ce->guard.omega_est;
+  if (opt.keep_frequency && !(ce->guard.omega_user > 0) && omega > 0 && std::isfinite(omega)) {
+    ce->guard.omega_user = omega;
+  }
+  if (opt.history) {
+    if ((flag = opt.history()) != CE_SUCCESS) return flag;
+    ce->adapters.history_preset = true;
+  }
+  return CE_SUCCESS;
+}
+
 }  // namespace ceode
 
 extern "C" {
@@ -213,45 +273,15 @@ int CEodeInit(void* mem, CEodeRhsFn f, sunrealtype t0, N_Vector x0, N_Vector v0)
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "f = NULL: pass the right-hand side function f(t, x, v, f, data).");
   }
-  if (!std::isfinite(t0))
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
-  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
-  if (flag != CE_SUCCESS) return flag;
-  if (ce->initialized) {
-    ceode::FreeSized(ce);  // a second Init replaces the problem
-  }
-  flag = ceode::AllocVectors(ce, x0);
-  if (flag != CE_SUCCESS) return ceode::ProcessError(ce, flag, __func__, "Out of memory.");
-  ce->n = N_VGetLength(x0);
-  if (f != ceode::FirstOrderRhs) ceode::FirstOrderFree(ce);  // the native form replaces it
-  ce->f = f;
-  ce->initialized = true;
-  return CEodeReInit(mem, t0, x0, v0);
+  flag = ceode::InitProblem(ce, __func__, f, t0, x0, v0);
+  if (flag == CE_SUCCESS) ceode::FirstOrderFree(ce);  // the native form replaces it
+  return flag;
 }
 
 int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   CEodeMemRec* ce = nullptr;
   int flag = ceode::Access(mem, __func__, &ce, true);
-  if (flag != CE_SUCCESS) return flag;
-  flag = ceode::CheckInitialData(ce, __func__, x0, v0);
-  if (flag != CE_SUCCESS) return flag;
-  if (N_VGetLength(x0) != ce->n) {
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
-                               "x0 has %ld entries, CEodeInit had %ld: use CEodeInit to resize.",
-                               static_cast<long>(N_VGetLength(x0)), static_cast<long>(ce->n));
-  }
-  N_VScale(1.0, x0, ce->xcur);
-  N_VScale(1.0, v0, ce->D[1]);
-  ce->tcur = t0;
-  ce->tretlast = t0;
-  ceode::Restart(ce);
-  ce->nst = ce->nfe = ce->nfe_start = 0;
-  ceode::LsReset(ce, true);
-  ceode::NlsReset(ce, true);
-  ceode::PcReset(ce);
-  ceode::ConstrReset(ce);
-  ceode::GuardReset(ce, true);
-  return CE_SUCCESS;
+  return flag == CE_SUCCESS ? ceode::RestartAt(ce, __func__, t0, x0, v0, true) : flag;
 }
 
 int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,

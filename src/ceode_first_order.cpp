@@ -14,23 +14,20 @@
 #include "ceode_impl.hpp"
 
 namespace ceode {
-namespace {
 
-// The adapter's state; it is CEODE's user_data while active, the user's data is kept here.
+// The adapter's state (Adapters::first_order); F gets the memory's user_data.
 struct FirstOrder {
   CEodeFirstOrderRhsFn F = nullptr;
-  void* user_data = nullptr;
   bool many = false;  // ManyVector [x; v], else serial of length 2n
   sunindextype n = 0;
-  N_Vector y = nullptr;      // what F sees as y
-  N_Vector ydot = nullptr;   // what F writes
-  N_Vector xdot = nullptr;   // ManyVector form: the first half of ydot (x' = v, discarded)
-  N_Vector xview = nullptr;  // serial form: x and v windows on a user vector y
-  N_Vector vview = nullptr;
-  bool checked = false;  // the first half of ydot was compared with v
+  N_Vector y = nullptr;     // what F sees as y
+  N_Vector ydot = nullptr;  // what F writes
+  N_Vector xdot = nullptr;  // ManyVector form: the first half of ydot (x' = v, discarded)
+  N_Vector view[2] = {};    // serial form: x and v windows on a user vector y (SplitHalves)
+  bool checked = false;     // the first half of ydot was compared with v
 };
 
-FirstOrder* Adapter(CEodeMemRec* ce) { return static_cast<FirstOrder*>(ce->fo); }
+namespace {
 
 N_Vector* Parts(N_Vector mv) {
   return static_cast<N_VectorContent_ManyVector>(mv->content)->subvec_array;
@@ -84,22 +81,13 @@ int CheckShape(CEodeMemRec* ce, const char* func, N_Vector y, const char* name,
   return CE_SUCCESS;
 }
 
-// x and v of a user vector y: its parts, or windows on its serial data.
+// x and v of a user vector y, checked by CheckShape.
 void Split(FirstOrder* fo, N_Vector y, N_Vector* x, N_Vector* v) {
-  if (fo->many) {
-    *x = N_VGetSubvector_ManyVector(y, 0);
-    *v = N_VGetSubvector_ManyVector(y, 1);
-    return;
-  }
-  sunrealtype* d = N_VGetArrayPointer(y);
-  N_VSetArrayPointer(d, fo->xview);
-  N_VSetArrayPointer(d + fo->n, fo->vview);
-  *x = fo->xview;
-  *v = fo->vview;
+  SplitHalves(y, fo->n, nullptr, fo->view, x, v);  // the views exist (Build)
 }
 
 void Destroy(FirstOrder* fo) {
-  N_Vector* all[] = {&fo->y, &fo->ydot, &fo->xdot, &fo->xview, &fo->vview};
+  N_Vector* all[] = {&fo->y, &fo->ydot, &fo->xdot, &fo->view[0], &fo->view[1]};
   for (N_Vector* w : all) {
     if (*w != nullptr) N_VDestroy(*w);
     *w = nullptr;
@@ -119,13 +107,13 @@ bool Build(FirstOrder* fo, N_Vector y0, SUNContext ctx) {
   }
   fo->y = N_VNew_Serial(2 * fo->n, ctx);
   fo->ydot = N_VNew_Serial(2 * fo->n, ctx);
-  fo->xview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0), ctx);
-  fo->vview = N_VMake_Serial(fo->n, N_VGetArrayPointer(y0) + fo->n, ctx);
-  return fo->y != nullptr && fo->ydot != nullptr && fo->xview != nullptr && fo->vview != nullptr;
+  N_Vector x = nullptr, v = nullptr;
+  return fo->y != nullptr && fo->ydot != nullptr && SplitHalves(y0, fo->n, ctx, fo->view, &x, &v);
 }
 
-// F at (t, [x; v]); the first half of ydot goes to xd, the second to a.
-int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_Vector a) {
+// F at (t, [x; v]) with the user's data; the first half of ydot goes to xd, the second to a.
+int CallF(FirstOrder* fo, void* user_data, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd,
+          N_Vector a) {
   if (fo->many) {
     N_Vector* yp = Parts(fo->y);
     N_Vector* dp = Parts(fo->ydot);
@@ -133,13 +121,13 @@ int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_
     yp[1] = v;
     dp[0] = xd;
     dp[1] = a;
-    return fo->F(t, fo->y, fo->ydot, fo->user_data);
+    return fo->F(t, fo->y, fo->ydot, user_data);
   }
   const auto bytes = static_cast<size_t>(fo->n) * sizeof(sunrealtype);
   sunrealtype* yd = N_VGetArrayPointer(fo->y);
   std::memcpy(yd, N_VGetArrayPointer(x), bytes);
   std::memcpy(yd + fo->n, N_VGetArrayPointer(v), bytes);
-  const int rv = fo->F(t, fo->y, fo->ydot, fo->user_data);
+  const int rv = fo->F(t, fo->y, fo->ydot, user_data);
   sunrealtype* dd = N_VGetArrayPointer(fo->ydot);
   std::memcpy(N_VGetArrayPointer(a), dd + fo->n, bytes);
   if (xd != nullptr) std::memcpy(N_VGetArrayPointer(xd), dd, bytes);
@@ -149,7 +137,7 @@ int CallF(FirstOrder* fo, sunrealtype t, N_Vector x, N_Vector v, N_Vector xd, N_
 // Largest |x'_i - v_i| relative to max(|v|, tiny) after F at (t, x, v).
 int FirstHalfMismatch(CEodeMemRec* ce, FirstOrder* fo, N_Vector x, N_Vector v, sunrealtype* rel) {
   N_Vector xd = ce->tmp1;
-  const int rv = CallF(fo, ce->tcur, x, v, xd, ce->tmp2);
+  const int rv = CallF(fo, ce->user_data, ce->tcur, x, v, xd, ce->tmp2);
   if (rv != 0) return rv;
   N_VLinearSum(1, xd, -1, v, xd);
   const sunrealtype vmax = N_VMaxNorm(v);
@@ -191,7 +179,7 @@ int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, 
                      FirstOrder** fo, N_Vector* x, N_Vector* v) {
   int flag = Access(mem, func, ce, true);
   if (flag != CE_SUCCESS) return flag;
-  *fo = Adapter(*ce);
+  *fo = (*ce)->adapters.first_order;
   if (*fo == nullptr) {
     return ProcessError(*ce, CE_NO_MALLOC, func,
                         "No first-order problem: call CEodeInitFirstOrder first.");
@@ -203,23 +191,64 @@ int AccessFirstOrder(void* mem, const char* func, N_Vector y, const char* name, 
 
 }  // namespace
 
-int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data) {
-  auto* fo = static_cast<FirstOrder*>(data);
-  return CallF(fo, t, x, v, fo->many ? fo->xdot : nullptr, a);
+bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_Vector* x,
+                 N_Vector* v) {
+  if (N_VGetVectorID(y) == SUNDIALS_NVEC_MANYVECTOR) {
+    *x = N_VGetSubvector_ManyVector(y, 0);
+    *v = N_VGetSubvector_ManyVector(y, 1);
+    return true;
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (view[i] == nullptr && (view[i] = N_VNewEmpty_Serial(n, ctx)) == nullptr) return false;
+    N_VSetArrayPointer(N_VGetArrayPointer(y) + i * n, view[i]);
+  }
+  *x = view[0];
+  *v = view[1];
+  return true;
+}
+
+int SplitFirstOrder(CEodeMemRec* ce, N_Vector y, N_Vector* view, N_Vector* x, N_Vector* v,
+                    const char* func) {
+  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
+  const N_Vector_ID id = N_VGetVectorID(y);
+  const N_Vector_ID want = N_VGetVectorID(ce->xcur);
+  if (id == SUNDIALS_NVEC_MANYVECTOR) {
+    const sunindextype np = N_VGetNumSubvectors_ManyVector(y);
+    const N_Vector px = np == 2 ? N_VGetSubvector_ManyVector(y, 0) : nullptr;
+    const N_Vector pv = np == 2 ? N_VGetSubvector_ManyVector(y, 1) : nullptr;
+    if (np != 2 || N_VGetLength(px) != ce->n || N_VGetLength(pv) != ce->n ||
+        N_VGetVectorID(px) != want || N_VGetVectorID(pv) != want) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The ManyVector state has %ld parts: it must have two, y = [x; v], "
+                          "each of length %ld and of the vector type of CEODE's x0.",
+                          static_cast<long>(np), static_cast<long>(ce->n));
+    }
+  } else if (id != SUNDIALS_NVEC_SERIAL || want != SUNDIALS_NVEC_SERIAL ||
+             N_VGetLength(y) != 2 * ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The state vector (id %d, length %ld) is neither a ManyVector [x; v] of "
+                        "two parts of length %ld nor a serial vector of length %ld (2n, with a "
+                        "serial x0 in CEodeInit).",
+                        static_cast<int>(id), static_cast<long>(N_VGetLength(y)),
+                        static_cast<long>(ce->n), static_cast<long>(2 * ce->n));
+  }
+  return SplitHalves(y, ce->n, ce->sunctx, view, x, v)
+             ? CE_SUCCESS
+             : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem) {
+  auto* ce = static_cast<CEodeMemRec*>(mem);
+  FirstOrder* fo = ce->adapters.first_order;
+  return CallF(fo, ce->user_data, t, x, v, fo->many ? fo->xdot : nullptr, a);
 }
 
 void FirstOrderFree(CEodeMemRec* ce) {
-  FirstOrder* fo = Adapter(ce);
+  FirstOrder* fo = ce->adapters.first_order;
   if (fo == nullptr) return;
-  ce->user_data = fo->user_data;
-  ce->fo = nullptr;
+  ce->adapters.first_order = nullptr;
+  SelectRhs(ce);
   Destroy(fo);
-}
-
-bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data) {
-  if (ce->fo == nullptr) return false;
-  Adapter(ce)->user_data = user_data;
-  return true;
 }
 
 }  // namespace ceode
@@ -241,7 +270,6 @@ int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vec
   fo->F = F;
   fo->many = N_VGetVectorID(y0) == SUNDIALS_NVEC_MANYVECTOR;
   fo->n = N_VGetLength(y0) / 2;
-  fo->user_data = ce->fo != nullptr ? ceode::Adapter(ce)->user_data : ce->user_data;
   if (!ceode::Build(fo, y0, ce->sunctx)) {
     ceode::Destroy(fo);
     return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
@@ -249,16 +277,16 @@ int CEodeInitFirstOrder(void* mem, CEodeFirstOrderRhsFn F, sunrealtype t0, N_Vec
   N_Vector x0 = nullptr;
   N_Vector v0 = nullptr;
   ceode::Split(fo, y0, &x0, &v0);
-  // A previous adapter stays in place until this one is initialised (CEodeInit keeps it
-  // for f = FirstOrderRhs), so a failure leaves the memory as it was.
-  flag = CEodeInit(mem, ceode::FirstOrderRhs, t0, x0, v0);
+  // A previous adapter stays in place until this problem is initialised, so a failure leaves the
+  // memory as it was. There is no native f: the adapter's FirstOrderRhs is evaluated instead.
+  flag = ceode::InitProblem(ce, __func__, nullptr, t0, x0, v0);
   if (flag != CE_SUCCESS) {
     ceode::Destroy(fo);
     return flag;
   }
   ceode::FirstOrderFree(ce);
-  ce->fo = fo;
-  ce->user_data = fo;
+  ce->adapters.first_order = fo;
+  ceode::SelectRhs(ce);
   return CE_SUCCESS;
 }
 

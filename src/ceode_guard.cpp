@@ -188,7 +188,7 @@ int StiffnessTimes(CEodeMemRec* ce, GuardWork* g, const char* func) {
   const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * (1 + N_VMaxNorm(ce->xcur)) / qmax;
   g->sig = sig;
   N_VLinearSum(1, ce->xcur, sig, g->q, g->xp);
-  const int rv = ce->f(ce->tcur, g->xp, ce->D[1], g->w, ce->user_data);
+  const int rv = CallRhs(ce, ce->tcur, g->xp, ce->D[1], g->w);
   ++ce->guard.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -472,7 +472,7 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   bool usable = true;
   if (flag == CE_SUCCESS) flag = GuardMass(ce, g, func, &usable);
   if (flag != CE_SUCCESS || !usable) return flag;
-  const int rv = ce->f(ce->tcur, ce->xcur, ce->D[1], g->f0, ce->user_data);
+  const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], g->f0);
   ++ce->guard.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -638,8 +638,9 @@ void GuardFree(CEodeMemRec* ce) {
 void GuardReset(CEodeMemRec* ce, bool counters) {
   GuardMem& g = ce->guard;
   if (g.work != nullptr) Work(ce)->mass_ready = false;
+  if (!counters) return;
   g.warned = false;
-  if (counters) g.nfe = g.nme = g.nsetups = 0;
+  g.nfe = g.nme = g.nsetups = 0;
 }
 
 void GuardMethodChanged(CEodeMemRec* ce) { ce->guard.omega_limit = 0; }

@@ -95,6 +95,22 @@ constexpr sunindextype kInPlaceMinLen = 1024;
 // D_2 (f's output buffer) and the top derivative z (read as history by later sums).
 constexpr bool InPlaceLevel(int d, int k) { return k != 2 && k != d - 1; }
 
+struct FirstOrder;  // ceode_first_order.cpp
+struct Forcing;     // ceode_forcing.cpp
+
+// What CEODE evaluates when it is not the user's f(t, x, v, user_data) alone, and what a Reset
+// hands the next start. f and user_data always stay the user's: the adapters read them.
+struct Adapters {
+  // Called as rhs(t, x, v, f, ce) in place of f (nullptr: f itself); set by SelectRhs only.
+  CEodeRhsFn rhs = nullptr;
+  FirstOrder* first_order = nullptr;  // CEodeInitFirstOrder's F gives the acceleration
+  Forcing* forcing = nullptr;         // the inner stepper's, on top of either (ceode_forcing.hpp)
+  void* stepper = nullptr;            // the inner stepper that drives this memory
+  // D_2..D_{d-1} at tcur came with the last Reset: the next start evaluates nothing and only
+  // forms x(t0 + h). Cleared by that start.
+  bool history_preset = false;
+};
+
 }  // namespace ceode
 
 namespace ceode {
@@ -283,7 +299,6 @@ struct CEodeMemRec {
   ceode::PcMem pc;
   ceode::GuardMem guard;
   ceode::ConstrMem con;
-  void* fo = nullptr;  // first-order adapter (ceode_first_order.cpp)
 
   // Counters of the integrator itself
   long int nst = 0;
@@ -297,11 +312,8 @@ struct CEodeMemRec {
   bool to_context = ceode::sun::kContextErrors;  // SUNDIALS 7: through the SUNContext
   std::string last_msg;
 
-  // --- inner stepper (src/ceode_stepper.cpp) ---
-  // D_2..D_{d-1} at tcur were supplied by the owner of this memory (the MRI inner stepper, from
-  // the previous inner run and the known forcing jump): the next start evaluates nothing and only
-  // forms x(t0 + h). Cleared by that start.
-  bool start_preset = false;
+  // --- adapters (ceode_first_order.cpp, ceode_forcing.cpp, ceode_stepper.cpp) ---
+  ceode::Adapters adapters;
 };
 
 namespace ceode {
@@ -436,7 +448,7 @@ void DirectAccel(CEodeMemRec* ce, N_Vector a);
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func);
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
             const char* func);
-void PcReset(CEodeMemRec* ce);  // its statistics (CEodeReInit)
+void PcReset(CEodeMemRec* ce, bool counters);  // its estimates; with counters, those too
 void PcFree(CEodeMemRec* ce);
 void PcMethodChanged(CEodeMemRec* ce);  // the default number of corrections of the new set
 void PcSetVelocityRequest(CEodeMemRec* ce, int request);  // CEodeSetVelocityDependence
@@ -455,8 +467,8 @@ void ConstrReset(CEodeMemRec* ce);  // zeroes its counters (CEodeReInit)
 // ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);
 void GuardFree(CEodeMemRec* ce);  // its workspace (at CEodeInit and CEodeFree)
-// Its copy of M is re-evaluated and its warning may be given again; with counters, they are
-// zeroed (CEodeReInit).
+// Its copy of M is re-evaluated; with counters (CEodeReInit), its warning may be given again and
+// its counters are zeroed (a Reset keeps both: one warning per run, not per restart).
 void GuardReset(CEodeMemRec* ce, bool counters);
 void GuardMethodChanged(CEodeMemRec* ce);                  // Omega_max is looked up again
 void GuardRequestCheck(CEodeMemRec* ce);                   // at the next CEodeEvolve (a start)
@@ -503,11 +515,50 @@ const LongRunBehaviour* FindLongRunBehaviour(const char* name);  // nullptr: not
 // (empty when `current` is already the right choice); returns buf.
 const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, size_t len);
 
-// ceode_first_order.cpp: the f CEODE calls for CEodeInitFirstOrder; dropping the adapter
-// (native CEodeInit, CEodeFree) restores the user's data; user data set while it is active.
-int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* data);
+// --- adapters ---
+// ceode_first_order.cpp: F's acceleration (data: the memory); the adapter's record, dropped by a
+// native CEodeInit and by CEodeFree.
+int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
 void FirstOrderFree(CEodeMemRec* ce);
-bool FirstOrderSetUserData(CEodeMemRec* ce, void* user_data);
+// The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
+inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
+  return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
+                                     : ce->adapters.rhs(t, x, v, f, ce);
+}
+// The same without the forcing: the user's f, or F of the first-order form.
+int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f);
+// The identity of the problem's right-hand side (f, or the first-order adapter's), forced or not.
+inline CEodeRhsFn RhsIdentity(const CEodeMemRec* ce) {
+  return ce->f != nullptr ? ce->f : FirstOrderRhs;
+}
+// Sets adapters.rhs from the attached adapters (ceode_forcing.cpp).
+void SelectRhs(CEodeMemRec* ce);
+// x and v of a first-order vector y = [x; v] with halves of length n: a ManyVector's two parts,
+// or windows on a serial y's array through view[0], view[1] (empty serial vectors, made when
+// first needed). False: out of memory.
+bool SplitHalves(N_Vector y, sunindextype n, SUNContext ctx, N_Vector* view, N_Vector* x,
+                 N_Vector* v);
+// The same for a y of the memory's own vectors (the inner stepper's state, forcing and output):
+// halves of CEODE's length and vector type, else an error reported as from func.
+int SplitFirstOrder(CEodeMemRec* ce, N_Vector y, N_Vector* view, N_Vector* x, N_Vector* v,
+                    const char* func);
+
+// ceode.cpp: a new problem (f, or nullptr for the first-order form) at t0; CEodeInit without the
+// adapter bookkeeping.
+int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
+                N_Vector v0);
+// A restart at (t0, x0, v0) that keeps the counters and the guard's warning state (CEodeReInit
+// zeroes them): for an adapter that integrates in pieces.
+struct ResetOptions {
+  // Fills D_2..D_{d-1} at t0 for the degree of the last start; the next start then evaluates
+  // nothing. Empty: the start computes them.
+  std::function<int()> history;
+  // The guard's estimate of the last run, if there is one and no frequency is set, becomes the
+  // set frequency: later starts check h against it without estimating it again.
+  bool keep_frequency = false;
+};
+int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
+          const ResetOptions& opt);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

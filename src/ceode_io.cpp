@@ -179,7 +179,7 @@ int CEodeSetUserData(void* mem, void* user_data) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (!ceode::FirstOrderSetUserData(ce, user_data)) ce->user_data = user_data;
+  ce->user_data = user_data;
   return CE_SUCCESS;
 }
 

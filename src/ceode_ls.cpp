@@ -34,7 +34,7 @@ int ATimes(void* data, N_Vector w, N_Vector z) {
   const sunrealtype vmax = std::max(N_VMaxNorm(ce->vtmp), SUN_RCONST(1e-8));
   const sunrealtype sig = std::sqrt(SUN_UNIT_ROUNDOFF) * vmax / wmax;
   N_VLinearSum(1, ce->vtmp, sig, w, ce->tmp1);
-  const int rv = ce->f(ce->nls.t_eval, ce->nls.x_eval, ce->tmp1, ce->tmp2, ce->user_data);
+  const int rv = CallRhs(ce, ce->nls.t_eval, ce->nls.x_eval, ce->tmp1, ce->tmp2);
   ++ce->ls.nfeDQ;
   if (rv != 0) return rv;
   // z <- z - kappa (f(v + sig w) - f(v)) / sig
@@ -61,7 +61,7 @@ int DenseDqJac(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector 
   for (sunindextype j = 0; j < n; ++j) {
     const sunrealtype inc = DqIncrement(vd[j], vscale);
     vpd[j] = vd[j] + inc;
-    const int rv = ce->f(t, x, vp, fp, ce->user_data);
+    const int rv = CallRhs(ce, t, x, vp, fp);
     ++ce->ls.nfeDQ;
     vpd[j] = vd[j];
     if (rv != 0) return rv;
@@ -87,7 +87,7 @@ int BandDqJac(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f
   const sunrealtype vscale = 1e-3 * N_VMaxNorm(v);
   for (sunindextype g = 0; g < width; ++g) {
     for (sunindextype j = g; j < n; j += width) vpd[j] = vd[j] + DqIncrement(vd[j], vscale);
-    const int rv = ce->f(t, x, vp, fp, ce->user_data);
+    const int rv = CallRhs(ce, t, x, vp, fp);
     ++ce->ls.nfeDQ;
     if (rv != 0) return rv;
     const sunrealtype* fpd = N_VGetArrayPointer(fp);

@@ -23,7 +23,7 @@ constexpr sunrealtype kRDiv = 2.0;    // divergence when the correction grows th
 // f(t, x, vtmp) into ftmp inside a solve, counted; the failure is recorded for the step (a
 // fixed step cannot retry), and the solver gets SUNDIALS' recoverable/unrecoverable sign.
 int NlsRhs(CEodeMemRec* ce) {
-  const int rv = ce->f(ce->nls.t_eval, ce->nls.x_eval, ce->vtmp, ce->ftmp, ce->user_data);
+  const int rv = CallRhs(ce, ce->nls.t_eval, ce->nls.x_eval, ce->vtmp, ce->ftmp);
   ++ce->nfe;
   if (rv == 0) return 0;
   ProcessError(ce, CE_RHSFUNC_FAIL, kFunc,

@@ -48,7 +48,7 @@ void ProbeDirection(N_Vector w) {
 // f evaluations of the probes and checks, counted apart from the steps' (like the guard's).
 int CountedRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
                const char* func) {
-  const int rv = ce->f(t, x, v, f, ce->user_data);
+  const int rv = CallRhs(ce, t, x, v, f);
   ++ce->pc.nfe;
   if (rv != 0) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -147,14 +147,16 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
 // is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
 int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
   const bool detect = ce->pc.vel_request == CE_VELOCITY_DETECT;
-  if (ce->vel_dependent || !(detect || (ce->pc.vel_request < 0 && ce->pc.vel_checked_f != ce->f))) {
+  if (ce->vel_dependent ||
+      !(detect || (ce->pc.vel_request < 0 && ce->pc.vel_checked_f != RhsIdentity(ce)))) {
     return CE_SUCCESS;
   }
   // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
   N_Vector u = ce->atmp, fbase = ce->tmp2;
   int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
   if (flag != CE_SUCCESS) return flag;
-  if (!detect) ce->pc.vel_checked_f = ce->f;  // once per right-hand side, not at every restart
+  // Once per right-hand side, not at every restart.
+  if (!detect) ce->pc.vel_checked_f = RhsIdentity(ce);
   const sunrealtype sig = ProbeIncrement(ce->D[1]);
   const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
   const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
@@ -371,9 +373,9 @@ int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_V
   return SolveImplicit(ce, t, tnext, x, a, func);
 }
 
-void PcReset(CEodeMemRec* ce) {
+void PcReset(CEodeMemRec* ce, bool counters) {
   PcMem& pc = ce->pc;
-  pc.nsteps = pc.nfe = 0;
+  if (counters) pc.nsteps = pc.nfe = 0;
   pc.coupling = pc.theta = 0;
   pc.theta_last = false;
 }

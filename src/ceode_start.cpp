@@ -21,7 +21,8 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
 
 bool NeedsSolverWork(const CEodeMemRec* ce) {
   return ce->ls.LS != nullptr || ce->nls.NLS != nullptr || ce->ls.mfn != nullptr ||
-         ce->ls.M != nullptr || ce->vel_dependent || ce->fo != nullptr || HasConstraints(ce);
+         ce->ls.M != nullptr || ce->vel_dependent || ce->adapters.first_order != nullptr ||
+         HasConstraints(ce);
 }
 
 // Each N_VClone costs about a thousand instructions in an unoptimised SUNDIALS build (the
@@ -204,8 +205,8 @@ int AllocHistory(CEodeMemRec* ce, const char* func) {
 int OdeStart(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
   const sunrealtype t = ce->tcur;
-  const bool preset = ce->start_preset;  // the inner stepper's restart (src/ceode_stepper.cpp)
-  ce->start_preset = false;
+  const bool preset = ce->adapters.history_preset;  // from Reset (an adapter's restart)
+  ce->adapters.history_preset = false;
   int flag = preset ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
     flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,

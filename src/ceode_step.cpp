@@ -23,7 +23,7 @@ int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func) {
 }  // namespace
 
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
-  const int rv = ce->f(t, x, v, f, ce->user_data);
+  const int rv = CallRhs(ce, t, x, v, f);
   ++ce->nfe;
   return rv == 0 ? CE_SUCCESS : RhsFailed(ce, rv, t, func);
 }
@@ -319,12 +319,16 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     RotateVectors(ce, sm);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
+  // The right-hand side is chosen once: the user's f directly, or the adapters' (CallRhs).
+  const bool own_f = ce->adapters.rhs == nullptr;
+  const CEodeRhsFn rhs = own_f ? ce->f : ce->adapters.rhs;
+  void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
   const long int count = LeanStepCount(ce, target, max_steps);
   LeanEnd e;
   while (e.steps < count) {
     e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    e.rv = ce->f(e.t, p.x, p.v, p.a, ce->user_data);
+    e.rv = rhs(e.t, p.x, p.v, p.a, rhs_data);
     ++ce->nfe;
     if (e.rv != 0) break;
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;

@@ -2,9 +2,9 @@
 // SetForcing on the Stepper below) behind MRIStep's custom inner stepper
 // (SUNDIALS 6.4 and 7.x) and the SUNStepper of SUNDIALS >= 7.2.
 //
-// The forced inner problem x' = v + r_x(t), v' = g(t, x, v) + r_v(t) is integrated
-// in second-order form with u = x' = v + r_x (docs/porting.md, "The forced inner
-// problem"):  x'' = g(t, x, u - r_x) + r_v + r_x'.
+// The stepper owns its state y = [x; v]. Every inner run hands the MRI forcing to the memory's
+// forcing hook (ceode_forcing.hpp: CEODE then integrates in u = x' = v + r_x) and restarts CEODE
+// with Reset, which keeps the counters; the user's f and user_data stay in the memory.
 #include <ceode/ceode_stepper.h>
 #include <nvector/nvector_manyvector.h>
 #include <nvector/nvector_serial.h>
@@ -13,270 +13,75 @@
 #include <cmath>
 #include <new>
 
+#include "ceode_forcing.hpp"
 #include "ceode_impl.hpp"
 
 namespace ceode {
 namespace {
 
-constexpr int kMaxForcing = 10;  // MRI forcing polynomials have (order + 1) terms at most
-
-// Views of the two halves of a first-order vector y = [x; v].
+// The two halves of a first-order vector y = [x; v].
 struct Halves {
   N_Vector x = nullptr;
   N_Vector v = nullptr;
 };
+using Views = N_Vector[2];  // SplitHalves' windows on a serial y
 
-// Serial views are empty serial vectors re-pointed into y's array (no copy).
-struct ViewSlot {
-  N_Vector x = nullptr;
-  N_Vector v = nullptr;
-};
-
-// The counters CEodeReInit zeroes; the stepper adds every inner run to them.
-struct Counters {
-  long int nst, nfe, nfe_start, nni, nnf, nsetups, nls_solves, nje, nfeDQ, nme, nce;
-  long int nfe_guard, nme_guard, nsetups_guard;
-};
-
-Counters SaveCounters(const CEodeMemRec* ce) {
-  return {ce->nst,     ce->nfe,        ce->nfe_start, ce->nls.nni,          ce->nls.nnf,
-          ce->ls.nsetups, ce->ls.nsolves, ce->ls.nje,       ce->ls.nfeDQ,        ce->ls.nme,
-          ce->con.nce,     ce->guard.nfe,  ce->guard.nme, ce->guard.nsetups};
-}
-
-void AddCounters(CEodeMemRec* ce, const Counters& c) {
-  ce->nst += c.nst;
-  ce->nfe += c.nfe;
-  ce->nfe_start += c.nfe_start;
-  ce->nls.nni += c.nni;
-  ce->nls.nnf += c.nnf;
-  ce->ls.nsetups += c.nsetups;
-  ce->ls.nsolves += c.nls_solves;
-  ce->ls.nje += c.nje;
-  ce->ls.nfeDQ += c.nfeDQ;
-  ce->ls.nme += c.nme;
-  ce->con.nce += c.nce;
-  ce->guard.nfe += c.nfe_guard;
-  ce->guard.nme += c.nme_guard;
-  ce->guard.nsetups += c.nsetups_guard;
-}
-
-int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data);
-
-// The stepper's content. It owns its state y_own = [x; v] at t_own.
 struct Stepper {
   CEodeMemRec* ce = nullptr;
-  CEodeRhsFn g = nullptr;  // the user's fast acceleration and its data
-  void* g_data = nullptr;
+  CEodeRhsFn f = nullptr;  // the memory's f and user_data at creation: a change is refused
+  void* user_data = nullptr;
   sunrealtype h_max = 0;  // the user's inner step: the largest one taken
-  bool serial = false;    // y is a serial vector of 2n (else a ManyVector of two parts)
   N_Vector y_own = nullptr;
   sunrealtype t_own = 0;
   bool have_state = false;
-  bool omega_fixed = false;  // the guard's frequency is known: restarts do not re-estimate it
-  sunrealtype stepdir = 1;
   sunrealtype tstop = 0;
   bool tstop_set = false;
-  ViewSlot own_view, io_view, io2_view;
-  ViewSlot forcing_view[kMaxForcing];
-  N_Vector u = nullptr;   // x' = v + r_x during an inner run
-  N_Vector rx = nullptr;  // r_x(t), and v - r_x inside the trampoline
-  N_Vector vg = nullptr;
-  // Forcing r(t) = sum_k ((t - tshift)/tscale)^k F_k, in halves
-  int nforcing = 0;
-  sunrealtype tshift = 0;
-  sunrealtype tscale = 1;
-  N_Vector Fx[kMaxForcing] = {};
-  N_Vector Fv[kMaxForcing] = {};
-  long int nrestarts = 0;
-  // What the next restart can reuse (docs/porting.md, "What a restart costs"): at t_end, the
-  // end of the last inner run, the g parts g_end[k] = D_k - (r_v + r_x')^(k-2) of the history's
-  // derivatives D_2 .. D_{d-1} (the old x' in them) and r_x(t_end). Valid while the state has
-  // not been changed since.
-  bool end_valid = false;
-  int end_degree = 0;
-  sunrealtype t_end = 0;
-  N_Vector g_end[kMaxDegree] = {};
-  N_Vector rx_end = nullptr;
+  Views own_view = {}, io_view = {}, io2_view = {};
+  Views forcing_view[kMaxForcing] = {};
+  Forcing forcing;          // Adapters::forcing while the stepper exists; its end is what the
+                            // next restart reuses, valid while the owned state stays unchanged
+  N_Vector u = nullptr;     // x' = v + r_x during an inner run
   N_Vector ytmp = nullptr;  // for the comparison of a reset state with the owned one
+  long int nrestarts = 0;
 };
 
-void FreeSlot(ViewSlot* s) {
-  if (s->x != nullptr) N_VDestroy(s->x);
-  if (s->v != nullptr) N_VDestroy(s->v);
-  s->x = s->v = nullptr;
-}
-
-void DestroyStepper(Stepper* st) {
+void StepperDestroy(Stepper* st) {
   if (st == nullptr) return;
   CEodeMemRec* ce = st->ce;
-  if (ce != nullptr && ce->f == Trampoline) {  // hand the memory back to the user
-    ce->f = st->g;
-    ce->user_data = st->g_data;
+  if (ce != nullptr && ce->adapters.stepper == st) {  // the memory evaluates f unforced again
+    ce->adapters.stepper = nullptr;
+    ce->adapters.forcing = nullptr;
+    SelectRhs(ce);
   }
-  FreeSlot(&st->own_view);
-  FreeSlot(&st->io_view);
-  FreeSlot(&st->io2_view);
-  for (ViewSlot& s : st->forcing_view) FreeSlot(&s);
-  for (N_Vector w : {st->y_own, st->u, st->rx, st->vg, st->rx_end, st->ytmp}) {
+  const auto destroy = [](N_Vector w) {
     if (w != nullptr) N_VDestroy(w);
-  }
-  for (N_Vector w : st->g_end) {
-    if (w != nullptr) N_VDestroy(w);
-  }
+  };
+  for (N_Vector w : {st->y_own, st->u, st->ytmp}) destroy(w);
+  for (const Views* vw : {&st->own_view, &st->io_view, &st->io2_view})
+    std::for_each(*vw, *vw + 2, destroy);
+  for (const Views& vw : st->forcing_view) std::for_each(vw, vw + 2, destroy);
+  FreeForcing(&st->forcing);
   delete st;
 }
 
-// The one validation point of the first-order vectors handed to the stepper:
-// y must be [x; v] with both halves of CEODE's length and vector type.
-int SplitVector(Stepper* st, N_Vector y, ViewSlot* slot, Halves* out, const char* func) {
-  CEodeMemRec* ce = st->ce;
-  if (y == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The state vector is NULL.");
-  const N_Vector_ID id = N_VGetVectorID(y);
-  const N_Vector_ID want = N_VGetVectorID(ce->xcur);
-  if (id == SUNDIALS_NVEC_MANYVECTOR) {
-    const sunindextype np = N_VGetNumSubvectors_ManyVector(y);
-    N_Vector x = np == 2 ? N_VGetSubvector_ManyVector(y, 0) : nullptr;
-    N_Vector v = np == 2 ? N_VGetSubvector_ManyVector(y, 1) : nullptr;
-    if (np != 2 || N_VGetLength(x) != ce->n || N_VGetLength(v) != ce->n ||
-        N_VGetVectorID(x) != want || N_VGetVectorID(v) != want) {
-      return ProcessError(ce, CE_ILL_INPUT, func,
-                          "The ManyVector state has %ld parts: it must have two, y = [x; v], "
-                          "each of length %ld and of the vector type of CEODE's x0.",
-                          static_cast<long>(np), static_cast<long>(ce->n));
-    }
-    *out = {x, v};
-    return CE_SUCCESS;
-  }
-  if (id != SUNDIALS_NVEC_SERIAL || want != SUNDIALS_NVEC_SERIAL || N_VGetLength(y) != 2 * ce->n) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The state vector (id %d, length %ld) is neither a ManyVector [x; v] of "
-                        "two parts of length %ld nor a serial vector of length %ld (2n, with a "
-                        "serial x0 in CEodeInit).",
-                        static_cast<int>(id), static_cast<long>(N_VGetLength(y)),
-                        static_cast<long>(ce->n), static_cast<long>(2 * ce->n));
-  }
-  if (slot->x == nullptr) slot->x = N_VNewEmpty_Serial(ce->n, ce->sunctx);
-  if (slot->v == nullptr) slot->v = N_VNewEmpty_Serial(ce->n, ce->sunctx);
-  if (slot->x == nullptr || slot->v == nullptr) {
-    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
-  }
-  sunrealtype* data = N_VGetArrayPointer(y);
-  N_VSetArrayPointer(data, slot->x);
-  N_VSetArrayPointer(data + ce->n, slot->v);
-  *out = {slot->x, slot->v};
-  return CE_SUCCESS;
-}
-
-// Weights of r(t) (value) and r'(t) at t.
-void ForcingWeights(const Stepper* st, sunrealtype t, sunrealtype* val, sunrealtype* der) {
-  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
-  sunrealtype p = 1;  // tau^k
-  for (int k = 0; k < st->nforcing; ++k) {
-    val[k] = p;
-    der[k] = 0;
-    if (k > 0) der[k] = k * val[k - 1] / st->tscale;
-    p *= tau;
-  }
-}
-
-// out = a * base + s * sum_k w[k] F[k] in one pass (base may be out or null; zero weights are
-// skipped, since a forced vector at large n costs one pass per term).
-void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const sunrealtype* w,
-                    N_Vector const* F, N_Vector out) {
-  sunrealtype c[2 * kMaxForcing + 1];
-  N_Vector X[2 * kMaxForcing + 1];
-  int m = 0;
-  if (base != nullptr) {
-    c[m] = a;
-    X[m++] = base;
-  }
-  for (int k = 0; k < nw; ++k) {
-    if (w[k] == 0) continue;
-    c[m] = s * w[k];
-    X[m++] = F[k];
-  }
-  if (m == 0) {  // N_VLinearCombination needs at least one vector
-    N_VConst(0, out);
-    return;
-  }
-  N_VLinearCombination(m, c, X, out);
-}
-
-// out = a * base + s * r_x(t) (base may be null).
-void WithForcingX(const Stepper* st, sunrealtype t, sunrealtype a, N_Vector base, sunrealtype s,
-                  N_Vector out) {
-  sunrealtype val[kMaxForcing], der[kMaxForcing];
-  ForcingWeights(st, t, val, der);
-  CombineForcing(a, base, s, st->nforcing, val, st->Fx, out);
-}
-
-// Weights of the m-th time derivative of r(t) at t.
-void ForcingDerivWeights(const Stepper* st, sunrealtype t, int m, sunrealtype* w) {
-  const sunrealtype tau = st->nforcing > 1 ? (t - st->tshift) / st->tscale : 0;
-  for (int k = 0; k < st->nforcing; ++k) {
-    sunrealtype c = k >= m ? 1 : 0;
-    for (int i = 0; i < m && k >= m; ++i) c *= static_cast<sunrealtype>(k - i) / st->tscale;
-    for (int i = m; i < k; ++i) c *= tau;
-    w[k] = c;
-  }
-}
-
-// out = base + s * (r_v^(m)(t) + r_x^(m+1)(t)): the forcing's part of the m-th derivative of
-// x'' = G added to base.
-void WithForcingAccel(const Stepper* st, sunrealtype t, int m, N_Vector base, sunrealtype s,
-                      N_Vector out) {
-  sunrealtype c[2 * kMaxForcing];
-  N_Vector X[2 * kMaxForcing];
-  ForcingDerivWeights(st, t, m, c);
-  ForcingDerivWeights(st, t, m + 1, c + st->nforcing);
-  for (int k = 0; k < st->nforcing; ++k) {
-    X[k] = st->Fv[k];
-    X[st->nforcing + k] = st->Fx[k];
-  }
-  CombineForcing(1, base, s, 2 * st->nforcing, c, X, out);
-}
-
-// CEODE's right-hand side while the stepper runs: g(t, x, u - r_x) + r_v + r_x'.
-int Trampoline(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* data) {
-  auto* st = static_cast<Stepper*>(data);
-  if (st->nforcing == 0) return st->g(t, x, u, f, st->g_data);
-  sunrealtype val[kMaxForcing], der[kMaxForcing];
-  ForcingWeights(st, t, val, der);
-  CombineForcing(1, u, -1, st->nforcing, val, st->Fx, st->vg);
-  const int rv = st->g(t, x, st->vg, f, st->g_data);
-  if (rv != 0) return rv;
-  sunrealtype c[2 * kMaxForcing];
-  N_Vector X[2 * kMaxForcing];
-  for (int k = 0; k < st->nforcing; ++k) {
-    c[k] = val[k];
-    X[k] = st->Fv[k];
-    c[st->nforcing + k] = der[k];
-    X[st->nforcing + k] = st->Fx[k];
-  }
-  CombineForcing(1, f, 1, 2 * st->nforcing, c, X, f);
-  return 0;
+// y = [x; v] as views of the stepper's (SplitFirstOrder: the one check of its vectors).
+int SplitVector(Stepper* st, N_Vector y, Views& view, Halves* out, const char* func) {
+  return SplitFirstOrder(st->ce, y, view, &out->x, &out->v, func);
 }
 
 int Allocate(Stepper* st, N_Vector y, const char* func) {
-  CEodeMemRec* ce = st->ce;
-  st->serial = N_VGetVectorID(y) == SUNDIALS_NVEC_SERIAL;
   st->y_own = N_VClone(y);
-  st->u = N_VClone(ce->xcur);
-  st->rx = N_VClone(ce->xcur);
-  st->vg = N_VClone(ce->xcur);
-  st->rx_end = N_VClone(ce->xcur);
   st->ytmp = N_VClone(y);
-  if (st->y_own == nullptr || st->u == nullptr || st->rx == nullptr || st->vg == nullptr ||
-      st->rx_end == nullptr || st->ytmp == nullptr) {
-    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  st->u = N_VClone(st->ce->xcur);
+  if (st->y_own == nullptr || st->ytmp == nullptr || st->u == nullptr) {
+    return ProcessError(st->ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   return CE_SUCCESS;
 }
 
-// Problems the inner stepper cannot take: the forcing adds to x'' directly, so
-// a mass matrix would have to multiply it, and constraints would fight it.
-int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
+// Problems the inner stepper cannot take (the forcing adds to x'' directly: a mass matrix would
+// have to multiply it, constraints would fight it), and, with st, a memory changed behind it.
+int StepperCheckMemory(CEodeMemRec* ce, const Stepper* st, const char* func) {
   if (ce->ls.mfn != nullptr || ce->ls.M != nullptr || HasConstraints(ce)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The inner stepper needs M = I and no constraints (the MRI forcing is "
@@ -287,13 +92,19 @@ int StepperCheckMemory(CEodeMemRec* ce, const char* func) {
                         "No inner step: call CEodeSetFixedStep(ce_mem, h) first (h is the "
                         "largest inner step).");
   }
+  if (st != nullptr && (ce->f != st->f || ce->user_data != st->user_data)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The CEODE memory of this stepper was changed by CEodeInit or "
+                        "CEodeSetUserData after the stepper was created: free the stepper and "
+                        "create a new one (put your data in user_data before creating it).");
+  }
   return CE_SUCCESS;
 }
 
 int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
-  int flag = StepperCheckMemory(ce, func);
+  int flag = StepperCheckMemory(ce, nullptr, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->f == Trampoline) {
+  if (ce->adapters.stepper != nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "This CEODE memory already drives an inner stepper: create one CEODE "
                         "memory per stepper.");
@@ -301,22 +112,19 @@ int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   auto* st = new (std::nothrow) Stepper;
   if (st == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   st->ce = ce;
-  st->g = ce->f;
-  st->g_data = ce->user_data;
+  st->f = ce->f;
+  st->user_data = ce->user_data;
   st->h_max = ce->h;
-  st->omega_fixed = ce->guard.omega_user > 0;
-  ce->f = Trampoline;
-  ce->user_data = st;
+  ce->adapters.stepper = st;
+  ce->adapters.forcing = &st->forcing;  // no terms yet: f is evaluated as it is
   *out = st;
   return CE_SUCCESS;
 }
 
-void StepperDestroy(Stepper* st) { DestroyStepper(st); }
-
 // The stepper copies the state: it owns what it restarts from.
 int StepperReset(Stepper* st, sunrealtype tR, N_Vector yR, const char* func) {
   Halves in;
-  int flag = SplitVector(st, yR, &st->io_view, &in, func);
+  int flag = SplitVector(st, yR, st->io_view, &in, func);
   if (flag != CE_SUCCESS) return flag;
   if (!std::isfinite(tR)) return ProcessError(st->ce, CE_ILL_INPUT, func, "tR is not finite.");
   if (st->y_own == nullptr && (flag = Allocate(st, yR, func)) != CE_SUCCESS) return flag;
@@ -327,10 +135,11 @@ int StepperReset(Stepper* st, sunrealtype tR, N_Vector yR, const char* func) {
   }
   // A reset to the state the stepper already stands on (MRIStep does this at every stage; the
   // time may differ by rounding) keeps what the next restart may reuse; any other state drops it.
-  if (st->end_valid) {
+  bool& keep = st->forcing.end.valid;
+  if (keep) {
     N_VLinearSum(1, yR, -1, st->y_own, st->ytmp);
     const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(tR) + std::fabs(st->t_own));
-    st->end_valid = std::fabs(tR - st->t_own) <= tol && N_VMaxNorm(st->ytmp) == 0;
+    keep = std::fabs(tR - st->t_own) <= tol && N_VMaxNorm(st->ytmp) == 0;
   }
   N_VScale(1, yR, st->y_own);
   st->t_own = tR;
@@ -345,100 +154,14 @@ int StepperSetForcing(Stepper* st, sunrealtype tshift, sunrealtype tscale, N_Vec
                         "%d forcing vectors: 0..%d are supported (F must not be NULL).", nf,
                         kMaxForcing);
   }
-  if (nf > 1 && !(tscale != 0)) {
-    return ProcessError(st->ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
+  N_Vector Fx[kMaxForcing], Fv[kMaxForcing];
+  int flag = CE_SUCCESS;
+  for (int k = 0; k < nf && flag == CE_SUCCESS; ++k) {
+    flag = SplitFirstOrder(st->ce, F[k], st->forcing_view[k], &Fx[k], &Fv[k], func);
   }
-  st->nforcing = 0;
-  for (int k = 0; k < nf; ++k) {
-    Halves hv;
-    const int flag = SplitVector(st, F[k], &st->forcing_view[k], &hv, func);
-    if (flag != CE_SUCCESS) return flag;
-    st->Fx[k] = hv.x;
-    st->Fv[k] = hv.v;
-  }
-  st->nforcing = nf;
-  st->tshift = tshift;
-  st->tscale = tscale;
-  return CE_SUCCESS;
-}
-
-#ifdef CEODE_HAVE_SUNSTEPPER
-int StepperSetStepDirection(Stepper* st, sunrealtype stepdir, const char* func) {
-  if (stepdir < 0) {
-    return ProcessError(st->ce, CE_BAD_T, func,
-                        "Step direction %g: CEODE integrates forward only (a splitting method "
-                        "of order > 2 takes negative substeps); use a second-order splitting "
-                        "such as Strang, or another inner stepper.",
-                        static_cast<double>(stepdir));
-  }
-  st->stepdir = 1;
-  return CE_SUCCESS;
-}
-
-void StepperSetStopTime(Stepper* st, sunrealtype tstop) {
-  st->tstop = tstop;
-  st->tstop_set = true;
-}
-#endif
-
-// The cheap restart needs the history to be the explicit path's (D_2 = G at the end point,
-// exactly; with declared velocity dependence D_2 comes from the implicit solve and g_v would
-// enter the jerk) and a consistent one (not the zero start).
-bool CanReuse(const Stepper* st) {
-  const CEodeMemRec* ce = st->ce;
-  return !ce->vel_dependent && !ce->zero_start;
-}
-
-// After an inner run that ended on a step: strip the old forcing from the history at t_end,
-// g_end[k] = D_k - r_v^(k-2) - r_x^(k-1), k = 2 .. d-1 (for k = 2: g(t, x) itself).
-void CaptureEnd(Stepper* st) {
-  CEodeMemRec* ce = st->ce;
-  st->end_valid = false;
-  if (!CanReuse(st) || !ce->started) return;
-  const sunrealtype t = ce->tcur;
-  for (int k = 2; k < ce->degree; ++k) {
-    if (st->g_end[k] == nullptr && (st->g_end[k] = N_VClone(ce->xcur)) == nullptr) return;
-    WithForcingAccel(st, t, k - 2, ce->D[k], -1, st->g_end[k]);
-  }
-  WithForcingX(st, t, 0, nullptr, 1, st->rx_end);
-  st->t_end = t;
-  st->end_degree = ce->degree;
-  st->end_valid = true;
-}
-
-// The start's derivatives at t0 from the last run's end and the new forcing (its derivatives
-// are known exactly). x and v are continuous, so g(t0, x0) is unchanged: D_2 costs nothing.
-// x' = v + r_x jumps by delta = r_x,new(t0) - r_x,old(t0), so the g part of the jerk,
-// g_t + g_x x', gains g_x delta: one forward difference, none when delta = 0. Degrees 3 and 4
-// are then exact. From D_4 on, the g parts also change with the jump (g_x times the jump of
-// D_2, g_xx terms in delta): carried as they are, these errors are proportional to the change
-// of the forcing, and a step sees them scaled by h^k (docs/porting.md, "What a restart costs").
-int PresetStart(Stepper* st, sunrealtype t0, const Halves& own, const char* func) {
-  CEodeMemRec* ce = st->ce;
-  for (int k = 2; k < ce->degree; ++k) {
-    WithForcingAccel(st, t0, k - 2, st->g_end[k], 1, ce->D[k]);
-  }
-  if (ce->degree >= 4) {
-    WithForcingX(st, t0, -1, st->rx_end, 1, st->rx);
-    const sunrealtype dn = N_VMaxNorm(st->rx);
-    if (dn > 0) {
-      const sunrealtype eps =
-          std::sqrt(SUN_UNIT_ROUNDOFF) * std::max(sunrealtype(1), N_VMaxNorm(own.x) / dn);
-      N_VLinearSum(1, own.x, eps, st->rx, st->vg);
-      const int rv = st->g(t0, st->vg, own.v, ce->atmp, st->g_data);
-      ++ce->nfe;
-      ++ce->nfe_start;
-      if (rv != 0) {
-        return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                            "The right-hand side failed (returned %d) at t = %.17g.", rv,
-                            static_cast<double>(t0));
-      }
-      N_VLinearSum(1 / eps, ce->atmp, -1 / eps, st->g_end[2], ce->atmp);
-      N_VLinearSum(1, ce->D[3], 1, ce->atmp, ce->D[3]);
-    }
-  }
-  ce->start_preset = true;
-  return CE_SUCCESS;
+  if (flag != CE_SUCCESS) nf = 0;  // no forcing rather than half of one
+  const int set = SetForcing(st->ce, &st->forcing, tshift, tscale, nf, Fx, Fv, func);
+  return flag != CE_SUCCESS ? flag : set;
 }
 
 // Restart CEODE at (t0, x, u = v + r_x(t0)) with the largest step <= h_max that
@@ -450,48 +173,34 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
   const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
   int flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
   if (flag != CE_SUCCESS) return flag;
-  WithForcingX(st, t0, 1, own.v, 1, st->u);
-  const Counters saved = SaveCounters(ce);
-  const bool warned = ce->guard.warned;
-  flag = CEodeReInit(ce, t0, own.x, st->u);
-  AddCounters(ce, saved);
-  ce->guard.warned = warned;
+  ForcingX(st->forcing, t0, 1, own.v, 1, st->u);
   ++st->nrestarts;
-  const bool reuse = st->end_valid && CanReuse(st) && st->end_degree == ce->degree &&
-                     std::fabs(t0 - st->t_end) <= 1e-8 * ce->h;
-  st->end_valid = false;
-  if (flag == CE_SUCCESS && reuse) flag = PresetStart(st, t0, own, func);
-  return flag;
-}
-
-// Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's
-// x0, v0 at t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
-int StateFromMemory(Stepper* st, N_Vector y, const char* func) {
-  Halves in, own;
-  int flag = SplitVector(st, y, &st->io_view, &in, func);
-  if (flag == CE_SUCCESS && st->y_own == nullptr) flag = Allocate(st, y, func);
-  if (flag == CE_SUCCESS) flag = SplitVector(st, st->y_own, &st->own_view, &own, func);
-  if (flag != CE_SUCCESS) return flag;
-  N_VScale(1, st->ce->xcur, own.x);
-  N_VScale(1, st->ce->D[1], own.v);
-  st->t_own = st->ce->tcur;
-  st->have_state = true;
-  st->end_valid = false;
-  return CE_SUCCESS;
+  ResetOptions opt;
+  opt.keep_frequency = true;  // the first run estimates omega_max, later ones check h against it
+  if (CanCarry(ce, st->forcing, t0)) {
+    opt.history = [&] { return CarryHistory(ce, &st->forcing, t0, own.x, own.v, func); };
+  }
+  st->forcing.end.valid = false;
+  return Reset(ce, func, t0, own.x, st->u, opt);
 }
 
 // Integrates the owned state from t_own to tout (> t_own) and copies it to y.
 int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   CEodeMemRec* ce = st->ce;
-  int flag = StepperCheckMemory(ce, func);
+  int flag = StepperCheckMemory(ce, st, func);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->f != Trampoline || ce->user_data != st) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "The CEODE memory of this stepper was changed by CEodeInit or "
-                        "CEodeSetUserData after the stepper was created: free the stepper and "
-                        "create a new one (put your data in user_data before creating it).");
+  Halves own, io;
+  if ((flag = SplitVector(st, y, st->io_view, &io, func)) != CE_SUCCESS) return flag;
+  if (st->y_own == nullptr && (flag = Allocate(st, y, func)) != CE_SUCCESS) return flag;
+  if ((flag = SplitVector(st, st->y_own, st->own_view, &own, func)) != CE_SUCCESS) return flag;
+  if (!st->have_state) {
+    // Without a reset, the stepper starts where the CEODE memory stands (CEodeInit's x0, v0 at
+    // t0), as ARKODE's own SUNSteppers do; y only gives the vector shape.
+    N_VScale(1, ce->xcur, own.x);
+    N_VScale(1, ce->D[1], own.v);
+    st->t_own = ce->tcur;
+    st->have_state = true;
   }
-  if (!st->have_state && (flag = StateFromMemory(st, y, func)) != CE_SUCCESS) return flag;
   if (st->tstop_set && tout > st->tstop) tout = st->tstop;
   const sunrealtype t0 = st->t_own;
   const sunrealtype tol = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(t0) + std::fabs(tout));
@@ -502,28 +211,14 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
                         "use a second-order splitting such as Strang, or another inner stepper.",
                         static_cast<double>(t0), static_cast<double>(tout));
   }
-  Halves own, io;
-  if ((flag = SplitVector(st, st->y_own, &st->own_view, &own, func)) != CE_SUCCESS) return flag;
-  if ((flag = SplitVector(st, y, &st->io_view, &io, func)) != CE_SUCCESS) return flag;
   if (tout - t0 > tol) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
-    flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL);
-    ce->start_preset = false;
-    if (flag < 0) return flag;
+    if ((flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL)) < 0) return flag;
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.
-    if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) CaptureEnd(st);
-    // The first run estimated omega_max; later restarts check h against it without
-    // a new power iteration.
-    if (!st->omega_fixed && ce->guard.omega_est > 0 && std::isfinite(ce->guard.omega_est)) {
-      const bool warned = ce->guard.warned;  // one warning per run, not one per restart
-      CEodeSetMaxFrequency(ce, ce->guard.omega_est);
-      ce->guard.warned = warned;
-      ce->guard.pending = false;
-      st->omega_fixed = true;
-    }
-    WithForcingX(st, tout, 1, st->u, -1, own.v);
+    if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) KeepEnd(ce, &st->forcing);
+    ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
   N_VScale(1, st->y_own, y);
@@ -533,11 +228,11 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
 // The unforced fast right-hand side f = [v; g(t, x, v)].
 int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const char* func) {
   Halves in, out;
-  int flag = SplitVector(st, y, &st->io_view, &in, func);
+  int flag = SplitVector(st, y, st->io_view, &in, func);
   if (flag != CE_SUCCESS) return flag;
-  if ((flag = SplitVector(st, f, &st->io2_view, &out, func)) != CE_SUCCESS) return flag;
+  if ((flag = SplitVector(st, f, st->io2_view, &out, func)) != CE_SUCCESS) return flag;
   N_VScale(1, in.v, out.x);
-  const int rv = st->g(t, in.x, in.v, out.v, st->g_data);
+  const int rv = BaseRhs(st->ce, t, in.x, in.v, out.v);
   ++st->ce->nfe;
   if (rv != 0) {
     return ProcessError(st->ce, CE_RHSFUNC_FAIL, func,
@@ -547,24 +242,7 @@ int StepperFullRhs(Stepper* st, sunrealtype t, N_Vector y, N_Vector f, const cha
   return CE_SUCCESS;
 }
 
-long int StepperNumRestarts(const Stepper* st) { return st->nrestarts; }
-
-// The stepper attached to a CEODE memory, or nullptr.
-Stepper* AttachedStepper(CEodeMemRec* ce) {
-  return ce->f == Trampoline ? static_cast<Stepper*>(ce->user_data) : nullptr;
-}
-
-}  // namespace
-}  // namespace ceode
-
-// ---------------------------------------------------------------------------
-// Version-specific glue: each callback unpacks its stepper and calls the
-// implementation above.
-// ---------------------------------------------------------------------------
-namespace {
-
-using ceode::Stepper;
-
+// --- Version-specific glue: each callback unpacks its stepper and calls the above. ---
 Stepper* MriContent(MRIStepInnerStepper s) {
   void* content = nullptr;
   return MRIStepInnerStepper_GetContent(s, &content) == 0 ? static_cast<Stepper*>(content)
@@ -579,20 +257,20 @@ int MriEvolve(MRIStepInnerStepper s, sunrealtype t0, sunrealtype tout, N_Vector 
   N_Vector* F = nullptr;
   int nf = 0;
   if (MRIStepInnerStepper_GetForcingData(s, &tshift, &tscale, &F, &nf) != 0) nf = 0;
-  int flag = ceode::StepperSetForcing(st, tshift, tscale, F, nf, func);
-  if (flag == CE_SUCCESS) flag = ceode::StepperReset(st, t0, y, func);
-  if (flag == CE_SUCCESS) flag = ceode::StepperEvolve(st, tout, y, func);
+  int flag = StepperSetForcing(st, tshift, tscale, F, nf, func);
+  if (flag == CE_SUCCESS) flag = StepperReset(st, t0, y, func);
+  if (flag == CE_SUCCESS) flag = StepperEvolve(st, tout, y, func);
   return flag;
 }
 
 int MriFullRhs(MRIStepInnerStepper s, sunrealtype t, N_Vector y, N_Vector f, int /*mode*/) {
   Stepper* st = MriContent(s);
-  return st == nullptr ? CE_MEM_NULL : ceode::StepperFullRhs(st, t, y, f, "CEodeMRIStepFullRhs");
+  return st == nullptr ? CE_MEM_NULL : StepperFullRhs(st, t, y, f, "CEodeMRIStepFullRhs");
 }
 
 int MriReset(MRIStepInnerStepper s, sunrealtype tR, N_Vector yR) {
   Stepper* st = MriContent(s);
-  return st == nullptr ? CE_MEM_NULL : ceode::StepperReset(st, tR, yR, "CEodeMRIStepReset");
+  return st == nullptr ? CE_MEM_NULL : StepperReset(st, tR, yR, "CEodeMRIStepReset");
 }
 
 #ifdef CEODE_HAVE_SUNSTEPPER
@@ -602,64 +280,72 @@ Stepper* SunContent(SUNStepper s) {
                                                            : nullptr;
 }
 
-// SUNStepper calls return a SUNErrCode; CEODE's own flag is the stepper's last flag.
-SUNErrCode SunResult(SUNStepper s, int flag) {
+// Runs call(st) on the stepper of s (SUN_ERR_ARG_CORRUPT without one). CEODE's own flag becomes
+// the stepper's last flag; a failure returns `fail`.
+template <class Call>
+SUNErrCode OnSun(SUNStepper s, Call call, SUNErrCode fail = SUN_ERR_OP_FAIL) {
+  Stepper* st = SunContent(s);
+  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
+  const int flag = call(st);
   SUNStepper_SetLastFlag(s, flag);
-  return flag < 0 ? SUN_ERR_OP_FAIL : SUN_SUCCESS;
+  return flag < 0 ? fail : SUN_SUCCESS;
 }
 
 SUNErrCode SunEvolve(SUNStepper s, sunrealtype tout, N_Vector vret, sunrealtype* tret) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr || tret == nullptr) return SUN_ERR_ARG_CORRUPT;
-  const int flag = ceode::StepperEvolve(st, tout, vret, "CEodeSUNStepperEvolve");
-  *tret = st->t_own;
-  return SunResult(s, flag);
+  if (tret == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return OnSun(s, [&](Stepper* st) {
+    const int flag = StepperEvolve(st, tout, vret, "CEodeSUNStepperEvolve");
+    *tret = st->t_own;
+    return flag;
+  });
 }
 
 SUNErrCode SunFullRhs(SUNStepper s, sunrealtype t, N_Vector v, N_Vector f, SUNFullRhsMode) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s, ceode::StepperFullRhs(st, t, v, f, "CEodeSUNStepperFullRhs"));
+  return OnSun(s,
+               [&](Stepper* st) { return StepperFullRhs(st, t, v, f, "CEodeSUNStepperFullRhs"); });
 }
 
 SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s, ceode::StepperReset(st, tR, vR, "CEodeSUNStepperReset"));
+  return OnSun(s, [&](Stepper* st) { return StepperReset(st, tR, vR, "CEodeSUNStepperReset"); });
 }
 
 SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  ceode::StepperSetStopTime(st, tstop);
-  return SUN_SUCCESS;
+  return OnSun(s, [&](Stepper* st) {
+    st->tstop = tstop;
+    st->tstop_set = true;
+    return CE_SUCCESS;
+  });
 }
 
 SUNErrCode SunSetStepDirection(SUNStepper s, sunrealtype stepdir) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  const int flag = ceode::StepperSetStepDirection(st, stepdir, "CEodeSUNStepperSetStepDirection");
-  SUNStepper_SetLastFlag(s, flag);
-  return flag < 0 ? SUN_ERR_ARG_OUTOFRANGE : SUN_SUCCESS;
+  const auto check = [&](Stepper* st) {
+    if (!(stepdir < 0)) return CE_SUCCESS;
+    return ProcessError(st->ce, CE_BAD_T, "CEodeSUNStepperSetStepDirection",
+                        "Step direction %g: CEODE integrates forward only (a splitting method "
+                        "of order > 2 takes negative substeps); use a second-order splitting "
+                        "such as Strang, or another inner stepper.",
+                        static_cast<double>(stepdir));
+  };
+  return OnSun(s, check, SUN_ERR_ARG_OUTOFRANGE);
 }
 
 SUNErrCode SunSetForcing(SUNStepper s, sunrealtype tshift, sunrealtype tscale, N_Vector* F,
                          int nf) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr) return SUN_ERR_ARG_CORRUPT;
-  return SunResult(s,
-                   ceode::StepperSetForcing(st, tshift, tscale, F, nf, "CEodeSUNStepperForcing"));
+  return OnSun(s, [&](Stepper* st) {
+    return StepperSetForcing(st, tshift, tscale, F, nf, "CEodeSUNStepperForcing");
+  });
 }
 
 SUNErrCode SunGetNumSteps(SUNStepper s, suncountertype* nst) {
-  Stepper* st = SunContent(s);
-  if (st == nullptr || nst == nullptr) return SUN_ERR_ARG_CORRUPT;
-  *nst = static_cast<suncountertype>(st->ce->nst);
-  return SUN_SUCCESS;
+  if (nst == nullptr) return SUN_ERR_ARG_CORRUPT;
+  return OnSun(s, [&](Stepper* st) {
+    *nst = static_cast<suncountertype>(st->ce->nst);
+    return CE_SUCCESS;
+  });
 }
 
 SUNErrCode SunDestroy(SUNStepper s) {
-  ceode::StepperDestroy(SunContent(s));
+  StepperDestroy(SunContent(s));
   return SUNStepper_SetContent(s, nullptr);
 }
 
@@ -681,27 +367,30 @@ int SunAttach(SUNStepper s, Stepper* st) {
 // stepper's own state.
 template <class Handle>
 int BeginCreate(void* ce_mem, Handle* out, const char* func, CEodeMemRec** ce, Stepper** st) {
-  const int flag = ceode::Access(ce_mem, func, ce, true);
+  const int flag = Access(ce_mem, func, ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (out == nullptr) return ceode::ProcessError(*ce, CE_ILL_INPUT, func, "stepper = NULL.");
+  if (out == nullptr) return ProcessError(*ce, CE_ILL_INPUT, func, "stepper = NULL.");
   *out = nullptr;
-  return ceode::StepperCreate(*ce, st, func);
+  return StepperCreate(*ce, st, func);
 }
 
 }  // namespace
+}  // namespace ceode
+
+using ceode::Stepper;
 
 extern "C" {
 
 int CEodeCreateMRIStepInnerStepper(void* ce_mem, MRIStepInnerStepper* stepper) {
   CEodeMemRec* ce = nullptr;
   Stepper* st = nullptr;
-  const int flag = BeginCreate(ce_mem, stepper, __func__, &ce, &st);
+  const int flag = ceode::BeginCreate(ce_mem, stepper, __func__, &ce, &st);
   if (flag != CE_SUCCESS) return flag;
   int rv = MRIStepInnerStepper_Create(ce->sunctx, stepper);
   if (rv == 0) rv = MRIStepInnerStepper_SetContent(*stepper, st);
-  if (rv == 0) rv = MRIStepInnerStepper_SetEvolveFn(*stepper, MriEvolve);
-  if (rv == 0) rv = MRIStepInnerStepper_SetFullRhsFn(*stepper, MriFullRhs);
-  if (rv == 0) rv = MRIStepInnerStepper_SetResetFn(*stepper, MriReset);
+  if (rv == 0) rv = MRIStepInnerStepper_SetEvolveFn(*stepper, ceode::MriEvolve);
+  if (rv == 0) rv = MRIStepInnerStepper_SetFullRhsFn(*stepper, ceode::MriFullRhs);
+  if (rv == 0) rv = MRIStepInnerStepper_SetResetFn(*stepper, ceode::MriReset);
   if (rv != 0) {
     ceode::StepperDestroy(st);
     if (*stepper != nullptr) MRIStepInnerStepper_Free(stepper);
@@ -713,7 +402,7 @@ int CEodeCreateMRIStepInnerStepper(void* ce_mem, MRIStepInnerStepper* stepper) {
 
 int CEodeFreeMRIStepInnerStepper(MRIStepInnerStepper* stepper) {
   if (stepper == nullptr || *stepper == nullptr) return CE_SUCCESS;
-  ceode::StepperDestroy(MriContent(*stepper));
+  ceode::StepperDestroy(ceode::MriContent(*stepper));
   MRIStepInnerStepper_SetContent(*stepper, nullptr);
   MRIStepInnerStepper_Free(stepper);
   return CE_SUCCESS;
@@ -726,12 +415,12 @@ int CEodeGetNumInnerRestarts(void* ce_mem, long int* nrestarts) {
   if (nrestarts == nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "nrestarts = NULL.");
   }
-  const Stepper* st = ceode::AttachedStepper(ce);
+  const auto* st = static_cast<const Stepper*>(ce->adapters.stepper);
   if (st == nullptr) {
     return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
                                "This CEODE memory drives no inner stepper.");
   }
-  *nrestarts = ceode::StepperNumRestarts(st);
+  *nrestarts = st->nrestarts;
   return CE_SUCCESS;
 }
 
@@ -739,10 +428,10 @@ int CEodeGetNumInnerRestarts(void* ce_mem, long int* nrestarts) {
 int CEodeCreateSUNStepper(void* ce_mem, SUNStepper* stepper) {
   CEodeMemRec* ce = nullptr;
   Stepper* st = nullptr;
-  const int flag = BeginCreate(ce_mem, stepper, __func__, &ce, &st);
+  const int flag = ceode::BeginCreate(ce_mem, stepper, __func__, &ce, &st);
   if (flag != CE_SUCCESS) return flag;
   int rv = SUNStepper_Create(ce->sunctx, stepper);
-  if (rv == 0) rv = SunAttach(*stepper, st);
+  if (rv == 0) rv = ceode::SunAttach(*stepper, st);
   if (rv != 0) {
     ceode::StepperDestroy(st);
     if (*stepper != nullptr) {
