@@ -123,7 +123,7 @@ void SetCoupling(CEodeMemRec* ce, sunrealtype coupling) {
   ce->pc.nst_check = ce->nst;
 }
 
-// kappa ||M^{-1} df/dv||: power steps from the probe direction at the start, into pc_dir (kept
+// kappa ||M^{-1} df/dv||: power steps from the probe direction at the start, into pc.dir (kept
 // for the refreshes); atmp, ftmp are scratch.
 int EstimateCoupling(CEodeMemRec* ce, const char* func) {
   N_Vector w = ce->pc.dir, u = ce->atmp, fbase = ce->ftmp;
