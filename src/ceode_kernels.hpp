@@ -86,6 +86,52 @@ inline sunrealtype* SerialData(N_Vector v) {
 // Combine on serial vectors (N_VLinearSum's a = +-b shortcuts included). out is not an input.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
                    sunrealtype* out);
+// x[j] = the data of X[j], j < m, for vectors all NVECTOR_SERIAL or all of another kind that
+// exposes its (local) data, as the solvers' vectors are: one test for all.
+inline void SerialDataOf(int m, const N_Vector* X, const sunrealtype** x) {
+  const bool serial = m > 0 && X[0]->ops->nvgetarraypointer == N_VGetArrayPointer_Serial;
+  for (int j = 0; j < m; ++j) x[j] = serial ? NV_DATA_S(X[j]) : N_VGetArrayPointer(X[j]);
+}
+
+// out = sum_j c_j x_j entry by entry, the terms in order (the generic form's arithmetic), for
+// 3 <= m <= kMaxDegree terms, where no shortcut form applies; returns false for other m. Inline,
+// with the term count a constant in each branch: at n of a few the solvers' combinations are a
+// few multiplications, and a call through a table costs as much.
+template <int M>
+inline void CombineEntriesOf(sunindextype n, const sunrealtype* c, const sunrealtype* const* x,
+                             sunrealtype* out) {
+  for (sunindextype i = 0; i < n; ++i) {
+    sunrealtype s = c[0] * x[0][i];
+    for (int j = 1; j < M; ++j) s += c[j] * x[j][i];
+    out[i] = s;
+  }
+}
+inline bool CombineEntries(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
+                           sunrealtype* out) {
+  static_assert(kMaxDegree == 8, "CombineEntries lists every term count");
+  switch (m) {
+    case 3:
+      CombineEntriesOf<3>(n, c, x, out);
+      return true;
+    case 4:
+      CombineEntriesOf<4>(n, c, x, out);
+      return true;
+    case 5:
+      CombineEntriesOf<5>(n, c, x, out);
+      return true;
+    case 6:
+      CombineEntriesOf<6>(n, c, x, out);
+      return true;
+    case 7:
+      CombineEntriesOf<7>(n, c, x, out);
+      return true;
+    case 8:
+      CombineEntriesOf<8>(n, c, x, out);
+      return true;
+    default:
+      return false;
+  }
+}
 // The same on the data of the vectors X, all NVECTOR_SERIAL or all of another kind exposing
 // their (local) data.
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,

@@ -545,42 +545,9 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
 
 // The terms are copied into a FusedTerms only as far as the form reads them: at n of a few the
 // copy is most of the call.
-namespace {
-
-// out = sum_j c_j x_j entry by entry, the terms in order (the generic form's arithmetic); M a
-// constant, so the sum unrolls. At n of a few the solvers' combinations run through these, since
-// the blocked form's set-up costs more than the sum.
-template <int M>
-void CombineEntries(sunindextype n, const sunrealtype* c, const sunrealtype* const* x,
-                    sunrealtype* out) {
-  for (sunindextype i = 0; i < n; ++i) {
-    sunrealtype s = c[0] * x[0][i];
-    for (int j = 1; j < M; ++j) s += c[j] * x[j][i];
-    out[i] = s;
-  }
-}
-
-using EntriesFn = void (*)(sunindextype, const sunrealtype*, const sunrealtype* const*,
-                           sunrealtype*);
-constexpr EntriesFn kEntries[kMaxDegree + 1] = {nullptr,
-                                                nullptr,
-                                                nullptr,
-                                                &CombineEntries<3>,
-                                                &CombineEntries<4>,
-                                                &CombineEntries<5>,
-                                                &CombineEntries<6>,
-                                                &CombineEntries<7>,
-                                                &CombineEntries<8>};
-static_assert(kMaxDegree == 8, "kEntries lists every term count");
-
-}  // namespace
-
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtype* const* x,
                    sunrealtype* out) {
-  if (m >= 3 && m <= kMaxDegree) {  // no shortcut form applies from three terms on (FormOf)
-    kEntries[m](n, c, x, out);
-    return;
-  }
+  if (CombineEntries(n, m, c, x, out)) return;
   FusedTerms tk;
   for (int j = 0; j < m; ++j) {
     tk.c[j] = c[j];
@@ -592,13 +559,8 @@ void CombineSerial(sunindextype n, int m, const sunrealtype* c, const sunrealtyp
 void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* X,
                    sunrealtype* out) {
   const sunrealtype* x[kMaxTerms];
-  // The solvers' vectors are all NVECTOR_SERIAL or all not (SerialBackend): one test for all.
-  const bool serial = m > 0 && X[0]->ops->nvgetarraypointer == N_VGetArrayPointer_Serial;
-  for (int j = 0; j < m; ++j) x[j] = serial ? NV_DATA_S(X[j]) : N_VGetArrayPointer(X[j]);
-  if (m >= 3 && m <= kMaxDegree) {
-    kEntries[m](n, c, x, out);
-    return;
-  }
+  SerialDataOf(m, X, x);
+  if (CombineEntries(n, m, c, x, out)) return;
   CombineSerial(n, m, c, x, out);
 }
 

@@ -210,7 +210,10 @@ __attribute__((always_inline)) inline void VelocityCombination(const CEodeMemRec
     N_VLinearCombination(m, const_cast<sunrealtype*>(c), X, out);
     return;
   }
-  CombineSerial(ce->n, m, c, X, SerialData(out));
+  const sunrealtype* x[kMaxDegree];
+  SerialDataOf(std::min(m, kMaxDegree), X, x);
+  if (!CombineEntries(ce->n, m, c, x, SerialData(out)))
+    CombineSerial(ce->n, m, c, X, SerialData(out));
 }
 
 }  // namespace
