@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <new>
 
+#include "ceode_adapt.hpp"
 #include "ceode_impl.hpp"
 
 namespace ceode {
@@ -72,6 +73,7 @@ void FreeSized(CEodeMemRec* ce) {
   LsFree(ce);
   ConstrFree(ce);
   GuardFree(ce);
+  AdaptFree(ce);
   FreeVectors(ce);
 }
 
@@ -106,7 +108,7 @@ int CheckOutputVector(CEodeMemRec* ce, const char* func, N_Vector y, const char*
 // Builds whatever the configuration needs (linear, nonlinear, constraint solvers)
 // and the starting history; runs once per configuration change.
 int Prepare(CEodeMemRec* ce, const char* func) {
-  if (ce->h <= 0) {
+  if (ce->h <= 0 && !AdaptOn(ce)) {
     return ProcessError(
         ce, CE_ILL_INPUT, func,
         "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
@@ -211,6 +213,7 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
   NlsReset(ce, counters);
   PcReset(ce, counters);
   GuardReset(ce, counters);
+  AdaptReset(ce, counters);
   return CE_SUCCESS;
 }
 
@@ -291,6 +294,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   if (flag == CE_SUCCESS)
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
+  ceode::AdaptSetTarget(ce, tout);
   flag = ceode::Prepare(ce, __func__);
   if (flag == CE_SUCCESS && ce->guard.pending) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {
@@ -298,6 +302,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     *tret = ce->tcur;
     return flag;
   }
+  if (ceode::AdaptOn(ce)) return ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
   sunrealtype target = 0;
   bool hit_tstop = false;
   flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
@@ -339,12 +344,16 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
                                ce->degree, ce->degree);
   }
   const sunrealtype s = t - ce->tcur;
-  const sunrealtype tol = 1e-8 * ce->h;
-  if (!(s >= -tol && s <= ce->h + tol)) {  // also refuses t = NaN
+  // The interval of the dense output: the next step, or with error control the last accepted.
+  const bool back = ceode::AdaptOn(ce);
+  const sunrealtype lo = back ? -ce->adapt->hlast : 0;
+  const sunrealtype hi = back ? 0 : ce->h;
+  const sunrealtype tol = 1e-8 * (back ? ce->adapt->hlast : ce->h);
+  if (!(s >= lo - tol && s <= hi + tol)) {  // also refuses t = NaN
     return ceode::ProcessError(ce, CE_BAD_T, __func__,
                                "t = %.17g is outside the current interval [%.17g, %.17g].",
-                               static_cast<double>(t), static_cast<double>(ce->tcur),
-                               static_cast<double>(ce->tcur + ce->h));
+                               static_cast<double>(t), static_cast<double>(ce->tcur + lo),
+                               static_cast<double>(ce->tcur + hi));
   }
   ceode::Interpolate(ce, s, k, dky);
   return CE_SUCCESS;

@@ -1,19 +1,24 @@
 // Dense output: the interpolant of the step interval [tcur, tcur + h] from the history at tcur
-// and the position x(tcur + h) (docs/theory.md section 7).
+// and the position x(tcur + h) (docs/theory.md section 7); with error control, of the last
+// accepted step [tcur - hlast, tcur] and the position x(tcur - hlast) (section 10.4).
 #include <cmath>
 
+#include "ceode_adapt.hpp"
 #include "ceode_kernels.hpp"
 
 namespace ceode {
 
 namespace {
 
-// p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h). Apart from
-// Interpolate so that the copy at s = 0 (every CE_ONE_STEP output) does not set up its frame.
+// p(s) = sum_{i<d} D_i s^i/i! + e s^d, with e fixed by p(h) = x(tcur + h) (error control:
+// p(-hlast) = x(tcur - hlast)). Apart from Interpolate so that the copy at s = 0 (every
+// CE_ONE_STEP output) does not set up its frame.
 __attribute__((noinline)) void InterpolatePolynomial(CEodeMemRec* ce, sunrealtype s, int k,
                                                      N_Vector out) {
   const int d = ce->degree;
-  const sunrealtype h = ce->h;
+  const bool back = AdaptOn(ce) && ce->adapt->hlast > 0;
+  const sunrealtype h = back ? -ce->adapt->hlast : ce->h;
+  N_Vector xend = back ? ce->xnew : ce->xnext;
   const sunrealtype e = Factorial(d) / Factorial(d - k) * std::pow(s, d - k) / std::pow(h, d);
   sunrealtype ts[kMaxDegree + 1];
   sunrealtype th[kMaxDegree + 1];
@@ -26,7 +31,7 @@ __attribute__((noinline)) void InterpolatePolynomial(CEodeMemRec* ce, sunrealtyp
     c[m] = (i >= k ? ts[i - k] : 0) - e * th[i];
     X[m++] = ce->D[i];
   }
-  N_VLinearSum(1, ce->xnext, -1, ce->xcur, ce->tmp3);
+  N_VLinearSum(1, xend, -1, ce->xcur, ce->tmp3);
   c[m] = e;
   X[m++] = ce->tmp3;
   if (k == 0) {

@@ -647,6 +647,13 @@ void GuardMethodChanged(CEodeMemRec* ce) { ce->guard.omega_limit = 0; }
 
 void GuardRequestCheck(CEodeMemRec* ce) { ce->guard.pending = true; }
 
+sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety) {
+  const sunrealtype omega = ce->guard.omega_est;
+  if (ce->guard.mode == CE_GUARD_OFF || !(omega > 0) || !std::isfinite(omega)) return SUN_BIG_REAL;
+  const sunrealtype lim = Limit(ce);
+  return lim > 0 ? safety * lim / omega : SUN_BIG_REAL;
+}
+
 int GuardCheckPending(CEodeMemRec* ce, const char* func) {
   if (!ce->guard.pending) return CE_SUCCESS;
   ce->guard.pending = false;
@@ -663,6 +670,8 @@ int GuardCheck(CEodeMemRec* ce, const char* func) {
   if (flag != CE_SUCCESS) return flag;
   // No oscillation to resolve (f independent of x), or no estimate possible.
   if (!(ce->guard.omega_est > 0) || !std::isfinite(ce->guard.omega_est)) return CE_SUCCESS;
+  // With error control the estimate caps the steps (GuardStableStep): nothing to warn about.
+  if (AdaptOn(ce)) return CE_SUCCESS;
   const sunrealtype lim = Limit(ce);
   const sunrealtype Omega = ce->h * ce->guard.omega_est;
   // omega_est >= omega_max, so Omega <= lim keeps the true h * omega_max inside too.

@@ -70,6 +70,10 @@ struct StepMem;     // ceode_step.hpp: the step module's record
 struct StepMemFree {
   void operator()(StepMem* sm) const;
 };
+struct AdaptMem;  // ceode_adapt.hpp: the error-control module's record
+struct AdaptMemFree {
+  void operator()(AdaptMem* am) const;
+};
 
 // The acceleration solve of a step, chosen once per start: explicit (docs/theory.md section
 // 4.1), the nonlinear solver (4.2), prediction-correction (4.3), either by the coupling (AUTO,
@@ -252,7 +256,9 @@ struct CEodeMemRec {
   // The step module's record (ceode_step.hpp): the update options, plans and kernels, and the
   // step chosen at the start. Created with the first option or CEodeInit.
   std::unique_ptr<ceode::StepMem, ceode::StepMemFree> step;
-  sunrealtype h = 0;  // 0 until CEodeSetFixedStep
+  // The error-control module's record (ceode_adapt.hpp): created by the first tolerances call.
+  std::unique_ptr<ceode::AdaptMem, ceode::AdaptMemFree> adapt;
+  sunrealtype h = 0;  // 0 until CEodeSetFixedStep; with error control, the next step to take
   ceode::StepCoeffs co;
 
   // State: derivatives D_1..D_{d-1} at tcur, x at tcur and at tcur + h.
@@ -329,6 +335,9 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 void Restart(CEodeMemRec* ce);
 // The access guard every exported function starts with.
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
+
+// ceode_adapt.cpp: whether the run chooses its steps from tolerances (error control).
+bool AdaptOn(const CEodeMemRec* ce);
 
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);
@@ -473,6 +482,8 @@ void GuardReset(CEodeMemRec* ce, bool counters);
 void GuardMethodChanged(CEodeMemRec* ce);                  // Omega_max is looked up again
 void GuardRequestCheck(CEodeMemRec* ce);                   // at the next CEodeEvolve (a start)
 int GuardCheckPending(CEodeMemRec* ce, const char* func);  // the requested check, once
+// safety * Omega_max / omega_max from the last estimate; SUN_BIG_REAL when none is known.
+sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety);
 
 // ceode_stability.cpp
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "ceode_adapt.hpp"
 #include "ceode_impl.hpp"
 #include "ceode_testing.h"
 
@@ -138,7 +139,8 @@ int CEodeSetFixedStep(void* mem, sunrealtype h) {
                         "h = %g: the fixed step must be positive and finite.",
                         static_cast<double>(h));
   }
-  if (h != ce->h) Restart(ce);
+  if (h != ce->h || ceode::AdaptOn(ce)) Restart(ce);
+  ceode::AdaptDisable(ce);  // a fixed step ends error control (the last of the two calls decides)
   ce->h = h;
   return CE_SUCCESS;
 }
@@ -328,6 +330,9 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Constraint fn evals", static_cast<double>(ce->con.nce), true},
       {"Constraint Jac evals", static_cast<double>(ce->con.nge), true},
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
+      {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
+      {"Steps limited by stability",
+       static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
@@ -385,6 +390,7 @@ const char* ceode::FlagName(long int flag) {
       {CE_TOO_MUCH_WORK, "CE_TOO_MUCH_WORK"},
       {CE_BAD_T, "CE_BAD_T"},
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
+      {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
   };
   for (const auto& entry : kNames) {
     if (entry.flag == flag) return entry.name;

@@ -4,6 +4,7 @@
 // and StartMethod, which ends by choosing the step (ChooseStep, ceode_step.cpp).
 #include <algorithm>
 
+#include "ceode_adapt.hpp"
 #include "ceode_kernels.hpp"
 
 namespace ceode {
@@ -237,14 +238,18 @@ int StartMethod(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   int flag = AllocHistory(ce, func);
   if (flag != CE_SUCCESS) return flag;
+  const long int nfe0 = ce->nfe;
+  const bool adapt = AdaptOn(ce);
+  if (adapt) flag = AdaptStart(ce, func);  // the first step (and its evaluation)
+  if (flag != CE_SUCCESS) return flag;
   ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
   ce->guard.pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
-  const long int nfe0 = ce->nfe;
   flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
   ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
+  if (flag == CE_SUCCESS && adapt) AdaptStartHistory(ce);
   if (flag == CE_SUCCESS) flag = ChooseImplicitSolve(ce, func);  // PC, Newton or AUTO
   if (flag == CE_SUCCESS) ChooseStep(ce, true);
   if (flag == CE_SUCCESS) ce->started = true;

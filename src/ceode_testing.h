@@ -37,6 +37,13 @@ SUNDIALS_EXPORT int CEodeSetInPlaceUpdate(void* mem, sunbooleantype on);
  * of larger systems. Takes effect at the next Newton setup. */
 SUNDIALS_EXPORT int CEodeSetSchurComplement(void* mem, sunbooleantype use);
 
+/* With error control on: every step is accepted and the next one is schedule(t, n, data) (t and
+ * n of the last accepted step), instead of the controller's choice, so that the tests can run
+ * the variable step on a prescribed step sequence (orders under varying steps, stability under
+ * step ratios). NULL restores the controller. */
+typedef sunrealtype (*CEodeStepScheduleFn)(sunrealtype t, long int n, void* data);
+SUNDIALS_EXPORT int CEodeSetStepSchedule(void* mem, CEodeStepScheduleFn schedule, void* data);
+
 #ifdef __cplusplus
 }
 #endif

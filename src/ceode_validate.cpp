@@ -200,6 +200,7 @@ int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype relt
 }
 
 int ValidateStep(CEodeMemRec* ce, const char* func) {
+  if (AdaptOn(ce)) return CE_SUCCESS;  // the start chooses h (ceode_adapt.cpp)
   const sunrealtype h = ce->h;
   if (!(h > 0) || !std::isfinite(h)) {
     return ProcessError(

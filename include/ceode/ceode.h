@@ -70,6 +70,7 @@ extern "C" {
 #define CE_TOO_MUCH_WORK (-17)
 #define CE_BAD_T (-18)
 #define CE_VECTOROP_ERR (-19)
+#define CE_ERR_FAILURE (-20)
 
 /* Stability guard modes (CEodeSetStabilityGuard) */
 #define CE_GUARD_OFF 0
@@ -119,6 +120,9 @@ typedef int (*CEodeConstrFn)(sunrealtype t, N_Vector x, N_Vector phi, void* user
 typedef int (*CEodeConstrJacFn)(sunrealtype t, N_Vector x, SUNMatrix G, void* user_data);
 typedef void (*CEodeErrHandlerFn)(int error_code, const char* module, const char* function,
                                   char* msg, void* eh_data);
+/* Error weights of the adaptive step, as CVODE's CVEwtFn: ewt_i > 0 for every entry of
+ * the position x (CEodeWFtolerances). */
+typedef int (*CEodeEwtFn)(N_Vector x, N_Vector ewt, void* user_data);
 /* A first-order right-hand side F(t, y, ydot), unchanged from ARKODE/CVODE, with
  * y = [x; v] and ydot = [v; a] (CEodeInitFirstOrder). */
 typedef int (*CEodeFirstOrderRhsFn)(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
@@ -154,6 +158,25 @@ SUNDIALS_EXPORT int CEodeSetStopTime(void* mem, sunrealtype tstop);
 SUNDIALS_EXPORT int CEodeClearStopTime(void* mem);
 SUNDIALS_EXPORT int CEodeSetMaxNumSteps(void* mem, long int mxsteps);
 SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
+
+/* Error control (docs/api.md, "Error control"). Tolerances switch the run to the
+ * adaptive step: CEODE chooses every step from a local error estimate on the positions
+ * (WRMS norm with ewt_i = 1/(reltol |x_i| + abstol_i), or the user's weights) at no
+ * extra f evaluation, and never above the stable step of the stability guard's
+ * frequency estimate (0.9 Omega_max / omega_max). CEodeSetFixedStep switches back to
+ * fixed steps; the last of the two calls decides. The controller is CE_ADAPT_H211B
+ * (a digital filter that gives smooth step sequences) unless CEodeSetAdaptController
+ * chooses CE_ADAPT_PI. */
+#define CE_ADAPT_H211B 0
+#define CE_ADAPT_PI 1
+SUNDIALS_EXPORT int CEodeSStolerances(void* mem, sunrealtype reltol, sunrealtype abstol);
+SUNDIALS_EXPORT int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol);
+SUNDIALS_EXPORT int CEodeWFtolerances(void* mem, CEodeEwtFn efun);
+SUNDIALS_EXPORT int CEodeSetInitStep(void* mem, sunrealtype hin);
+SUNDIALS_EXPORT int CEodeSetMinStep(void* mem, sunrealtype hmin);
+SUNDIALS_EXPORT int CEodeSetMaxStep(void* mem, sunrealtype hmax);
+SUNDIALS_EXPORT int CEodeSetMaxErrTestFails(void* mem, int maxnef);
+SUNDIALS_EXPORT int CEodeSetAdaptController(void* mem, int controller);
 
 /* Velocity dependence. CEodeSetVelocityDependence is the SUNDIALS-style boolean:
  * SUNTRUE is CE_VELOCITY_DEPENDENT, SUNFALSE CE_VELOCITY_INDEPENDENT, any other
@@ -224,6 +247,16 @@ SUNDIALS_EXPORT int CEodeGetAccel(void* mem, N_Vector a);
 SUNDIALS_EXPORT int CEodeGetMultipliers(void* mem, N_Vector lambda);
 SUNDIALS_EXPORT int CEodeGetCurrentTime(void* mem, sunrealtype* tcur);
 SUNDIALS_EXPORT int CEodeGetCurrentStep(void* mem, sunrealtype* hcur);
+
+/* Error control: the step last taken, the first step, the error weights and the local
+ * error estimate of the last accepted step, failed error tests, and the accepted steps
+ * whose size the stable-step cap (not the error) decided. */
+SUNDIALS_EXPORT int CEodeGetLastStep(void* mem, sunrealtype* hlast);
+SUNDIALS_EXPORT int CEodeGetActualInitStep(void* mem, sunrealtype* hinused);
+SUNDIALS_EXPORT int CEodeGetErrWeights(void* mem, N_Vector eweight);
+SUNDIALS_EXPORT int CEodeGetEstLocalErrors(void* mem, N_Vector ele);
+SUNDIALS_EXPORT int CEodeGetNumErrTestFails(void* mem, long int* netfails);
+SUNDIALS_EXPORT int CEodeGetNumStableStepLimited(void* mem, long int* ncapped);
 
 /* Counters (reset by CEodeInit and CEodeReInit) */
 SUNDIALS_EXPORT int CEodeGetNumSteps(void* mem, long int* nsteps);

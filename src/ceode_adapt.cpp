@@ -1,0 +1,589 @@
+// Error control (docs/theory.md section 10): the tolerances and step bounds, the method's error
+// constant and history remap from its parameters, the error weights, the first step and the
+// step-size controller. The adaptive step itself is in ceode_adapt_step.cpp.
+#include "ceode_adapt.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <new>
+
+namespace ceode {
+
+void AdaptMemFree::operator()(AdaptMem* am) const { delete am; }
+
+namespace {
+
+// ---- The consistent history of a fixed-step run as power series (docs/theory.md 10.2) ----
+// D_k = sum_j gamma_kj h^j y^(k+j): R_k(s), s = h d/dt, are the history's series relative to the
+// top derivative, from the derivative relations; gamma_k = R_k / R_2.
+constexpr int kTerms = 16;
+struct Laurent {
+  int v = 0;  // valuation: c[i] is the coefficient of s^(v + i)
+  long double c[kTerms] = {};
+};
+
+Laurent Mul(const Laurent& a, const Laurent& b) {
+  Laurent r;
+  r.v = a.v + b.v;
+  for (int i = 0; i < kTerms; ++i) {
+    for (int j = 0; i + j < kTerms; ++j) r.c[i + j] += a.c[i] * b.c[j];
+  }
+  return r;
+}
+
+Laurent Inv(const Laurent& a) {
+  Laurent r;
+  r.v = -a.v;
+  r.c[0] = 1 / a.c[0];
+  for (int n = 1; n < kTerms; ++n) {
+    long double s = 0;
+    for (int i = 1; i <= n; ++i) s += a.c[i] * r.c[n - i];
+    r.c[n] = -s / a.c[0];
+  }
+  return r;
+}
+
+// a + s b, on the lower valuation of the two (the other's last terms drop out of the window).
+Laurent AddScaled(const Laurent& a, long double s, const Laurent& b) {
+  Laurent r;
+  r.v = std::min(a.v, b.v);
+  for (int i = 0; i < kTerms; ++i) {
+    const int ia = i - (a.v - r.v);
+    const int ib = i - (b.v - r.v);
+    r.c[i] = (ia >= 0 ? a.c[ia] : 0) + (ib >= 0 ? s * b.c[ib] : 0);
+  }
+  return r;
+}
+
+long double FactorialL(int n) {
+  long double r = 1;
+  for (int i = 2; i <= n; ++i) r *= i;
+  return r;
+}
+
+// gamma[k][j], k = 1 .. d-1, j = 0 .. kTerms - 1.
+void HistoryGammas(int d, const sunrealtype* p, long double (*gamma)[kTerms]) {
+  Laurent u;  // e^s - 1
+  u.v = 1;
+  for (int i = 0; i < kTerms; ++i) u.c[i] = 1 / FactorialL(i + 1);
+  const Laurent uinv = Inv(u);
+  Laurent R[kMaxDegree];
+  R[d - 1].c[0] = 1;
+  for (int k = d - 2; k >= 1; --k) {
+    Laurent acc;  // (p_k (e^s - 1) + 1) / (d-1-k)!
+    acc.c[0] = 1 / FactorialL(d - 1 - k);
+    for (int i = 1; i < kTerms; ++i) acc.c[i] = p[k] / FactorialL(i) / FactorialL(d - 1 - k);
+    for (int i = 1; i <= d - 2 - k; ++i) acc = AddScaled(acc, 1 / FactorialL(i), R[k + i]);
+    R[k] = Mul(acc, uinv);
+  }
+  const Laurent r2inv = Inv(R[2]);
+  for (int k = 1; k < d; ++k) {
+    const Laurent q = Mul(R[k], r2inv);
+    for (int j = 0; j < kTerms; ++j) {
+      const int i = (k - 2 + j) - q.v;  // the coefficient of s^(k-2+j)
+      gamma[k][j] = i >= 0 && i < kTerms ? q.c[i] : 0;
+    }
+  }
+}
+
+// C_{p+1}: one step of size 1 from the exact consistent history of y = t^q / q!, q = p + 1, less
+// the exact y(1).
+sunrealtype ErrorConstant(int d, const sunrealtype* p, int order,
+                          const long double (*gamma)[kTerms]) {
+  const int q = order + 1;
+  const auto y = [q](int k, long double t) -> long double {
+    return k > q ? 0 : std::pow(t, q - k) / FactorialL(q - k);
+  };
+  StepCoeffs co;
+  ComputeStepCoeffs(d, p, 1, &co);
+  long double D[kMaxDegree] = {};
+  for (int k = 1; k < d; ++k) {
+    for (int j = 0; k + j <= q && j < kTerms; ++j) D[k] += gamma[k][j] * y(k + j, -1);
+  }
+  const long double a = y(2, 0);
+  long double B[kMaxDegree] = {};
+  for (int k = 1; k <= d - 2; ++k) {
+    for (int j = 1; j < d; ++j) B[k] += co.T[k][j] * D[j];
+  }
+  const long double z = d == 3 ? a : (a - B[2]) / co.c[2];
+  long double x1 = y(0, 0) + co.wz_old * D[d - 1] + co.wz_new * z;
+  for (int i = 1; i <= d - 2; ++i) x1 += co.w[i] * (i == 2 ? a : B[i] + co.c[i] * z);
+  return static_cast<sunrealtype>(x1 - y(0, 1));
+}
+
+bool AllocAdaptRecord(CEodeMemRec* ce) {
+  if (ce->adapt == nullptr) ce->adapt.reset(new (std::nothrow) AdaptMem);
+  return ce->adapt != nullptr;
+}
+
+// The controller's constants: the filter H211b of Soderlind (b = 4) or a PI controller, aiming at
+// an error norm of kTarget, with ratios in [kEtaMin, kEtaMax].
+constexpr sunrealtype kTarget = 0.5;
+constexpr sunrealtype kFilterB = 4;
+constexpr sunrealtype kEtaMin = 0.2;
+constexpr sunrealtype kEtaMax = 2;
+constexpr sunrealtype kStableSafety = 0.9;
+
+}  // namespace
+
+void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,
+                       RemapTerm* remap, int* nremap) {
+  long double gamma[kMaxDegree][kTerms] = {};
+  HistoryGammas(d, params, gamma);
+  int ox = 0;
+  int ov = 0;
+  MethodOrders(d, params, &ox, &ov, nullptr, nullptr);
+  *order = std::max(1, std::min(ox, d));
+  *cerr = ErrorConstant(d, params, *order, gamma);
+  *nremap = 0;
+  for (int k = 1; k < d; ++k) {
+    if (k == 2) continue;  // D_2 is the acceleration itself
+    for (int j = 1; k + j <= d; ++j) {
+      if (std::fabs(gamma[k][j]) > 1e-10L) {
+        remap[(*nremap)++] = {k, j, static_cast<sunrealtype>(gamma[k][j])};
+      }
+    }
+  }
+}
+
+bool AdaptOn(const CEodeMemRec* ce) { return ce->adapt != nullptr && ce->adapt->on; }
+
+sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
+  return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
+}
+
+int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
+  AdaptMem& am = *ce->adapt;
+  if (am.tol_kind == 2) {
+    if (am.efun(x, am.ewt, ce->user_data) != 0) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The error weight function (CEodeWFtolerances) failed at t = %.17g.",
+                          static_cast<double>(ce->tcur));
+    }
+  } else {
+    N_VAbs(x, am.ewt);
+    if (am.tol_kind == 1) {
+      N_VLinearSum(am.rtol, am.ewt, 1, am.atol_vec, am.ewt);
+    } else {
+      N_VScale(am.rtol, am.ewt, am.ewt);
+      N_VAddConst(am.ewt, am.atol, am.ewt);
+    }
+    if (!(N_VMin(am.ewt) > 0)) {
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "An error weight is not defined at t = %.17g: some x_i = 0 where its "
+                          "abstol is 0. Give abstol > 0 for every entry.",
+                          static_cast<double>(ce->tcur));
+    }
+    N_VInv(am.ewt, am.ewt);
+    return CE_SUCCESS;
+  }
+  if (!(N_VMin(am.ewt) > 0) || !IsFinite(am.ewt)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The error weight function returned a weight that is not positive and "
+                        "finite at t = %.17g.",
+                        static_cast<double>(ce->tcur));
+  }
+  return CE_SUCCESS;
+}
+
+namespace {
+
+bool CloneOnce(N_Vector* v, N_Vector tmpl) {
+  if (*v == nullptr) *v = N_VClone(tmpl);
+  return *v != nullptr;
+}
+
+int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
+  AdaptMem& am = *ce->adapt;
+  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ele, ce->xcur) &&
+            CloneOnce(&am.est, ce->xcur) && CloneOnce(&am.yd, ce->xcur);
+  if (ok) N_VConst(0, am.ele);
+  for (int b = 0; b < 2; ++b) {
+    for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j) ok = CloneOnce(&am.dd[b][j], ce->xcur);
+  }
+  return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+}
+
+// The first step from the initial data when the user gave none: the order-p error model with
+// every derivative scaled by the problem's time scale tau (from ||x||, ||v||, ||a|| in the
+// error weights), aiming at half the tolerance; at most a tenth of the distance to tout.
+sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
+  const AdaptMem& am = *ce->adapt;
+  const sunrealtype nx = N_VWrmsNorm(ce->xcur, am.ewt);
+  const sunrealtype nv = N_VWrmsNorm(ce->D[1], am.ewt);
+  const sunrealtype na = N_VWrmsNorm(ce->D[2], am.ewt);
+  sunrealtype tau = SUN_BIG_REAL;
+  if (nv > 0) tau = std::min(tau, nx / nv);
+  if (na > 0) tau = std::min(tau, std::sqrt(nx / na));
+  if (na > 0 && nv > 0) tau = std::min(tau, nv / na);
+  const int p = am.order;
+  sunrealtype h = 0.1 * span;
+  if (tau > 0 && tau < SUN_BIG_REAL) {
+    const sunrealtype top = std::max({na * std::pow(tau, -(p - 1)), nv * std::pow(tau, -p),
+                                      nx * std::pow(tau, -(p + 1))});
+    const sunrealtype c = std::max(std::fabs(am.cerr), SUN_UNIT_ROUNDOFF);
+    if (top > 0) h = std::min(h, std::pow(kTarget / (c * top), 1.0 / (p + 1)));
+  }
+  return h;
+}
+
+}  // namespace
+
+int AdaptStart(CEodeMemRec* ce, const char* func) {
+  AdaptMem& am = *ce->adapt;
+  if (HasConstraints(ce)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "Error control is not available with constraints: use "
+                        "CEodeSetFixedStep.");
+  }
+  try {
+    AdaptCoefficients(ce->degree, ce->params, &am.order, &am.cerr, am.remap, &am.nremap);
+  } catch (...) {
+    return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+  }
+  am.pfac = Factorial(am.order - 1);
+  int flag = AllocAdaptVectors(ce, func);
+  if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
+  if (flag != CE_SUCCESS) return flag;
+  am.first = true;
+  am.err = am.err_prev = 0;
+  am.eta_prev = 1;
+  am.hlast = 0;
+  am.hprev = 0;
+  sunrealtype h = am.hin;
+  if (h == 0) {
+    flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2], func);
+    if (flag != CE_SUCCESS) return flag;
+    const sunrealtype span = std::fabs(am.tout_hint - ce->tcur);
+    h = InitialStep(ce, span > 0 ? span : 1);
+  }
+  if (am.hmax > 0) h = std::min(h, am.hmax);
+  h = std::max(h, am.hmin);
+  if (!(h > 0) || !std::isfinite(h) || !(ce->tcur + h > ce->tcur)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "No usable first step (h = %g at t = %.17g): give one with "
+                        "CEodeSetInitStep.",
+                        static_cast<double>(h), static_cast<double>(ce->tcur));
+  }
+  ce->h = h;
+  am.h0 = h;
+  am.hmap = h;
+  return CE_SUCCESS;
+}
+
+void AdaptStartHistory(CEodeMemRec* ce) {
+  AdaptMem& am = *ce->adapt;
+  const int d = ce->degree;
+  // The start's derivatives at t0 are a's Taylor coefficients there: t0 counts d - 2 times in the
+  // divided differences (a, a', ..., a^(d-3)); the zero start has only a.
+  const int mult = ce->zero_start ? 1 : d - 2;
+  am.cur = 0;
+  for (int j = 1; j <= am.order - 2; ++j) {
+    if (j < mult) N_VScale(1 / Factorial(j), ce->D[j + 2], am.dd[0][j]);
+  }
+  am.ndata = mult;
+  for (sunrealtype& t : am.tnode) t = ce->tcur;
+  N_VConst(0, am.yd);
+}
+
+sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err) {
+  const AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  sunrealtype eta = std::isfinite(err) ? 0.9 * std::pow(err, -1 / k) : 0.25;
+  eta = std::min(0.9, std::max(kEtaMin, eta));
+  return std::max(ce->h * eta, am.hmin);
+}
+
+sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t, bool* capped) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  sunrealtype eta = 1;
+  if (err > 0) {
+    const sunrealtype e = std::max(err, 1e-10) / kTarget;
+    const sunrealtype ep = am.err_prev > 0 ? std::max(am.err_prev, 1e-10) / kTarget : e;
+    if (am.controller == CE_ADAPT_PI) {
+      eta = 0.9 * std::pow(e, -0.7 / k) * std::pow(ep / e, 0.4 / k);
+    } else {
+      eta = std::pow(e * ep, -1 / (kFilterB * k)) * std::pow(am.eta_prev, -1 / kFilterB);
+    }
+    am.err_prev = err;
+  }
+  eta = std::min(kEtaMax, std::max(kEtaMin, eta));
+  const sunrealtype hold = ce->h;
+  sunrealtype h = hold * eta;
+  if (am.schedule != nullptr) h = am.schedule(ce->tcur, ce->nst, am.schedule_data);
+  if (am.hmax > 0) h = std::min(h, am.hmax);
+  const sunrealtype hs = AdaptStableStep(ce);
+  *capped = h > hs;
+  if (*capped) h = hs;
+  h = std::max(h, am.hmin);
+  const sunrealtype rem = limit_t - ce->tcur;
+  if (rem <= h * (1 + 1e-4)) {
+    h = rem;  // lands on the limit (a stretch of at most 1e-4)
+  } else if (rem < 2 * h) {
+    h = rem / 2;  // two even steps instead of a sliver
+  }
+  am.eta_prev = h / hold;
+  return h;
+}
+
+void AdaptFree(CEodeMemRec* ce) {
+  if (ce->adapt == nullptr) return;
+  AdaptMem& am = *ce->adapt;
+  N_Vector* vs[] = {&am.ewt, &am.ele, &am.est, &am.yd, &am.atol_vec};
+  for (N_Vector* v : vs) {
+    if (*v != nullptr) N_VDestroy(*v);
+    *v = nullptr;
+  }
+  for (auto& buf : am.dd) {
+    for (N_Vector& v : buf) {
+      if (v != nullptr) N_VDestroy(v);
+      v = nullptr;
+    }
+  }
+  if (am.tol_kind == 1) am.on = false;  // the abstol vector went with the problem's size
+}
+
+void AdaptReset(CEodeMemRec* ce, bool counters) {
+  if (ce->adapt == nullptr || !counters) return;
+  ce->adapt->netf = ce->adapt->ncapped = 0;
+}
+
+void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout) {
+  if (ce->adapt != nullptr) ce->adapt->tout_hint = tout;
+}
+
+void AdaptDisable(CEodeMemRec* ce) {
+  if (ce->adapt != nullptr) ce->adapt->on = false;
+}
+
+}  // namespace ceode
+
+using ceode::Access;
+using ceode::AdaptMem;
+using ceode::ProcessError;
+
+namespace {
+
+// The record for a setter, created on first use.
+int AdaptAccess(void* mem, const char* func, CEodeMemRec** ce) {
+  int flag = Access(mem, func, ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!ceode::AllocAdaptRecord(*ce)) return ProcessError(*ce, CE_MEM_FAIL, func, "Out of memory.");
+  return CE_SUCCESS;
+}
+
+// Turns the adaptive step on with the weights of kind `kind`.
+int EnableTolerances(CEodeMemRec* ce, int kind) {
+  AdaptMem& am = *ce->adapt;
+  am.tol_kind = kind;
+  am.on = true;
+  ceode::Restart(ce);
+  return CE_SUCCESS;
+}
+
+int CheckRtol(CEodeMemRec* ce, const char* func, sunrealtype reltol) {
+  if (!(reltol >= 0) || !std::isfinite(reltol)) {
+    return ProcessError(ce, CE_ILL_INPUT, func, "reltol = %g: need a finite reltol >= 0.",
+                        static_cast<double>(reltol));
+  }
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+extern "C" {
+
+int CEodeSStolerances(void* mem, sunrealtype reltol, sunrealtype abstol) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag == CE_SUCCESS) flag = CheckRtol(ce, __func__, reltol);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(abstol >= 0) || !std::isfinite(abstol) || (reltol == 0 && abstol == 0)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "abstol = %g (reltol = %g): need a finite abstol >= 0, not both zero.",
+                        static_cast<double>(abstol), static_cast<double>(reltol));
+  }
+  ce->adapt->rtol = reltol;
+  ce->adapt->atol = abstol;
+  return EnableTolerances(ce, 0);
+}
+
+int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag == CE_SUCCESS) flag = CheckRtol(ce, __func__, reltol);
+  if (flag != CE_SUCCESS) return flag;
+  if (!ce->initialized) {
+    return ProcessError(ce, CE_NO_MALLOC, __func__,
+                        "A vector abstol needs the problem's size: call CEodeInit first.");
+  }
+  if (abstol == nullptr || N_VGetLength(abstol) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "abstol is NULL or not of the problem's length %ld: clone it from x0.",
+                        static_cast<long>(ce->n));
+  }
+  if (!ceode::IsFinite(abstol) || N_VMin(abstol) < 0) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "abstol has a negative or non-finite entry.");
+  }
+  AdaptMem& am = *ce->adapt;
+  if (am.atol_vec == nullptr) am.atol_vec = N_VClone(ce->xcur);
+  if (am.atol_vec == nullptr) return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+  N_VScale(1, abstol, am.atol_vec);
+  am.rtol = reltol;
+  return EnableTolerances(ce, 1);
+}
+
+int CEodeWFtolerances(void* mem, CEodeEwtFn efun) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (efun == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "efun = NULL.");
+  ce->adapt->efun = efun;
+  return EnableTolerances(ce, 2);
+}
+
+int CEodeSetInitStep(void* mem, sunrealtype hin) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(hin >= 0) || !std::isfinite(hin)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "hin = %g: give a finite hin > 0, or 0 to let CEODE choose.",
+                        static_cast<double>(hin));
+  }
+  ce->adapt->hin = hin;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMinStep(void* mem, sunrealtype hmin) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype hmax = ce->adapt->hmax;
+  if (!(hmin >= 0) || !std::isfinite(hmin) || (hmax > 0 && hmin > hmax)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "hmin = %g: need a finite hmin >= 0, not above hmax = %g.",
+                        static_cast<double>(hmin), static_cast<double>(hmax));
+  }
+  ce->adapt->hmin = hmin;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxStep(void* mem, sunrealtype hmax) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(hmax >= 0) || !std::isfinite(hmax) || (hmax > 0 && hmax < ce->adapt->hmin)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "hmax = %g: need a finite hmax >= hmin (%g), or 0 for no limit.",
+                        static_cast<double>(hmax), static_cast<double>(ce->adapt->hmin));
+  }
+  ce->adapt->hmax = hmax;
+  return CE_SUCCESS;
+}
+
+int CEodeSetMaxErrTestFails(void* mem, int maxnef) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->adapt->maxnef = maxnef > 0 ? maxnef : 7;  // as CVODE: <= 0 restores the default
+  return CE_SUCCESS;
+}
+
+int CEodeSetAdaptController(void* mem, int controller) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (controller != CE_ADAPT_H211B && controller != CE_ADAPT_PI) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "controller = %d: use CE_ADAPT_H211B or CE_ADAPT_PI.", controller);
+  }
+  ce->adapt->controller = controller;
+  return CE_SUCCESS;
+}
+
+int CEodeSetStepSchedule(void* mem, CEodeStepScheduleFn schedule, void* data) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->adapt->schedule = schedule;
+  ce->adapt->schedule_data = data;
+  return CE_SUCCESS;
+}
+
+int CEodeGetLastStep(void* mem, sunrealtype* hlast) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (hlast == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "hlast = NULL.");
+  if (ceode::AdaptOn(ce)) {
+    *hlast = ce->adapt->hlast;
+  } else {
+    *hlast = ce->nst > 0 ? ce->h : 0;
+  }
+  return CE_SUCCESS;
+}
+
+int CEodeGetActualInitStep(void* mem, sunrealtype* hinused) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (hinused == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "hinused = NULL.");
+  *hinused = ceode::AdaptOn(ce) ? ce->adapt->h0 : ce->h;
+  return CE_SUCCESS;
+}
+
+namespace {
+
+int CopyAdaptVector(void* mem, const char* func, N_Vector out, N_Vector AdaptMem::*field) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, func, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (out == nullptr || N_VGetLength(out) != ce->n) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The output vector is NULL or not of the problem's length %ld.",
+                        static_cast<long>(ce->n));
+  }
+  if (!ceode::AdaptOn(ce) || !ce->started || ce->adapt.get()->*field == nullptr) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "No error control in this run: set tolerances (CEodeSStolerances) and "
+                        "call CEodeEvolve first.");
+  }
+  N_VScale(1, ce->adapt.get()->*field, out);
+  return CE_SUCCESS;
+}
+
+long int AdaptCounter(const CEodeMemRec& ce, long int AdaptMem::*field) {
+  return ce.adapt != nullptr ? ce.adapt.get()->*field : 0;
+}
+
+int GetAdaptCounter(void* mem, const char* func, long int* out, long int AdaptMem::*field) {
+  CEodeMemRec* ce = nullptr;
+  int flag = Access(mem, func, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (out == nullptr) return ProcessError(ce, CE_ILL_INPUT, func, "The output pointer is NULL.");
+  *out = AdaptCounter(*ce, field);
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+int CEodeGetErrWeights(void* mem, N_Vector eweight) {
+  return CopyAdaptVector(mem, __func__, eweight, &AdaptMem::ewt);
+}
+
+int CEodeGetEstLocalErrors(void* mem, N_Vector ele) {
+  return CopyAdaptVector(mem, __func__, ele, &AdaptMem::ele);
+}
+
+int CEodeGetNumErrTestFails(void* mem, long int* netfails) {
+  return GetAdaptCounter(mem, __func__, netfails, &AdaptMem::netf);
+}
+
+int CEodeGetNumStableStepLimited(void* mem, long int* ncapped) {
+  return GetAdaptCounter(mem, __func__, ncapped, &AdaptMem::ncapped);
+}
+
+}  // extern "C"

@@ -1,0 +1,101 @@
+// The error-control module's record (CEodeMemRec::adapt), written only by ceode_adapt.cpp (the
+// options, the method's error and remap coefficients, the controller) and ceode_adapt_step.cpp
+// (the adaptive step); the others read it (docs/theory.md section 10).
+#ifndef CEODE_SRC_CEODE_ADAPT_HPP_
+#define CEODE_SRC_CEODE_ADAPT_HPP_
+
+#include "ceode_impl.hpp"
+#include "ceode_testing.h"
+
+namespace ceode {
+
+// One term of the history's remap when the step changes from h to h' (docs/theory.md
+// section 10.2): D_k += gamma (h'^j - h^j) Y, Y = D_{k+j} (k + j < d) or the top derivative's
+// rate yd (k + j = d).
+struct RemapTerm {
+  int k;
+  int j;
+  sunrealtype gamma;
+};
+
+struct AdaptMem {
+  // Options
+  bool on = false;  // tolerances given and no fixed step set after them
+  int tol_kind = 0;  // 0 scalar, 1 vector abstol, 2 user weights
+  sunrealtype rtol = 0;
+  sunrealtype atol = 0;
+  N_Vector atol_vec = nullptr;  // CEodeSVtolerances' copy
+  CEodeEwtFn efun = nullptr;
+  sunrealtype hin = 0;  // 0: chosen by the start
+  sunrealtype hmin = 0;
+  sunrealtype hmax = 0;  // 0: no limit
+  int maxnef = 7;
+  int controller = CE_ADAPT_H211B;
+  CEodeStepScheduleFn schedule = nullptr;  // CEodeSetStepSchedule (tests)
+  void* schedule_data = nullptr;
+  sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step
+
+  // The method's coefficients (with the method, at each start)
+  int order = 0;           // p: order in x of the set
+  sunrealtype cerr = 0;    // C_{p+1}: local error C h^{p+1} y^{(p+1)}
+  sunrealtype pfac = 0;    // (p - 1)!: y^{(p+1)} = (p - 1)! a[t_n, ..., t_{n-p+1}]
+  int nremap = 0;
+  RemapTerm remap[kMaxDegree * kMaxDegree] = {};
+
+  // The run
+  N_Vector ewt = nullptr;
+  N_Vector ele = nullptr;   // the last accepted step's local error estimate
+  N_Vector est = nullptr;   // the estimate of the step under test
+  N_Vector yd = nullptr;    // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  N_Vector dd[2][kMaxDegree] = {};  // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
+  int cur = 0;              // dd[cur] belongs to the node
+  sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
+  int ndata = 0;            // accelerations and start derivatives behind the divided differences
+  sunrealtype hprev = 0;    // t_n - t_{n-1} (0 at the start)
+  sunrealtype hmap = 0;     // the step the node's history is remapped for
+  sunrealtype hlast = 0;    // the last accepted step
+  sunrealtype h0 = 0;       // the first step of the run
+  sunrealtype err = 0;      // the last accepted step's error norm (0: none estimated)
+  sunrealtype err_prev = 0;
+  sunrealtype eta_prev = 1;  // the last accepted ratio (the filter's memory)
+  bool first = true;         // no step taken since the start
+
+  // Counters
+  long int netf = 0;
+  long int ncapped = 0;
+};
+
+// ceode_adapt.cpp
+// At the start: the method's coefficients, the vectors, and the first step (the user's or
+// one from the initial data, which costs one f); clears the run's state.
+int AdaptStart(CEodeMemRec* ce, const char* func);
+// After the start's history exists: the divided differences at t0 from the start's derivatives.
+void AdaptStartHistory(CEodeMemRec* ce);
+// The error weights from x (the tolerances or the user's function).
+int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func);
+// The next step after an accepted one with error norm err (0: none estimated): the controller,
+// then hmax, the stable step and the stop time.
+sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t, bool* capped);
+// The step to retry with after a failed error test.
+sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
+// The largest step the guard's estimate admits (SUN_BIG_REAL: none known).
+sunrealtype AdaptStableStep(const CEodeMemRec* ce);
+void AdaptFree(CEodeMemRec* ce);  // its vectors (the problem's size changes)
+void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout);  // CEodeEvolve's tout
+void AdaptDisable(CEodeMemRec* ce);                      // CEodeSetFixedStep
+void AdaptReset(CEodeMemRec* ce, bool counters);
+// The coefficients of an arbitrary set (also for the tests): C_{p+1}, the order, the remap.
+void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,
+                       RemapTerm* remap, int* nremap);
+
+// ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
+// covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past
+// the stop time.
+int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                N_Vector vout, sunrealtype* tret, int itask);
+// The first position step again for a new first step h (the start's Taylor polynomial).
+void AdaptReviseFirstStep(CEodeMemRec* ce, sunrealtype h);
+
+}  // namespace ceode
+
+#endif  // CEODE_SRC_CEODE_ADAPT_HPP_

@@ -1,0 +1,272 @@
+// The adaptive step (docs/theory.md section 10): the step of the fixed run with the interval it
+// actually spans in each relation, the local error estimate from divided differences of the
+// accelerations (no extra f), the error test with a retry that redoes only the position update,
+// and CEodeEvolve's returns by the dense output of the last accepted step.
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "ceode_adapt.hpp"
+#include "ceode_kernels.hpp"
+#include "ceode_step.hpp"
+
+namespace ceode {
+
+namespace {
+
+constexpr sunrealtype kGrowthLimit = 1e15;  // as the fixed step's growth check
+
+// The node's history for a next step of h instead of am.hmap: the h-dependent part of the
+// consistent history follows the step (docs/theory.md 10.2).
+void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+  if (h == am->hmap) return;
+  const int d = ce->degree;
+  for (int i = 0; i < am->nremap; ++i) {
+    const RemapTerm& r = am->remap[i];
+    const sunrealtype c = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
+    N_Vector y = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
+    N_VLinearSum(1, ce->D[r.k], c, y, ce->D[r.k]);
+  }
+  am->hmap = h;
+}
+
+// x(t_n + h) into out from the node (x(t_n) = xcur and its remapped history): the Taylor terms,
+// and the top derivative's blend over the new interval, z_n - (1 - p0) h yd with the node's own
+// z_n (before the remap).
+void PositionFromNode(CEodeMemRec* ce, const AdaptMem& am, sunrealtype h, N_Vector out) {
+  const int d = ce->degree;
+  sunrealtype tw[kMaxDegree + 1];
+  TaylorWeights(h, d, tw);
+  sunrealtype c[kMaxDegree + 2];
+  N_Vector X[kMaxDegree + 2];
+  int m = 0;
+  c[m] = 1;
+  X[m++] = ce->xcur;
+  for (int i = 1; i < d; ++i) {
+    c[m] = tw[i];
+    X[m++] = ce->D[i];
+  }
+  sunrealtype top_shift = 0;  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap
+  for (int i = 0; i < am.nremap; ++i) {
+    if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (am.hmap - am.hprev);
+  }
+  const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * h);
+  if (yd_coef != 0 && am.hprev > 0) {
+    c[m] = yd_coef;
+    X[m++] = am.yd;
+  }
+  Combine(m, c, X, out);
+}
+
+// The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
+// step's plan without its position sum.
+void UpdateDerivatives(CEodeMemRec* ce) {
+  UpdatePlan plan;
+  BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &plan);
+  --plan.n;
+  UpdateReference(plan, {false, nullptr, nullptr, nullptr});
+}
+
+// The new divided differences a[t, t_n, ..., t_{n+1-j}] (dd[1 - cur]) and the local error
+// estimate of the step into est; returns its WRMS norm, 0 while the history is too short.
+sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector est) {
+  const int p = am->order;
+  if (am->ndata < p - 1) {  // a[t, ...] of p nodes needs p - 1 behind t
+    for (int j = 1; j <= std::min(p - 2, am->ndata); ++j) {
+      N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
+      N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
+      const sunrealtype r = 1 / (t - am->tnode[j - 1]);
+      N_VLinearSum(r, prev_new, -r, prev_old, am->dd[1 - am->cur][j]);
+    }
+    N_VConst(0, est);
+    return 0;
+  }
+  for (int j = 1; j <= p - 1; ++j) {
+    N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
+    N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
+    N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
+    const sunrealtype r = 1 / (t - am->tnode[j - 1]);
+    N_VLinearSum(r, prev_new, -r, prev_old, out);
+  }
+  const sunrealtype h = ce->h;
+  N_VScale(am->cerr * std::pow(h, p + 1) * am->pfac, est, est);
+  return N_VWrmsNorm(est, am->ewt);
+}
+
+// The step's coefficients for a new h.
+void SetStep(CEodeMemRec* ce, sunrealtype h) {
+  if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co);
+  ce->h = h;
+}
+
+int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err, int nef) {
+  if (!IsFinite(ce->Dnew[2])) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "The acceleration is NaN or Inf at t = %.17g after %d smaller steps: f "
+                        "returns non-finite values.",
+                        static_cast<double>(t), nef);
+  }
+  return ProcessError(ce, CE_ERR_FAILURE, func,
+                      "The error test failed %d times at t = %.17g (error norm %g, h = %g, hmin "
+                      "= %g): the tolerances cannot be met here; loosen them or check f for a "
+                      "discontinuity.",
+                      nef, static_cast<double>(t), static_cast<double>(err),
+                      static_cast<double>(ce->h), static_cast<double>(ce->adapt->hmin));
+}
+
+// The accepted step becomes the node: the history, the positions (x(t_n) stays as the dense
+// output's left end), the divided differences and the times.
+void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
+  const int d = ce->degree;
+  const sunrealtype h = ce->h;
+  // yd of the new node: its z (un-remapped) less the node's z over the step.
+  N_VLinearSum(1 / h, ce->Dnew[d - 1], -1 / h, ce->D[d - 1], am->yd);
+  std::swap(ce->D, ce->Dnew);
+  N_Vector old = ce->xcur;
+  ce->xcur = ce->xnext;
+  ce->xnext = ce->xnew;
+  ce->xnew = old;  // x(t_n): the dense output's left end
+  std::swap(am->ele, am->est);
+  am->cur = 1 - am->cur;
+  for (int i = kMaxDegree; i > 0; --i) am->tnode[i] = am->tnode[i - 1];
+  am->tnode[0] = t;
+  am->ndata = std::min(am->ndata + 1, kMaxDegree);
+  am->hprev = am->hmap = am->hlast = h;
+  am->err = err;
+  am->first = false;
+  ce->tcur = t;
+  ++ce->nst;
+  ++ce->nsteps_h;
+}
+
+// One accepted step (with as many retries as the error test asks for), then the next step's
+// size and position.
+int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
+  N_Vector est = am->est;
+  StepMem* sm = ce->step.get();
+  if (am->first) {  // the guard's estimate became known after the start chose h
+    const sunrealtype hs = AdaptStableStep(ce);
+    if (ce->h > hs) {
+      AdaptReviseFirstStep(ce, hs);
+      ++am->ncapped;
+    }
+  }
+  int nef = 0;
+  sunrealtype err = 0;
+  sunrealtype t = 0;
+  for (;;) {
+    t = ce->tcur + ce->h;
+    if (ce->h == tlimit - ce->tcur) t = tlimit;  // lands on tstop exactly
+    int flag = sm->solve(ce, t, t + ce->h, ce->xnext, ce->Dnew[2], func);
+    if (flag != CE_SUCCESS) return flag;
+    UpdateDerivatives(ce);
+    err = EstimateError(ce, am, t, est);
+    if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
+    ++am->netf;
+    ++nef;
+    if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
+    const sunrealtype h = AdaptRetryStep(ce, err);
+    RemapHistory(ce, am, h);
+    PositionFromNode(ce, *am, h, ce->xnext);
+    SetStep(ce, h);
+  }
+  CommitNode(ce, am, t, err);
+  int flag = AdaptWeights(ce, ce->xcur, func);
+  if (flag != CE_SUCCESS) return flag;
+  bool capped = false;
+  sunrealtype h = AdaptNextStep(ce, err, tlimit, &capped);
+  if (nef > 0) h = std::min(h, ce->h);  // no growth right after a failed test
+  if (capped) ++am->ncapped;
+  RemapHistory(ce, am, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
+  SetStep(ce, h);
+  // Growth that the relative error weights follow: stop long before overflow, as the fixed step.
+  const sunrealtype xl1 = N_VL1Norm(ce->xnext);
+  if (!(xl1 <= kGrowthLimit * (1 + ce->xl1_start))) {
+    return ProcessError(ce, CE_UNSTABLE, func,
+                        "The state grew explosively or stopped being finite (||x||_1 = %g at t = "
+                        "%.17g, %g at the start) although every step passed its error test: the "
+                        "step sequence excited a parasitic mode of %s (docs/theory.md section "
+                        "10.3). Tighten the tolerances or use a set of lower degree.",
+                        static_cast<double>(xl1), static_cast<double>(t),
+                        static_cast<double>(ce->xl1_start), ce->method_name.c_str());
+  }
+  if (ce->guard.every > 0 && ce->nst % ce->guard.every == 0) return GuardCheck(ce, func);
+  return CE_SUCCESS;
+}
+
+// The k-th derivative at tcur + s, s in [-hlast, 0]: the history at tcur and x at its left end.
+void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+  Interpolate(ce, s, 0, xout);
+  Interpolate(ce, s, 1, vout);
+}
+
+}  // namespace
+
+void AdaptReviseFirstStep(CEodeMemRec* ce, sunrealtype h) {
+  AdaptMem* am = ce->adapt.get();
+  RemapHistory(ce, am, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
+  SetStep(ce, h);
+  am->h0 = h;
+}
+
+int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                N_Vector vout, sunrealtype* tret, int itask) {
+  AdaptMem* am = ce->adapt.get();
+  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
+  if (itask == CE_NORMAL && tout < ce->tcur - am->hlast - troundoff) {
+    *tret = ce->tcur;
+    return ProcessError(ce, CE_BAD_T, func,
+                        "tout = %.17g is behind the last step [%.17g, %.17g]: CEODE integrates "
+                        "forward only; call CEodeReInit to go back.",
+                        static_cast<double>(tout), static_cast<double>(ce->tcur - am->hlast),
+                        static_cast<double>(ce->tcur));
+  }
+  sunrealtype tlimit = SUN_BIG_REAL;
+  if (ce->tstop_set) {
+    if (ce->tstop < ce->tcur - troundoff) {
+      *tret = ce->tcur;
+      return ProcessError(ce, CE_ILL_INPUT, func,
+                          "The stop time %.17g is behind the current time %.17g.",
+                          static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
+    }
+    tlimit = ce->tstop;
+    if (ce->tcur + ce->h > tlimit) AdaptReviseFirstStep(ce, tlimit - ce->tcur);
+  }
+  long int nsteps = 0;
+  int flag = CE_SUCCESS;
+  const auto reached = [&]() {
+    if (ce->tstop_set && ce->tcur >= tlimit - troundoff) return true;
+    return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
+  };
+  while (!reached()) {
+    if (nsteps >= ce->mxstep) {
+      flag = ProcessError(ce, CE_TOO_MUCH_WORK, func,
+                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise the "
+                          "limit with CEodeSetMaxNumSteps or loosen the tolerances.",
+                          nsteps, static_cast<double>(tout), static_cast<double>(ce->tcur));
+      break;
+    }
+    flag = OneStep(ce, am, tlimit, func);
+    if (flag != CE_SUCCESS) break;
+    ++nsteps;
+  }
+  if (flag != CE_SUCCESS) {
+    Output(ce, 0, xout, vout);
+    *tret = ce->tretlast = ce->tcur;
+    return flag;
+  }
+  const bool at_stop = ce->tstop_set && ce->tcur >= tlimit - troundoff;
+  sunrealtype tret_v = itask == CE_ONE_STEP || at_stop ? ce->tcur : tout;
+  if (itask == CE_NORMAL && !at_stop && tout > ce->tcur) tret_v = ce->tcur;
+  Output(ce, tret_v - ce->tcur, xout, vout);
+  *tret = ce->tretlast = tret_v;
+  if (at_stop) {
+    ce->tstop_set = false;
+    return CE_TSTOP_RETURN;
+  }
+  return CE_SUCCESS;
+}
+
+}  // namespace ceode
