@@ -1,4 +1,4 @@
-// Error control (docs/theory.md section 10): the tolerances and step bounds, the method's error
+// Error control (docs/theory.md section 12): the tolerances and step bounds, the method's error
 // constant and history remap from its parameters, the error weights, the first step and the
 // step-size controller. The adaptive step itself is in ceode_adapt_step.cpp.
 #include "ceode_adapt.hpp"
@@ -13,7 +13,7 @@ void AdaptMemFree::operator()(AdaptMem* am) const { delete am; }
 
 namespace {
 
-// ---- The consistent history of a fixed-step run as power series (docs/theory.md 10.2) ----
+// ---- The consistent history of a fixed-step run as power series (docs/theory.md 12.2) ----
 // D_k = sum_j gamma_kj h^j y^(k+j): R_k(s), s = h d/dt, are the history's series relative to the
 // top derivative, from the derivative relations; gamma_k = R_k / R_2.
 constexpr int kTerms = 16;

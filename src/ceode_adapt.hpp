@@ -1,6 +1,6 @@
 // The error-control module's record (CEodeMemRec::adapt), written only by ceode_adapt.cpp (the
 // options, the method's error and remap coefficients, the controller) and ceode_adapt_step.cpp
-// (the adaptive step); the others read it (docs/theory.md section 10).
+// (the adaptive step); the others read it (docs/theory.md section 12).
 #ifndef CEODE_SRC_CEODE_ADAPT_HPP_
 #define CEODE_SRC_CEODE_ADAPT_HPP_
 
@@ -10,7 +10,7 @@
 namespace ceode {
 
 // One term of the history's remap when the step changes from h to h' (docs/theory.md
-// section 10.2): D_k += gamma (h'^j - h^j) Y, Y = D_{k+j} (k + j < d) or the top derivative's
+// section 12.2): D_k += gamma (h'^j - h^j) Y, Y = D_{k+j} (k + j < d) or the top derivative's
 // rate yd (k + j = d).
 struct RemapTerm {
   int k;

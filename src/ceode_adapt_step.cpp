@@ -1,4 +1,4 @@
-// The adaptive step (docs/theory.md section 10): the step of the fixed run with the interval it
+// The adaptive step (docs/theory.md section 12): the step of the fixed run with the interval it
 // actually spans in each relation, the local error estimate from divided differences of the
 // accelerations (no extra f), the error test with a retry that redoes only the position update,
 // and CEodeEvolve's returns by the dense output of the last accepted step.
@@ -17,7 +17,7 @@ namespace {
 constexpr sunrealtype kGrowthLimit = 1e15;  // as the fixed step's growth check
 
 // The node's history for a next step of h instead of am.hmap: the h-dependent part of the
-// consistent history follows the step (docs/theory.md 10.2).
+// consistent history follows the step (docs/theory.md 12.2).
 void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   if (h == am->hmap) return;
   const int d = ce->degree;

@@ -1,6 +1,6 @@
 // Dense output: the interpolant of the step interval [tcur, tcur + h] from the history at tcur
 // and the position x(tcur + h) (docs/theory.md section 7); with error control, of the last
-// accepted step [tcur - hlast, tcur] and the position x(tcur - hlast) (section 10.4).
+// accepted step [tcur - hlast, tcur] and the position x(tcur - hlast) (section 12.4).
 #include <cmath>
 
 #include "ceode_adapt.hpp"
