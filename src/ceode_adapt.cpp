@@ -3,6 +3,8 @@
 // step-size controller. The adaptive step itself is in ceode_adapt_step.cpp.
 #include "ceode_adapt.hpp"
 
+#include <ceode/ceode_stability.h>
+
 #include <algorithm>
 #include <cmath>
 #include <new>
@@ -206,7 +208,9 @@ int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
 
 // The first step from the initial data when the user gave none: the order-p error model with
 // every derivative scaled by the problem's time scale tau (from ||x||, ||v||, ||a|| in the
-// error weights), aiming at half the tolerance; at most a tenth of the distance to tout.
+// error weights), aiming at half the tolerance; at most a tenth of the distance to tout. A first
+// step that fails its error test starts the method again with a smaller one (AdaptEvolve), so
+// that the start's stencils are spaced for the step the run takes.
 sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   const AdaptMem& am = *ce->adapt;
   const sunrealtype nx = N_VWrmsNorm(ce->xcur, am.ewt);
@@ -242,6 +246,10 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   am.pfac = Factorial(am.order - 1);
+  sunrealtype tol = am.tol_kind == 2 ? 1 : am.rtol;
+  if (am.tol_kind == 0 && tol == 0) tol = am.atol;
+  if (am.tol_kind == 1 && tol == 0) tol = N_VMaxNorm(am.atol_vec);
+  am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.order);
   int flag = AllocAdaptVectors(ce, func);
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
@@ -250,7 +258,8 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.eta_prev = 1;
   am.hlast = 0;
   am.hprev = 0;
-  sunrealtype h = am.hin;
+  sunrealtype h = am.h_restart > 0 ? am.h_restart : am.hin;
+  am.h_restart = 0;
   if (h == 0) {
     flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2], func);
     if (flag != CE_SUCCESS) return flag;
@@ -502,6 +511,25 @@ int CEodeSetAdaptController(void* mem, int controller) {
   }
   ce->adapt->controller = controller;
   return CE_SUCCESS;
+}
+
+int CEodeMethodErrorConstant(int degree, const sunrealtype* params, int* order,
+                             sunrealtype* cerr) {
+  if (degree < ceode::kMinDegree || degree > ceode::kMaxDegree || params == nullptr ||
+      order == nullptr || cerr == nullptr) {
+    return CE_ILL_INPUT;
+  }
+  for (int i = 0; i < degree - 1; ++i) {
+    if (!std::isfinite(params[i])) return CE_ILL_INPUT;
+  }
+  try {
+    ceode::RemapTerm remap[ceode::kMaxDegree * ceode::kMaxDegree];
+    int nremap = 0;
+    ceode::AdaptCoefficients(degree, params, order, cerr, remap, &nremap);
+    return std::isfinite(*cerr) ? CE_SUCCESS : CE_ILL_INPUT;
+  } catch (...) {
+    return CE_MEM_FAIL;
+  }
 }
 
 int CEodeSetStepSchedule(void* mem, CEodeStepScheduleFn schedule, void* data) {

@@ -39,6 +39,9 @@ struct AdaptMem {
   int order = 0;           // p: order in x of the set
   sunrealtype cerr = 0;    // C_{p+1}: local error C h^{p+1} y^{(p+1)}
   sunrealtype pfac = 0;    // (p - 1)!: y^{(p+1)} = (p - 1)! a[t_n, ..., t_{n-p+1}]
+  // 1 / tol^(1/p): the local error is held to tol^((p+1)/p) in the weights, so that the global
+  // error is proportional to tol (docs/theory.md section 12.3).
+  sunrealtype err_scale = 1;
   int nremap = 0;
   RemapTerm remap[kMaxDegree * kMaxDegree] = {};
 
@@ -58,7 +61,9 @@ struct AdaptMem {
   sunrealtype err = 0;      // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
   sunrealtype eta_prev = 1;  // the last accepted ratio (the filter's memory)
-  bool first = true;         // no step taken since the start
+  bool first = true;         // no step has passed an error test since the start
+  sunrealtype h_restart = 0;  // the first step failed its test: the next start's step
+  int start_fails = 0;        // failed first steps of this CEodeEvolve
 
   // Counters
   long int netf = 0;

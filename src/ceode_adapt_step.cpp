@@ -15,6 +15,7 @@ namespace ceode {
 namespace {
 
 constexpr sunrealtype kGrowthLimit = 1e15;  // as the fixed step's growth check
+constexpr int kStartAgain = 1;              // OneStep: the first step failed, start with a smaller
 
 // The node's history for a next step of h instead of am.hmap: the h-dependent part of the
 // consistent history follows the step (docs/theory.md 12.2).
@@ -68,20 +69,14 @@ void UpdateDerivatives(CEodeMemRec* ce) {
 }
 
 // The new divided differences a[t, t_n, ..., t_{n+1-j}] (dd[1 - cur]) and the local error
-// estimate of the step into est; returns its WRMS norm, 0 while the history is too short.
+// estimate of the step into est; returns its WRMS norm (scaled for tolerance proportionality).
+// One difference short (the first step of the sets of order d), the top difference available
+// over the step stands in for the missing one: an overestimate while h is below the solution's
+// time scale, so the first step is tested too. 0 while the history is shorter still.
 sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector est) {
   const int p = am->order;
-  if (am->ndata < p - 1) {  // a[t, ...] of p nodes needs p - 1 behind t
-    for (int j = 1; j <= std::min(p - 2, am->ndata); ++j) {
-      N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
-      N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-      const sunrealtype r = 1 / (t - am->tnode[j - 1]);
-      N_VLinearSum(r, prev_new, -r, prev_old, am->dd[1 - am->cur][j]);
-    }
-    N_VConst(0, est);
-    return 0;
-  }
-  for (int j = 1; j <= p - 1; ++j) {
+  const int jmax = std::min(p - 1, am->ndata);
+  for (int j = 1; j <= jmax; ++j) {
     N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
     N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
     N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
@@ -89,8 +84,16 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
     N_VLinearSum(r, prev_new, -r, prev_old, out);
   }
   const sunrealtype h = ce->h;
-  N_VScale(am->cerr * std::pow(h, p + 1) * am->pfac, est, est);
-  return N_VWrmsNorm(est, am->ewt);
+  sunrealtype scale = am->cerr * std::pow(h, p + 1) * am->pfac;
+  if (jmax == p - 2 && jmax >= 1) {
+    N_VScale(1, am->dd[1 - am->cur][jmax], est);
+    scale /= h;
+  } else if (jmax < p - 1) {
+    N_VConst(0, est);
+    return 0;
+  }
+  N_VScale(scale, est, est);
+  return N_VWrmsNorm(est, am->ewt) * am->err_scale;
 }
 
 // The step's coefficients for a new h.
@@ -133,7 +136,7 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
-  am->first = false;
+  am->first = am->first && err == 0;  // until a step passes a test: the start is still on trial
   ce->tcur = t;
   ++ce->nst;
   ++ce->nsteps_h;
@@ -164,6 +167,11 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
     if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
     ++am->netf;
     ++nef;
+    if (am->first && am->start_fails + 1 < am->maxnef) {  // the start's stencils were too wide
+      ++am->start_fails;
+      am->h_restart = AdaptRetryStep(ce, err);
+      return kStartAgain;
+    }
     if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
     const sunrealtype h = AdaptRetryStep(ce, err);
     RemapHistory(ce, am, h);
@@ -249,7 +257,12 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
       break;
     }
     flag = OneStep(ce, am, tlimit, func);
+    if (flag == kStartAgain) {
+      flag = StartMethod(ce);
+      if (flag == CE_SUCCESS) continue;
+    }
     if (flag != CE_SUCCESS) break;
+    am->start_fails = 0;
     ++nsteps;
   }
   if (flag != CE_SUCCESS) {

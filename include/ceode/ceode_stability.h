@@ -48,6 +48,11 @@ SUNDIALS_EXPORT int CEodeMethodOrder(int degree, const sunrealtype* params, int*
  * n <= 2 * 8 + 4. */
 SUNDIALS_EXPORT int CEodeMethodErrorCoeffs(int degree, const sunrealtype* params, int n,
                                            sunrealtype* coef_x, sunrealtype* coef_v);
+/* The local error constant of the position step that error control uses: a step of size h
+ * from the exact consistent history errs by cerr h^(order+1) x^(order+1) + O(h^(order+2)),
+ * with order the set's order in x (docs/theory.md section 12.3). */
+SUNDIALS_EXPORT int CEodeMethodErrorConstant(int degree, const sunrealtype* params, int* order,
+                                             sunrealtype* cerr);
 /* ---- end of order conditions ---------------------------------------------------------- */
 
 #ifdef __cplusplus
