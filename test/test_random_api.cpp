@@ -126,6 +126,44 @@ class Sequence {
     }
   }
 
+  // Tolerances, step bounds and the error-control getters, with every kind of bad argument.
+  void ErrorControl() {
+    void* m = mem_.get();
+    const sunrealtype bad[] = {0, 1e-8, 1e-3, -1, NAN, INFINITY, 1e300};
+    switch (Int(0, 6)) {
+      case 0:
+        CEodeSStolerances(m, bad[Int(0, 6)], bad[Int(0, 6)]);
+        break;
+      case 1:
+        CEodeSVtolerances(m, bad[Int(0, 6)], Int(0, 1) && x_ ? v_.get() : nullptr);
+        break;
+      case 2:
+        CEodeSetInitStep(m, bad[Int(0, 6)]);
+        CEodeSetMaxStep(m, bad[Int(0, 6)]);
+        break;
+      case 3:
+        CEodeSetMinStep(m, bad[Int(0, 6)]);
+        CEodeSetMaxErrTestFails(m, Int(-1, 9));
+        break;
+      case 4:
+        CEodeSetAdaptController(m, Int(-1, 2));
+        break;
+      case 5: {
+        sunrealtype h = 0;
+        long int n = 0;
+        CEodeGetLastStep(m, Int(0, 3) ? &h : nullptr);
+        CEodeGetActualInitStep(m, &h);
+        CEodeGetNumErrTestFails(m, Int(0, 3) ? &n : nullptr);
+        CEodeGetNumStableStepLimited(m, &n);
+        if (x_) CEodeGetErrWeights(m, x_.get());
+        break;
+      }
+      default:
+        if (x_) CEodeGetEstLocalErrors(m, Int(0, 1) ? x_.get() : nullptr);
+        break;
+    }
+  }
+
   int Step() {
     void* m = mem_.get();
     switch (Int(0, 18)) {
@@ -178,6 +216,9 @@ class Sequence {
         return 0;
       case 11:
         return GetDky();
+      case 12:
+        ErrorControl();
+        return 0;
       default:
         return Evolve();
     }
