@@ -118,13 +118,14 @@ bool AllocAdaptRecord(CEodeMemRec* ce) {
   return ce->adapt != nullptr;
 }
 
-// The controller's constants: the filter H211b of Soderlind (b = 4) or a PI controller, aiming at
-// an error norm of kTarget, with ratios in [kEtaMin, kEtaMax].
+// The controller's constants: a PI controller or the filter H211b of Soderlind (b = 4), aiming at
+// an error norm of kTarget, with ratios in [kEtaMin, kEtaMax], on the envelope kEnvelope.
 constexpr sunrealtype kTarget = 0.5;
 constexpr sunrealtype kFilterB = 4;
 constexpr sunrealtype kEtaMin = 0.2;
 constexpr sunrealtype kEtaMax = 2;
 constexpr sunrealtype kStableSafety = 0.9;
+constexpr sunrealtype kEnvelope = 0.85;
 
 }  // namespace
 
@@ -308,6 +309,10 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
   const sunrealtype k = am.order + 1;
   sunrealtype eta = 1;
   if (err > 0) {
+    // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
+    // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
+    // step (the test itself uses the estimate).
+    if (am.err_prev > 0) err = std::max(err, kEnvelope * am.err_prev * std::pow(am.eta_prev, k));
     const sunrealtype e = std::max(err, 1e-10) / kTarget;
     const sunrealtype ep = am.err_prev > 0 ? std::max(am.err_prev, 1e-10) / kTarget : e;
     if (am.controller == CE_ADAPT_PI) {

@@ -30,7 +30,7 @@ struct AdaptMem {
   sunrealtype hmin = 0;
   sunrealtype hmax = 0;  // 0: no limit
   int maxnef = 7;
-  int controller = CE_ADAPT_H211B;
+  int controller = CE_ADAPT_PI;
   CEodeStepScheduleFn schedule = nullptr;  // CEodeSetStepSchedule (tests)
   void* schedule_data = nullptr;
   sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step

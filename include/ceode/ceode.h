@@ -164,9 +164,9 @@ SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
  * (WRMS norm with ewt_i = 1/(reltol |x_i| + abstol_i), or the user's weights) at no
  * extra f evaluation, and never above the stable step of the stability guard's
  * frequency estimate (0.9 Omega_max / omega_max). CEodeSetFixedStep switches back to
- * fixed steps; the last of the two calls decides. The controller is CE_ADAPT_H211B
- * (a digital filter that gives smooth step sequences) unless CEodeSetAdaptController
- * chooses CE_ADAPT_PI. */
+ * fixed steps; the last of the two calls decides. The controller is CE_ADAPT_PI unless
+ * CEodeSetAdaptController chooses CE_ADAPT_H211B (a digital filter: smoother step
+ * sequences, more failed tests). */
 #define CE_ADAPT_H211B 0
 #define CE_ADAPT_PI 1
 SUNDIALS_EXPORT int CEodeSStolerances(void* mem, sunrealtype reltol, sunrealtype abstol);
