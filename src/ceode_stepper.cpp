@@ -31,6 +31,10 @@ struct Stepper {
   CEodeRhsFn f = nullptr;  // the memory's f and user_data at creation: a change is refused
   void* user_data = nullptr;
   sunrealtype h_max = 0;  // the user's inner step: the largest one taken
+  // Tolerances were set on the memory: the inner steps follow its error control, each slow
+  // stage starting from the last inner step (h_last) and ending on the stage's time exactly.
+  bool adaptive = false;
+  sunrealtype h_last = 0;
   N_Vector y_own = nullptr;
   sunrealtype t_own = 0;
   bool have_state = false;
@@ -87,10 +91,10 @@ int StepperCheckMemory(CEodeMemRec* ce, const Stepper* st, const char* func) {
                         "The inner stepper needs M = I and no constraints (the MRI forcing is "
                         "added to the acceleration): divide f by M in your right-hand side.");
   }
-  if (ce->h <= 0) {
+  if (ce->h <= 0 && !AdaptOn(ce)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "No inner step: call CEodeSetFixedStep(ce_mem, h) first (h is the "
-                        "largest inner step).");
+                        "largest inner step), or set tolerances (CEodeSStolerances).");
   }
   if (st != nullptr && (ce->f != st->f || ce->user_data != st->user_data)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -115,6 +119,7 @@ int StepperCreate(CEodeMemRec* ce, Stepper** out, const char* func) {
   st->f = ce->f;
   st->user_data = ce->user_data;
   st->h_max = ce->h;
+  st->adaptive = AdaptOn(ce);
   ce->adapters.stepper = st;
   ce->adapters.forcing = &st->forcing;  // no terms yet: f is evaluated as it is
   *out = st;
@@ -170,8 +175,14 @@ int RestartInner(Stepper* st, sunrealtype t0, sunrealtype tout, const Halves& ow
                  const char* func) {
   CEodeMemRec* ce = st->ce;
   const sunrealtype span = tout - t0;
-  const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
-  int flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
+  int flag = CE_SUCCESS;
+  if (st->adaptive) {
+    flag = CEodeSetStopTime(ce, tout);
+    if (flag == CE_SUCCESS) flag = CEodeSetInitStep(ce, std::min(st->h_last, span));
+  } else {
+    const long int nsub = std::max(1L, static_cast<long int>(std::ceil(span / st->h_max - 1e-8)));
+    flag = CEodeSetFixedStep(ce, span / static_cast<sunrealtype>(nsub));
+  }
   if (flag != CE_SUCCESS) return flag;
   ForcingX(st->forcing, t0, 1, own.v, 1, st->u);
   ++st->nrestarts;
@@ -215,6 +226,7 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
     if ((flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL)) < 0) return flag;
+    if (st->adaptive) CEodeGetLastStep(ce, &st->h_last);
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.
     if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) KeepEnd(ce, &st->forcing);

@@ -75,6 +75,7 @@ enum class Form { kNative, kManyVector, kSerial };
 struct Case {
   const char* method;
   bool damped;  // velocity-dependent: Newton with a dense linear solver
+  bool adaptive = false;  // tolerances instead of the fixed step
 };
 
 struct Outcome {
@@ -111,7 +112,8 @@ class Runner {
     };
     bool good = ok(Init()) && ok(CEodeSetUserData(mem_.get(), &prob_)) &&
                 ok(CEodeSetMethodByName(mem_.get(), case_.method)) &&
-                ok(CEodeSetFixedStep(mem_.get(), SUN_RCONST(0.01))) &&
+                ok(case_.adaptive ? CEodeSStolerances(mem_.get(), 1e-8, 1e-8)
+                                  : CEodeSetFixedStep(mem_.get(), SUN_RCONST(0.01))) &&
                 ok(CEodeSetStabilityGuard(mem_.get(), CE_GUARD_OFF, 0));
     if (good && case_.damped) {
       A_.reset(SUNDenseMatrix(prob_.n, prob_.n, ctx_));
@@ -200,13 +202,15 @@ std::string CaseName(const ::testing::TestParamInfo<std::tuple<Case, Form>>& inf
   const Case c = std::get<0>(info.param);
   const Form f = std::get<1>(info.param);
   return std::string(c.method) + (c.damped ? "_DampedNewton" : "_Undamped") +
+         (c.adaptive ? "_Tolerances" : "") +
          (f == Form::kManyVector ? "_ManyVector" : "_Serial2n");
 }
 
 INSTANTIATE_TEST_SUITE_P(
     SpringChain, FirstOrderAdapter,
     ::testing::Combine(::testing::Values(Case{"G3_CD", false}, Case{"G4_A34", false},
-                                         Case{"G4_A34", true}, Case{"G5", true}),
+                                         Case{"G4_A34", true}, Case{"G5", true},
+                                         Case{"G6_O5", false, true}, Case{"G4_A34", true, true}),
                        ::testing::Values(Form::kManyVector, Form::kSerial)),
     CaseName);
 

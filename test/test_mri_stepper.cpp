@@ -145,6 +145,37 @@ TEST(MriInnerStepper, GivesThirdOrderWithMriGarkErk33aOnTheTwoScaleProblem) {
   EXPECT_LT(E.back(), 1e-7);
 }
 
+// With tolerances on the inner memory the inner steps follow its error control (each stage ends
+// on the stage's time): the slow method's third order and error are kept.
+TEST(MriInnerStepper, WithTolerancesKeepsTheSlowMethodsOrder) {
+  Context ctx;
+  std::vector<double> H, E;
+  for (int nslow : {40, 80, 160}) {
+    ManyState st(ctx, 2);
+    double q, s, p;
+    ExactA(0, &q, &s, &p);
+    sunrealtype* x = N_VGetArrayPointer(st.x.get());
+    sunrealtype* v = N_VGetArrayPointer(st.v.get());
+    x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
+    Mem ce(CEodeCreate(ctx));
+    ASSERT_EQ(CEodeInit(ce.get(), FastA, 0, st.x.get(), st.v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(ce.get(), "G6_O5"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSStolerances(ce.get(), 1e-12, 1e-12), CE_SUCCESS);
+    MRIStepInnerStepper raw = nullptr;
+    ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
+    Inner inner(raw);
+    ASSERT_GE(RunMri(ctx, SlowA, raw, st.y.get(), 2.0, nslow), 0);
+    ExactA(2.0, &q, &s, &p);
+    H.push_back(2.0 / nslow);
+    E.push_back(std::max({std::fabs(x[0] - q), std::fabs(x[1] - s), std::fabs(v[0] - p) / kOmega}));
+  }
+  const double order = ceode_test::FitOrder(H, E);
+  EXPECT_GE(order, 2.8);
+  EXPECT_LE(order, 3.2);
+  // The slow method's error: as with the fixed inner step of 1e-3.
+  EXPECT_LT(E.back(), 1.5 * RunProblemA(ctx, 160).err);
+}
+
 TEST(MriInnerStepper, AccumulatesCountersOverRestartsAndEstimatesOmegaOnce) {
   Context ctx;
   const OrderRun r40 = RunProblemA(ctx, 40);
