@@ -255,6 +255,8 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
   am.first = true;
+  am.capped_last = false;
+  am.nst_refresh = ce->nst;
   am.err = am.err_prev = 0;
   am.eta_prev = 1;
   am.hlast = 0;
@@ -331,10 +333,12 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
   *capped = h > hs;
   if (*capped) h = hs;
   h = std::max(h, am.hmin);
+  // On the limit itself (a stop time just reached) the step stays the controller's: the next
+  // CEodeEvolve cuts it to its own stop time.
   const sunrealtype rem = limit_t - ce->tcur;
-  if (rem <= h * (1 + 1e-4)) {
+  if (rem > 0 && rem <= h * (1 + 1e-4)) {
     h = rem;  // lands on the limit (a stretch of at most 1e-4)
-  } else if (rem < 2 * h) {
+  } else if (rem > 0 && rem < 2 * h) {
     h = rem / 2;  // two even steps instead of a sliver
   }
   am.eta_prev = h / hold;

@@ -62,6 +62,8 @@ struct AdaptMem {
   sunrealtype err_prev = 0;
   sunrealtype eta_prev = 1;  // the last accepted ratio (the filter's memory)
   bool first = true;         // no step has passed an error test since the start
+  bool capped_last = false;   // the stable step decided the last step
+  long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;  // the first step failed its test: the next start's step
   int start_fails = 0;        // failed first steps of this CEodeEvolve
 
@@ -98,8 +100,6 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
 // the stop time.
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
                 N_Vector vout, sunrealtype* tret, int itask);
-// The first position step again for a new first step h (the start's Taylor polynomial).
-void AdaptReviseFirstStep(CEodeMemRec* ce, sunrealtype h);
 
 }  // namespace ceode
 

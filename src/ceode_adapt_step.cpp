@@ -102,6 +102,23 @@ void SetStep(CEodeMemRec* ce, sunrealtype h) {
   ce->h = h;
 }
 
+// While the stable step decides the steps, the frequency it comes from is estimated again every
+// kRefreshSteps steps: the state moves away from where it was estimated (a Kepler orbit whose
+// pericentre closes in), and a stale cap lets the step grow past the stability limit.
+constexpr long int kRefreshSteps = 50;
+int RefreshStableStep(CEodeMemRec* ce, AdaptMem* am, const char* func) {
+  if (!am->capped_last || ce->nst - am->nst_refresh < kRefreshSteps) return CE_SUCCESS;
+  am->nst_refresh = ce->nst;
+  return GuardCheck(ce, func);
+}
+
+// The node's next step becomes h (the history remapped, the position again).
+void ReviseStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+  RemapHistory(ce, am, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
+  SetStep(ce, h);
+}
+
 int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err, int nef) {
   if (!IsFinite(ce->Dnew[2])) {
     return ProcessError(ce, CE_RHSFUNC_FAIL, func,
@@ -150,7 +167,8 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   if (am->first) {  // the guard's estimate became known after the start chose h
     const sunrealtype hs = AdaptStableStep(ce);
     if (ce->h > hs) {
-      AdaptReviseFirstStep(ce, hs);
+      ReviseStep(ce, am, hs);
+      am->h0 = hs;
       ++am->ncapped;
     }
   }
@@ -180,11 +198,13 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   }
   CommitNode(ce, am, t, err);
   int flag = AdaptWeights(ce, ce->xcur, func);
+  if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
   if (flag != CE_SUCCESS) return flag;
   bool capped = false;
   sunrealtype h = AdaptNextStep(ce, err, tlimit, &capped);
   if (nef > 0) h = std::min(h, ce->h);  // no growth right after a failed test
   if (capped) ++am->ncapped;
+  am->capped_last = capped;
   RemapHistory(ce, am, h);
   PositionFromNode(ce, *am, h, ce->xnext);
   SetStep(ce, h);
@@ -211,13 +231,6 @@ void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
 
 }  // namespace
 
-void AdaptReviseFirstStep(CEodeMemRec* ce, sunrealtype h) {
-  AdaptMem* am = ce->adapt.get();
-  RemapHistory(ce, am, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
-  SetStep(ce, h);
-  am->h0 = h;
-}
 
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
                 N_Vector vout, sunrealtype* tret, int itask) {
@@ -240,7 +253,10 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
                           static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
     }
     tlimit = ce->tstop;
-    if (ce->tcur + ce->h > tlimit) AdaptReviseFirstStep(ce, tlimit - ce->tcur);
+    // The next step ends on the stop time, or the two before it share what remains.
+    const sunrealtype rem = tlimit - ce->tcur;
+    if (rem > 0 && ce->h > rem) ReviseStep(ce, am, rem);
+    if (rem > 0 && ce->h < rem && 2 * ce->h > rem) ReviseStep(ce, am, rem / 2);
   }
   long int nsteps = 0;
   int flag = CE_SUCCESS;

@@ -330,6 +330,14 @@ TEST(ErrorControl, ReturnsAtEveryToutAndStopsExactlyAtTstop) {
   sunrealtype tcur = 0;
   CEodeGetCurrentTime(mem.get(), &tcur);
   EXPECT_EQ(tcur, 7.25);
+  // The run goes on past a stop time: to a new one, then without one.
+  ASSERT_EQ(CEodeSetStopTime(mem.get(), 9), CE_SUCCESS);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_NORMAL), CE_TSTOP_RETURN);
+  EXPECT_EQ(t, 9);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  EXPECT_EQ(t, 10);
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0), std::exp(-1.0) * (std::cos(10 * w) + 0.1 / w * std::sin(10 * w)),
+              1e-7);
   long netf = -1;
   EXPECT_EQ(CEodeGetNumErrTestFails(mem.get(), &netf), CE_SUCCESS);
   EXPECT_GE(netf, 0);
