@@ -164,20 +164,14 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
                           static_cast<double>(ce->tcur));
     }
   } else {
-    N_VAbs(x, am.ewt);
-    if (am.tol_kind == 1) {
-      N_VLinearSum(am.rtol, am.ewt, 1, am.atol_vec, am.ewt);
-    } else {
-      N_VScale(am.rtol, am.ewt, am.ewt);
-      N_VAddConst(am.ewt, am.atol, am.ewt);
-    }
-    if (!(N_VMin(am.ewt) > 0)) {
+    const sunrealtype dmin = am.kernels.Weights(x, am.rtol, am.atol,
+                                                am.tol_kind == 1 ? am.atol_vec : nullptr, am.ewt);
+    if (!(dmin > 0)) {
       return ProcessError(ce, CE_ILL_INPUT, func,
                           "An error weight is not defined at t = %.17g: some x_i = 0 where its "
                           "abstol is 0. Give abstol > 0 for every entry.",
                           static_cast<double>(ce->tcur));
     }
-    N_VInv(am.ewt, am.ewt);
     return CE_SUCCESS;
   }
   if (!(N_VMin(am.ewt) > 0) || !IsFinite(am.ewt)) {
@@ -252,6 +246,9 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   if (am.tol_kind == 1 && tol == 0) tol = N_VMaxNorm(am.atol_vec);
   am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.order);
   int flag = AllocAdaptVectors(ce, func);
+  const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL &&
+                      (am.tol_kind != 1 || N_VGetVectorID(am.atol_vec) == SUNDIALS_NVEC_SERIAL);
+  am.kernels = {serial, ce->n};
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
   am.first = true;

@@ -4,7 +4,7 @@
 #ifndef CEODE_SRC_CEODE_ADAPT_HPP_
 #define CEODE_SRC_CEODE_ADAPT_HPP_
 
-#include "ceode_impl.hpp"
+#include "ceode_kernels.hpp"
 #include "ceode_testing.h"
 
 namespace ceode {
@@ -46,6 +46,7 @@ struct AdaptMem {
   RemapTerm remap[kMaxDegree * kMaxDegree] = {};
 
   // The run
+  AdaptKernels kernels;  // the backend of its vector work, chosen at the start
   N_Vector ewt = nullptr;
   N_Vector ele = nullptr;   // the last accepted step's local error estimate
   N_Vector est = nullptr;   // the estimate of the step under test

@@ -26,7 +26,7 @@ void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
     const RemapTerm& r = am->remap[i];
     const sunrealtype c = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
     N_Vector y = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
-    N_VLinearSum(1, ce->D[r.k], c, y, ce->D[r.k]);
+    am->kernels.Axpy(c, y, ce->D[r.k]);
   }
   am->hmap = h;
 }
@@ -56,16 +56,17 @@ void PositionFromNode(CEodeMemRec* ce, const AdaptMem& am, sunrealtype h, N_Vect
     c[m] = yd_coef;
     X[m++] = am.yd;
   }
-  Combine(m, c, X, out);
+  am.kernels.Lin(m, c, X, out);
 }
 
 // The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
 // step's plan without its position sum.
 void UpdateDerivatives(CEodeMemRec* ce) {
-  UpdatePlan plan;
-  BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &plan);
-  --plan.n;
-  UpdateReference(plan, {false, nullptr, nullptr, nullptr});
+  KernelPlan kp;
+  BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &kp.plan);
+  --kp.plan.n;
+  PreparePlan(ce->adapt->kernels.serial, &kp);
+  RunPlan(kp, ce->n);
 }
 
 // The new divided differences a[t, t_n, ..., t_{n+1-j}] (dd[1 - cur]) and the local error
@@ -81,19 +82,21 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
     N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
     N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
     const sunrealtype r = 1 / (t - am->tnode[j - 1]);
-    N_VLinearSum(r, prev_new, -r, prev_old, out);
+    const sunrealtype c[2] = {r, -r};
+    N_Vector X[2] = {prev_new, prev_old};
+    am->kernels.Lin(2, c, X, out);
   }
   const sunrealtype h = ce->h;
   sunrealtype scale = am->cerr * std::pow(h, p + 1) * am->pfac;
   if (jmax == p - 2 && jmax >= 1) {
-    N_VScale(1, am->dd[1 - am->cur][jmax], est);
+    CopyVector(am->dd[1 - am->cur][jmax], est);
     scale /= h;
   } else if (jmax < p - 1) {
     N_VConst(0, est);
     return 0;
   }
-  N_VScale(scale, est, est);
-  return N_VWrmsNorm(est, am->ewt) * am->err_scale;
+  am->kernels.Scale(scale, est);
+  return am->kernels.WrmsNorm(est, am->ewt) * am->err_scale;
 }
 
 // The step's coefficients for a new h.
@@ -140,7 +143,9 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   const int d = ce->degree;
   const sunrealtype h = ce->h;
   // yd of the new node: its z (un-remapped) less the node's z over the step.
-  N_VLinearSum(1 / h, ce->Dnew[d - 1], -1 / h, ce->D[d - 1], am->yd);
+  const sunrealtype c[2] = {1 / h, -1 / h};
+  N_Vector X[2] = {ce->Dnew[d - 1], ce->D[d - 1]};
+  am->kernels.Lin(2, c, X, am->yd);
   std::swap(ce->D, ce->Dnew);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
@@ -209,7 +214,7 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   PositionFromNode(ce, *am, h, ce->xnext);
   SetStep(ce, h);
   // Growth that the relative error weights follow: stop long before overflow, as the fixed step.
-  const sunrealtype xl1 = N_VL1Norm(ce->xnext);
+  const sunrealtype xl1 = am->kernels.L1Norm(ce->xnext);
   if (!(xl1 <= kGrowthLimit * (1 + ce->xl1_start))) {
     return ProcessError(ce, CE_UNSTABLE, func,
                         "The state grew explosively or stopped being finite (||x||_1 = %g at t = "

@@ -165,6 +165,27 @@ struct KernelPlan {
 void PreparePlan(bool serial_allowed, KernelPlan* kp);
 void RunPlan(const KernelPlan& kp, sunindextype n);
 
+// ---- The adaptive step's vector work (ceode_kernels_adapt.cpp) ----
+
+// Each operation on the backend chosen once per start: N_Vector operations, or loops on the
+// raw arrays of serial vectors with the same arithmetic in the same order (the same numbers;
+// test_fused compares them).
+struct AdaptKernels {
+  bool serial = false;  // every vector of the run is NVECTOR_SERIAL and the fused kernel is on
+  sunindextype n = 0;
+  // out = sum_j c[j] X[j] (Combine's values; out is not an input).
+  void Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) const;
+  // x += c y (N_VLinearSum(1, x, c, y, x)).
+  void Axpy(sunrealtype c, N_Vector y, N_Vector x) const;
+  void Scale(sunrealtype c, N_Vector x) const;  // x *= c
+  sunrealtype WrmsNorm(N_Vector x, N_Vector w) const;
+  sunrealtype L1Norm(N_Vector x) const;
+  // ewt = 1 / (rtol |x| + atol) with a scalar atol (atolv == nullptr) or a vector one; returns
+  // the smallest denominator (ewt is not formed when it is not positive).
+  sunrealtype Weights(N_Vector x, sunrealtype rtol, sunrealtype atol, N_Vector atolv,
+                      N_Vector ewt) const;
+};
+
 }  // namespace ceode
 
 #endif  // CEODE_SRC_CEODE_KERNELS_HPP_

@@ -5,7 +5,7 @@
 
 #include <random>
 
-#include "ceode_testing.h"
+#include "ceode_testing.h"  // CEodeSetStepSchedule, CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
@@ -384,6 +384,42 @@ TEST(ErrorControl, RefusesBadTolerancesAndStepBoundsAndStaysUsable) {
   EXPECT_NEAR(NV_Ith_S(x.get(), 0), std::exp(-0.2) * (std::cos(2 * w) + 0.1 / w * std::sin(2 * w)),
               1e-6);
 }
+
+class Backends : public ::testing::TestWithParam<const char*> {};
+
+// The adaptive step's vector work on raw arrays (serial vectors) gives the numbers of its
+// N_Vector reference bit for bit, with scalar and with vector abstol.
+TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
+  double out[2][2];
+  long nst[2];
+  for (int fused = 0; fused < 2; ++fused) {
+    Context ctx;
+    const auto s = KeplerSetup();
+    Vector x = SerialVector(2, ctx);
+    Vector v = SerialVector(2, ctx);
+    Vector atol = SerialVector(2, ctx, 1e-9);
+    NV_Ith_S(atol.get(), 1) = 2e-9;
+    for (int i = 0; i < 2; ++i) {
+      NV_Ith_S(x.get(), i) = s.x0[i];
+      NV_Ith_S(v.get(), i) = s.v0[i];
+    }
+    Mem mem(CEodeCreate(ctx));
+    ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(mem.get(), GetParam()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFusedKernel(mem.get(), fused != 0 ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+    ASSERT_EQ(CEodeSVtolerances(mem.get(), 1e-9, atol.get()), CE_SUCCESS);
+    sunrealtype t = 0;
+    ASSERT_EQ(CEodeEvolve(mem.get(), 4 * M_PI, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    out[fused][0] = NV_Ith_S(x.get(), 0);
+    out[fused][1] = NV_Ith_S(v.get(), 1);
+    CEodeGetNumSteps(mem.get(), &nst[fused]);
+  }
+  EXPECT_EQ(nst[0], nst[1]);
+  EXPECT_EQ(out[0][0], out[1][0]);
+  EXPECT_EQ(out[0][1], out[1][1]);
+}
+
+INSTANTIATE_TEST_SUITE_P(NamedSets, Backends, ::testing::ValuesIn(kSets));
 
 // A fixed step after tolerances takes the run back to fixed steps: the numbers of a run that
 // never had tolerances, bit for bit.

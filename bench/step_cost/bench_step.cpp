@@ -20,6 +20,8 @@
 //                                               VARIANT also ceode_generic: the N_Vector
 //                                               reference update, to count its passes;
 //                                               ceode_two_buffers: CEodeSetInPlaceUpdate off;
+//                                               ceode_adaptive: tolerances 1e-8 instead of
+//                                               the fixed step, prints the steps taken;
 //                                               instructions per step = difference of two
 //                                               STEPS divided by their difference)
 // Before timing, the program checks that CEODE and both hand loops agree with the exact
@@ -226,7 +228,8 @@ struct CeodeRun {
 
   // generic: the N_Vector reference update instead of the fused kernel; two_buffers: no in-place
   // plans.
-  CeodeRun(const Method& m, long n, bool generic = false, bool two_buffers = false)
+  CeodeRun(const Method& m, long n, bool generic = false, bool two_buffers = false,
+           bool adaptive = false)
       : k(SpringConstants(n)) {
     if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return;
     x = N_VNew_Serial(n, ctx);
@@ -238,7 +241,8 @@ struct CeodeRun {
     ok = CEodeInit(mem, CeodeRhs, 0.0, x, v) == CE_SUCCESS &&
          CEodeSetUserData(mem, &k) == CE_SUCCESS &&
          CEodeSetMethodByName(mem, m.name) == CE_SUCCESS &&
-         CEodeSetFixedStep(mem, kStep) == CE_SUCCESS &&
+         (adaptive ? CEodeSStolerances(mem, 1e-8, 1e-8) : CEodeSetFixedStep(mem, kStep)) ==
+             CE_SUCCESS &&
          CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0) == CE_SUCCESS &&
          CEodeSetMaxNumSteps(mem, 1L << 40) == CE_SUCCESS &&
          SetUpdateToggles(mem, !generic, !two_buffers) &&
@@ -407,9 +411,14 @@ int CountMode(int argc, char** argv) {
   const long steps = std::atol(argv[5]);
   if (m == nullptr || n < 1 || steps < 0) return 2;
   if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic" ||
-      variant == "ceode_two_buffers") {
-    CeodeRun run(*m, n, variant == "ceode_generic", variant == "ceode_two_buffers");
-    return run.ok && run.Steps(steps, variant == "ceode_1step") ? 0 : 1;
+      variant == "ceode_two_buffers" || variant == "ceode_adaptive") {
+    CeodeRun run(*m, n, variant == "ceode_generic", variant == "ceode_two_buffers",
+                 variant == "ceode_adaptive");
+    const bool ok = run.ok && run.Steps(steps, variant == "ceode_1step");
+    long nst = 0;
+    CEodeGetNumSteps(run.mem, &nst);
+    if (variant == "ceode_adaptive") std::printf("steps %ld\n", nst);
+    return ok ? 0 : 1;
   }
   const Coeffs co = MakeCoeffs(*m, kStep);
   HandState s = MakeHand(*m, n);
