@@ -126,6 +126,8 @@ constexpr sunrealtype kEtaMin = 0.2;
 constexpr sunrealtype kEtaMax = 2;
 constexpr sunrealtype kStableSafety = 0.9;
 constexpr sunrealtype kEnvelope = 0.85;
+constexpr sunrealtype kHoldLow = 0.97;
+constexpr sunrealtype kHoldHigh = 1.05;
 
 }  // namespace
 
@@ -252,6 +254,9 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
   am.first = true;
+  am.tw_h = 0;
+  am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
+  am.plan_key[0] = am.plan_key[1] = nullptr;
   am.capped_last = false;
   am.nst_refresh = ce->nst;
   am.err = am.err_prev = 0;
@@ -311,7 +316,11 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
     // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
     // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
     // step (the test itself uses the estimate).
-    if (am.err_prev > 0) err = std::max(err, kEnvelope * am.err_prev * std::pow(am.eta_prev, k));
+    if (am.err_prev > 0) {
+      sunrealtype grow = 1;  // eta_prev^(p+1)
+      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      err = std::max(err, kEnvelope * am.err_prev * grow);
+    }
     const sunrealtype e = std::max(err, 1e-10) / kTarget;
     const sunrealtype ep = am.err_prev > 0 ? std::max(am.err_prev, 1e-10) / kTarget : e;
     if (am.controller == CE_ADAPT_PI) {
@@ -321,6 +330,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
     }
     am.err_prev = err;
   }
+  // Small changes are not made: a step kept costs no new coefficients, plans or remap, and
+  // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5).
+  if (eta > kHoldLow && eta < kHoldHigh) eta = 1;
   eta = std::min(kEtaMax, std::max(kEtaMin, eta));
   const sunrealtype hold = ce->h;
   sunrealtype h = hold * eta;

@@ -68,6 +68,14 @@ struct AdaptMem {
   sunrealtype h_restart = 0;  // the first step failed its test: the next start's step
   int start_fails = 0;        // failed first steps of this CEodeEvolve
 
+  // What a step keeps while h stays: the position's Taylor weights, the derivative update's
+  // plans of the two history configurations (keyed by D_1's buffer).
+  sunrealtype tw[kMaxDegree + 1] = {};
+  sunrealtype tw_h = 0;
+  KernelPlan plans[2];
+  sunrealtype plan_h[2] = {};
+  N_Vector plan_key[2] = {};
+
   // Counters
   long int netf = 0;
   long int ncapped = 0;

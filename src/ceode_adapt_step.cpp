@@ -17,6 +17,13 @@ namespace {
 constexpr sunrealtype kGrowthLimit = 1e15;  // as the fixed step's growth check
 constexpr int kStartAgain = 1;              // OneStep: the first step failed, start with a smaller
 
+// x^j by multiplication (the remap's and the estimate's powers are small integers).
+sunrealtype IntPow(sunrealtype x, int j) {
+  sunrealtype r = 1;
+  for (int i = 0; i < j; ++i) r *= x;
+  return r;
+}
+
 // The node's history for a next step of h instead of am.hmap: the h-dependent part of the
 // consistent history follows the step (docs/theory.md 12.2).
 void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
@@ -24,7 +31,7 @@ void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    const sunrealtype c = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
+    const sunrealtype c = r.gamma * (IntPow(h, r.j) - IntPow(am->hmap, r.j));
     N_Vector y = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
     am->kernels.Axpy(c, y, ce->D[r.k]);
   }
@@ -34,10 +41,13 @@ void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
 // x(t_n + h) into out from the node (x(t_n) = xcur and its remapped history): the Taylor terms,
 // and the top derivative's blend over the new interval, z_n - (1 - p0) h yd with the node's own
 // z_n (before the remap).
-void PositionFromNode(CEodeMemRec* ce, const AdaptMem& am, sunrealtype h, N_Vector out) {
+void PositionFromNode(CEodeMemRec* ce, AdaptMem& am, sunrealtype h, N_Vector out) {
   const int d = ce->degree;
-  sunrealtype tw[kMaxDegree + 1];
-  TaylorWeights(h, d, tw);
+  if (h != am.tw_h) {  // the weights of the last step are kept: h often stays
+    TaylorWeights(h, d, am.tw);
+    am.tw_h = h;
+  }
+  const sunrealtype* tw = am.tw;
   sunrealtype c[kMaxDegree + 2];
   N_Vector X[kMaxDegree + 2];
   int m = 0;
@@ -61,11 +71,17 @@ void PositionFromNode(CEodeMemRec* ce, const AdaptMem& am, sunrealtype h, N_Vect
 
 // The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
 // step's plan without its position sum.
-void UpdateDerivatives(CEodeMemRec* ce) {
-  KernelPlan kp;
-  BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &kp.plan);
-  --kp.plan.n;
-  PreparePlan(ce->adapt->kernels.serial, &kp);
+// The plans of the two history configurations are kept while h stays.
+void UpdateDerivatives(CEodeMemRec* ce, AdaptMem* am) {
+  const int i = ce->D[1] == am->plan_key[0] ? 0 : 1;
+  KernelPlan& kp = am->plans[i];
+  if (am->plan_h[i] != ce->co.h || am->plan_key[i] != ce->D[1]) {
+    BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &kp.plan);
+    --kp.plan.n;
+    PreparePlan(am->kernels.serial, &kp);
+    am->plan_h[i] = ce->co.h;
+    am->plan_key[i] = ce->D[1];
+  }
   RunPlan(kp, ce->n);
 }
 
@@ -87,7 +103,7 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
     am->kernels.Lin(2, c, X, out);
   }
   const sunrealtype h = ce->h;
-  sunrealtype scale = am->cerr * std::pow(h, p + 1) * am->pfac;
+  sunrealtype scale = am->cerr * IntPow(h, p + 1) * am->pfac;
   if (jmax == p - 2 && jmax >= 1) {
     CopyVector(am->dd[1 - am->cur][jmax], est);
     scale /= h;
@@ -185,7 +201,7 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
     if (ce->h == tlimit - ce->tcur) t = tlimit;  // lands on tstop exactly
     int flag = sm->solve(ce, t, t + ce->h, ce->xnext, ce->Dnew[2], func);
     if (flag != CE_SUCCESS) return flag;
-    UpdateDerivatives(ce);
+    UpdateDerivatives(ce, am);
     err = EstimateError(ce, am, t, est);
     if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
     ++am->netf;
