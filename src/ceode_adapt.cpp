@@ -232,11 +232,6 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
 
 int AdaptStart(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
-  if (HasConstraints(ce)) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "Error control is not available with constraints: use "
-                        "CEodeSetFixedStep.");
-  }
   try {
     AdaptCoefficients(ce->degree, ce->params, &am.order, &am.cerr, am.remap, &am.nremap);
   } catch (...) {
@@ -266,7 +261,13 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   sunrealtype h = am.h_restart > 0 ? am.h_restart : am.hin;
   am.h_restart = 0;
   if (h == 0) {
-    flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2], func);
+    // The constrained acceleration needs the start's own solve (M may be singular): the first
+    // step then comes from x and v alone.
+    if (HasConstraints(ce)) {
+      N_VConst(0, ce->D[2]);
+    } else {
+      flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2], func);
+    }
     if (flag != CE_SUCCESS) return flag;
     const sunrealtype span = std::fabs(am.tout_hint - ce->tcur);
     h = InitialStep(ce, span > 0 ? span : 1);
@@ -282,6 +283,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   ce->h = h;
   am.h0 = h;
   am.hmap = h;
+  am.h_plan = h;
   return CE_SUCCESS;
 }
 
@@ -308,7 +310,8 @@ sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err) {
   return std::max(ce->h * eta, am.hmin);
 }
 
-sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t, bool* capped) {
+sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
+                          sunrealtype limit_t, bool* capped) {
   AdaptMem& am = *ce->adapt;
   const sunrealtype k = am.order + 1;
   sunrealtype eta = 1;
@@ -334,7 +337,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
   // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5).
   if (eta > kHoldLow && eta < kHoldHigh) eta = 1;
   eta = std::min(kEtaMax, std::max(kEtaMin, eta));
-  const sunrealtype hold = ce->h;
+  const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
   if (am.schedule != nullptr) h = am.schedule(ce->tcur, ce->nst, am.schedule_data);
   if (am.hmax > 0) h = std::min(h, am.hmax);
@@ -344,7 +347,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t,
   h = std::max(h, am.hmin);
   // On the limit itself (a stop time just reached) the step stays the controller's: the next
   // CEodeEvolve cuts it to its own stop time.
-  const sunrealtype rem = limit_t - ce->tcur;
+  const sunrealtype rem = limit_t - tfrom;
   if (rem > 0 && rem <= h * (1 + 1e-4)) {
     h = rem;  // lands on the limit (a stretch of at most 1e-4)
   } else if (rem > 0 && rem < 2 * h) {

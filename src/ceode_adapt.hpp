@@ -65,7 +65,10 @@ struct AdaptMem {
   bool first = true;         // no step has passed an error test since the start
   bool capped_last = false;   // the stable step decided the last step
   long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
-  sunrealtype h_restart = 0;  // the first step failed its test: the next start's step
+  sunrealtype h_restart = 0;
+  // With constraints the solve at a node imposes the constraint one step ahead, so the step
+  // after the next one is planned at each acceptance (docs/theory.md 12.6).
+  sunrealtype h_plan = 0;  // the first step failed its test: the next start's step
   int start_fails = 0;        // failed first steps of this CEodeEvolve
 
   // What a step keeps while h stays: the position's Taylor weights, the derivative update's
@@ -89,9 +92,11 @@ int AdaptStart(CEodeMemRec* ce, const char* func);
 void AdaptStartHistory(CEodeMemRec* ce);
 // The error weights from x (the tolerances or the user's function).
 int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func);
-// The next step after an accepted one with error norm err (0: none estimated): the controller,
-// then hmax, the stable step and the stop time.
-sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype limit_t, bool* capped);
+// The step after hbase (starting at tfrom) from the error norm err of the last accepted step (0:
+// none estimated): the controller's ratio applied to hbase, then hmax, the stable step and the
+// stop time limit_t.
+sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
+                          sunrealtype limit_t, bool* capped);
 // The step to retry with after a failed error test.
 sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
 // The largest step the guard's estimate admits (SUN_BIG_REAL: none known).

@@ -3,6 +3,7 @@
 // accelerations (no extra f), the error test with a retry that redoes only the position update,
 // and CEodeEvolve's returns by the dense output of the last accepted step.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -115,6 +116,64 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   return am->kernels.WrmsNorm(est, am->ewt) * am->err_scale;
 }
 
+// x(t + hn; a) for the constrained solve at t = t_n + h: the derivative relations over h, the
+// new node's yd, the remap from h to hn and the position over hn, on coefficient arrays over
+// {x(t), D_1(t_n), ..., D_{d-1}(t_n), a} (index 0, 1..d-1, d): the weights xoff of x(t) and the
+// history, and mu of a (docs/theory.md 12.6). The same operations as UpdateDerivatives,
+// CommitNode, RemapHistory and PositionFromNode perform on the vectors.
+void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn,
+                       sunrealtype* xoff, sunrealtype* mu) {
+  using Co = std::array<sunrealtype, kMaxDegree + 1>;
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  const sunrealtype h = co.h;
+  const auto unit = [](int i) {
+    Co e{};
+    e[i] = 1;
+    return e;
+  };
+  const auto axpy = [d](sunrealtype c, const Co& y, Co* x) {
+    for (int i = 0; i <= d; ++i) (*x)[i] += c * y[i];
+  };
+  Co z = unit(d);  // d = 3: z is a
+  if (d > 3) {
+    Co b2{};
+    for (int j = 2; j < d; ++j) axpy(co.T[2][j], unit(j), &b2);
+    axpy(-1, b2, &z);
+    for (sunrealtype& c : z) c /= co.c[2];
+  }
+  Co D[kMaxDegree] = {};
+  for (int k = 1; k < d; ++k) {
+    if (k == 2 || k == d - 1) {
+      D[k] = k == 2 ? unit(d) : z;
+      continue;
+    }
+    D[k] = unit(k);  // T[k][k] = 1: the accumulated quantity
+    for (int j = k + 1; j < d; ++j) axpy(co.T[k][j], unit(j), &D[k]);
+    axpy(co.c[k], z, &D[k]);
+  }
+  if (d == 3) D[2] = unit(d);
+  Co yd = z;
+  axpy(-1, unit(d - 1), &yd);
+  for (sunrealtype& c : yd) c /= h;
+  const Co Dunmapped[kMaxDegree] = {D[0], D[1], D[2], D[3], D[4], D[5], D[6], D[7]};
+  sunrealtype top_shift = 0;
+  for (int i = 0; i < am.nremap; ++i) {
+    const RemapTerm& r = am.remap[i];
+    const sunrealtype c = r.gamma * (IntPow(hn, r.j) - IntPow(h, r.j));
+    axpy(c, r.k + r.j == d ? yd : Dunmapped[r.k + r.j], &D[r.k]);
+    if (r.k == d - 1) top_shift += r.gamma * (hn - h);
+  }
+  sunrealtype tw[kMaxDegree + 1];
+  TaylorWeights(hn, d, tw);
+  Co x = unit(0);
+  for (int i = 1; i < d; ++i) axpy(tw[i], D[i], &x);
+  axpy(-tw[d - 1] * (top_shift + (1 - ce->params[0]) * hn), yd, &x);
+  std::fill(xoff, xoff + kMaxDegree, 0);
+  for (int j = 0; j < d; ++j) xoff[j] = x[j];
+  *mu = x[d];
+}
+
 // The step's coefficients for a new h.
 void SetStep(CEodeMemRec* ce, sunrealtype h) {
   if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co);
@@ -185,12 +244,19 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
 int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
   N_Vector est = am->est;
   StepMem* sm = ce->step.get();
+  // With constraints x(t_n + h) lies on the constraint manifold as solved: a new h means a new
+  // start there (a rare event: the first step, a failed test).
+  const bool constrained = sm->solve_kind == SolveKind::kConstrained;
   if (am->first) {  // the guard's estimate became known after the start chose h
     const sunrealtype hs = AdaptStableStep(ce);
     if (ce->h > hs) {
+      ++am->ncapped;
+      if (constrained) {
+        am->h_restart = hs;
+        return kStartAgain;
+      }
       ReviseStep(ce, am, hs);
       am->h0 = hs;
-      ++am->ncapped;
     }
   }
   int nef = 0;
@@ -199,14 +265,23 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   for (;;) {
     t = ce->tcur + ce->h;
     if (ce->h == tlimit - ce->tcur) t = tlimit;  // lands on tstop exactly
-    int flag = sm->solve(ce, t, t + ce->h, ce->xnext, ce->Dnew[2], func);
+    sunrealtype tnext = t + ce->h;
+    if (constrained) {  // the constraint holds at t + h_plan
+      sunrealtype xoff[kMaxDegree];
+      sunrealtype mu = 0;
+      AffineStepWeights(ce, *am, am->h_plan, xoff, &mu);
+      ConstrSetStepPosition(ce, xoff, mu);
+      tnext = t + am->h_plan;
+    }
+    int flag = sm->solve(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
     if (flag != CE_SUCCESS) return flag;
     UpdateDerivatives(ce, am);
     err = EstimateError(ce, am, t, est);
     if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
     ++am->netf;
     ++nef;
-    if (am->first && am->start_fails + 1 < am->maxnef) {  // the start's stencils were too wide
+    const bool restart = am->first || constrained;  // the start's stencils were too wide, or
+    if (restart && am->start_fails + 1 < am->maxnef) {  // x(t) must be solved for again
       ++am->start_fails;
       am->h_restart = AdaptRetryStep(ce, err);
       return kStartAgain;
@@ -222,8 +297,14 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
   if (flag != CE_SUCCESS) return flag;
   bool capped = false;
-  sunrealtype h = AdaptNextStep(ce, err, tlimit, &capped);
-  if (nef > 0) h = std::min(h, ce->h);  // no growth right after a failed test
+  sunrealtype h = 0;
+  if (constrained) {  // the planned step, and the plan of the one after it
+    h = am->h_plan;
+    am->h_plan = AdaptNextStep(ce, err, h, ce->tcur + h, tlimit, &capped);
+  } else {
+    h = AdaptNextStep(ce, err, ce->h, ce->tcur, tlimit, &capped);
+    if (nef > 0) h = std::min(h, ce->h);  // no growth right after a failed test
+  }
   if (capped) ++am->ncapped;
   am->capped_last = capped;
   RemapHistory(ce, am, h);
@@ -236,7 +317,7 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
                         "The state grew explosively or stopped being finite (||x||_1 = %g at t = "
                         "%.17g, %g at the start) although every step passed its error test: the "
                         "step sequence excited a parasitic mode of %s (docs/theory.md section "
-                        "10.3). Tighten the tolerances or use a set of lower degree.",
+                        "12.5). Tighten the tolerances or use a set of lower degree.",
                         static_cast<double>(xl1), static_cast<double>(t),
                         static_cast<double>(ce->xl1_start), ce->method_name.c_str());
   }
@@ -274,10 +355,23 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
                           static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
     }
     tlimit = ce->tstop;
-    // The next step ends on the stop time, or the two before it share what remains.
+    // The next step ends on the stop time, or the two before it share what remains (with
+    // constraints, a next step past it starts the method again there).
     const sunrealtype rem = tlimit - ce->tcur;
-    if (rem > 0 && ce->h > rem) ReviseStep(ce, am, rem);
-    if (rem > 0 && ce->h < rem && 2 * ce->h > rem) ReviseStep(ce, am, rem / 2);
+    if (ce->step->solve_kind == SolveKind::kConstrained) {
+      if (rem > 0 && ce->h > rem) {
+        am->h_restart = rem;
+        const int flag = StartMethod(ce);
+        if (flag != CE_SUCCESS) {
+          *tret = ce->tcur;
+          return flag;
+        }
+      }
+      if (rem - ce->h > 0 && am->h_plan > rem - ce->h) am->h_plan = rem - ce->h;
+    } else {
+      if (rem > 0 && ce->h > rem) ReviseStep(ce, am, rem);
+      if (rem > 0 && ce->h < rem && 2 * ce->h > rem) ReviseStep(ce, am, rem / 2);
+    }
   }
   long int nsteps = 0;
   int flag = CE_SUCCESS;

@@ -72,6 +72,7 @@ struct ConWork {
   // x(t+h; a) = xoff[0] x(t) + sum_j xoff[j] D_j(t-h) + mu a: the step's update restricted to
   // the position, affine in the acceleration (AffineWeights).
   sunrealtype xoff[kMaxDegree] = {};
+  sunrealtype mu_step = 0;  // the step's mu: the method's, or error control's for its two steps
   bool lam_prev_valid = false;  // lam_prev holds lambda(t - 2h) for the predictor
 };
 
@@ -131,7 +132,7 @@ void StepPosition(CEodeMemRec* ce, const ConWork* w, N_Vector x, N_Vector a, N_V
     c[m] = w->xoff[j];
     X[m++] = j == 0 ? x : ce->D[j];
   }
-  c[m] = ce->co.mu;
+  c[m] = w->mu_step;
   X[m++] = a;
   if (ce->compensated) {  // the update adds its increment minus the carried compensation
     c[m] = -1;
@@ -588,6 +589,7 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   w->a_valid = false;  // h, M or the options may have changed at the restart
   w->lam_prev_valid = false;
   AffineWeights(d, ce->co, w->xoff);
+  w->mu_step = ce->co.mu;
   if (ce->zero_start) {
     // The paper's start: history (v0, a0, 0, ...), a0 the acceleration of the constrained
     // Taylor step x(t0 + h) = x0 + h v0 + h^2/2 a0.
@@ -622,6 +624,12 @@ int ConstrStart(CEodeMemRec* ce, const char* func) {
   return CE_SUCCESS;
 }
 
+void ConstrSetStepPosition(CEodeMemRec* ce, const sunrealtype* xoff, sunrealtype mu) {
+  ConWork* w = Work(ce);
+  std::copy(xoff, xoff + kMaxDegree, w->xoff);
+  w->mu_step = mu;
+}
+
 // The signature of every acceleration solve (the step module's SolveFn); the errors name kFunc.
 int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
                     const char* /*func*/) {
@@ -639,7 +647,7 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
     V0 = w->vbase;
   }
   const StepCoeffs& co = ce->co;
-  const SolveSpec sp{t,  x,     tnext, co.mu, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
+  const SolveSpec sp{t,  x,     tnext, w->mu_step, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
                      V0, false, true};
   const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr);
   if (flag != CE_SUCCESS) return flag;

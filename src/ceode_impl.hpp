@@ -472,6 +472,9 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
                     const char* func);
 void ConstrFree(CEodeMemRec* ce);
 void ConstrReset(CEodeMemRec* ce);  // zeroes its counters (CEodeReInit)
+// Error control: x(t + h_next; a) = xoff[0] x(t) + sum_j xoff[j] D_j + mu a for the step's own
+// pair of steps (kMaxDegree weights), until the next start.
+void ConstrSetStepPosition(CEodeMemRec* ce, const sunrealtype* xoff, sunrealtype mu);
 
 // ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);
