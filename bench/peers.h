@@ -101,10 +101,10 @@ inline const Info& InfoOf(Kind k) {
 // GSL's default error handler aborts the process; the runners check flags.
 inline void Setup() { gsl_set_error_handler_off(); }
 
-// The scene's error after every step, and the step count.
+// The scene's error (and drift, when the problem has one) after every step, and the step count.
 struct Track {
   const Problem& p;
-  double emax = 0;
+  double emax = 0, dmax = 0;
   long steps = 0;
   bool bad = false;
   explicit Track(const Problem& pr) : p(pr) {}
@@ -113,10 +113,12 @@ struct Track {
     ++steps;
     const double e = p.err(t, x, v, p.user);
     if (!(e <= emax)) emax = e;  // also catches NaN
+    const double d = p.drift != nullptr ? p.drift(t, x, v, p.user) : 0.0;
+    if (!(d <= dmax)) dmax = d;
   }
   int Finish(long evals, wp::Outcome* out) const {
     out->error = emax;
-    out->drift = 0;
+    out->drift = dmax;
     out->steps = steps;
     out->rhs_evals = evals;
     return bad || !std::isfinite(emax) ? 1 : 0;

@@ -137,7 +137,11 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
   HistoryGammas(d, params, gamma);
   int ox = 0;
   int ov = 0;
-  MethodOrders(d, params, &ox, &ov, nullptr, nullptr);
+  if (const MethodSet* named = NamedSetWithParams(d, params)) {
+    ox = named->order_x;  // the table's: the order conditions are not solved again
+  } else {
+    MethodOrders(d, params, &ox, &ov, nullptr, nullptr);
+  }
   *order = std::max(1, std::min(ox, d));
   *cerr = ErrorConstant(d, params, *order, gamma);
   *nremap = 0;
@@ -166,8 +170,8 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
                           static_cast<double>(ce->tcur));
     }
   } else {
-    const sunrealtype dmin = am.kernels.Weights(x, am.rtol, am.atol,
-                                                am.tol_kind == 1 ? am.atol_vec : nullptr, am.ewt);
+    const sunrealtype dmin =
+        am.kernels.Weights(x, am.rtol, am.atol, am.tol_kind == 1 ? am.atol_vec : nullptr, am.ewt);
     if (!(dmin > 0)) {
       return ProcessError(ce, CE_ILL_INPUT, func,
                           "An error weight is not defined at t = %.17g: some x_i = 0 where its "
@@ -198,7 +202,8 @@ int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
             CloneOnce(&am.est, ce->xcur) && CloneOnce(&am.yd, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
-    for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j) ok = CloneOnce(&am.dd[b][j], ce->xcur);
+    for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j)
+      ok = CloneOnce(&am.dd[b][j], ce->xcur);
   }
   return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
 }
@@ -220,10 +225,10 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   const int p = am.order;
   sunrealtype h = 0.1 * span;
   if (tau > 0 && tau < SUN_BIG_REAL) {
-    const sunrealtype top = std::max({na * std::pow(tau, -(p - 1)), nv * std::pow(tau, -p),
-                                      nx * std::pow(tau, -(p + 1))});
+    const sunrealtype top = std::max(
+        {na * std::pow(tau, -(p - 1)), nv * std::pow(tau, -p), nx * std::pow(tau, -(p + 1))});
     const sunrealtype c = std::max(std::fabs(am.cerr), SUN_UNIT_ROUNDOFF);
-    if (top > 0) h = std::min(h, std::pow(kTarget / (c * top), 1.0 / (p + 1)));
+    if (top > 0) h = std::min(h, std::pow(kTarget / (c * top * am.err_scale), 1.0 / (p + 1)));
   }
   return h;
 }
@@ -454,8 +459,7 @@ int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol) {
                         static_cast<long>(ce->n));
   }
   if (!ceode::IsFinite(abstol) || N_VMin(abstol) < 0) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "abstol has a negative or non-finite entry.");
+    return ProcessError(ce, CE_ILL_INPUT, __func__, "abstol has a negative or non-finite entry.");
   }
   AdaptMem& am = *ce->adapt;
   if (am.atol_vec == nullptr) am.atol_vec = N_VClone(ce->xcur);
@@ -534,8 +538,7 @@ int CEodeSetAdaptController(void* mem, int controller) {
   return CE_SUCCESS;
 }
 
-int CEodeMethodErrorConstant(int degree, const sunrealtype* params, int* order,
-                             sunrealtype* cerr) {
+int CEodeMethodErrorConstant(int degree, const sunrealtype* params, int* order, sunrealtype* cerr) {
   if (degree < ceode::kMinDegree || degree > ceode::kMaxDegree || params == nullptr ||
       order == nullptr || cerr == nullptr) {
     return CE_ILL_INPUT;

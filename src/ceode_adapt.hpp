@@ -20,7 +20,7 @@ struct RemapTerm {
 
 struct AdaptMem {
   // Options
-  bool on = false;  // tolerances given and no fixed step set after them
+  bool on = false;   // tolerances given and no fixed step set after them
   int tol_kind = 0;  // 0 scalar, 1 vector abstol, 2 user weights
   sunrealtype rtol = 0;
   sunrealtype atol = 0;
@@ -36,9 +36,9 @@ struct AdaptMem {
   sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step
 
   // The method's coefficients (with the method, at each start)
-  int order = 0;           // p: order in x of the set
-  sunrealtype cerr = 0;    // C_{p+1}: local error C h^{p+1} y^{(p+1)}
-  sunrealtype pfac = 0;    // (p - 1)!: y^{(p+1)} = (p - 1)! a[t_n, ..., t_{n-p+1}]
+  int order = 0;         // p: order in x of the set
+  sunrealtype cerr = 0;  // C_{p+1}: local error C h^{p+1} y^{(p+1)}
+  sunrealtype pfac = 0;  // (p - 1)!: y^{(p+1)} = (p - 1)! a[t_n, ..., t_{n-p+1}]
   // 1 / tol^(1/p): the local error is held to tol^((p+1)/p) in the weights, so that the global
   // error is proportional to tol (docs/theory.md section 12.3).
   sunrealtype err_scale = 1;
@@ -48,28 +48,28 @@ struct AdaptMem {
   // The run
   AdaptKernels kernels;  // the backend of its vector work, chosen at the start
   N_Vector ewt = nullptr;
-  N_Vector ele = nullptr;   // the last accepted step's local error estimate
-  N_Vector est = nullptr;   // the estimate of the step under test
-  N_Vector yd = nullptr;    // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
-  N_Vector dd[2][kMaxDegree] = {};  // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
-  int cur = 0;              // dd[cur] belongs to the node
+  N_Vector ele = nullptr;  // the last accepted step's local error estimate
+  N_Vector est = nullptr;  // the estimate of the step under test
+  N_Vector yd = nullptr;   // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
+  int cur = 0;                             // dd[cur] belongs to the node
   sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
-  int ndata = 0;            // accelerations and start derivatives behind the divided differences
-  sunrealtype hprev = 0;    // t_n - t_{n-1} (0 at the start)
-  sunrealtype hmap = 0;     // the step the node's history is remapped for
-  sunrealtype hlast = 0;    // the last accepted step
-  sunrealtype h0 = 0;       // the first step of the run
-  sunrealtype err = 0;      // the last accepted step's error norm (0: none estimated)
+  int ndata = 0;          // accelerations and start derivatives behind the divided differences
+  sunrealtype hprev = 0;  // t_n - t_{n-1} (0 at the start)
+  sunrealtype hmap = 0;   // the step the node's history is remapped for
+  sunrealtype hlast = 0;  // the last accepted step
+  sunrealtype h0 = 0;     // the first step of the run
+  sunrealtype err = 0;    // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
   sunrealtype eta_prev = 1;  // the last accepted ratio (the filter's memory)
   bool first = true;         // no step has passed an error test since the start
-  bool capped_last = false;   // the stable step decided the last step
-  long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
+  bool capped_last = false;  // the stable step decided the last step
+  long int nst_refresh = 0;  // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
   // With constraints the solve at a node imposes the constraint one step ahead, so the step
   // after the next one is planned at each acceptance (docs/theory.md 12.6).
   sunrealtype h_plan = 0;  // the first step failed its test: the next start's step
-  int start_fails = 0;        // failed first steps of this CEodeEvolve
+  int start_fails = 0;     // failed first steps of this CEodeEvolve
 
   // What a step keeps while h stays: the position's Taylor weights, the derivative update's
   // plans of the two history configurations (keyed by D_1's buffer).
@@ -101,7 +101,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
 // The largest step the guard's estimate admits (SUN_BIG_REAL: none known).
 sunrealtype AdaptStableStep(const CEodeMemRec* ce);
-void AdaptFree(CEodeMemRec* ce);  // its vectors (the problem's size changes)
+void AdaptFree(CEodeMemRec* ce);                         // its vectors (the problem's size changes)
 void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout);  // CEodeEvolve's tout
 void AdaptDisable(CEodeMemRec* ce);                      // CEodeSetFixedStep
 void AdaptReset(CEodeMemRec* ce, bool counters);
@@ -112,8 +112,8 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past
 // the stop time.
-int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
-                N_Vector vout, sunrealtype* tret, int itask);
+int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
+                sunrealtype* tret, int itask);
 
 }  // namespace ceode
 

@@ -121,8 +121,8 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
 // {x(t), D_1(t_n), ..., D_{d-1}(t_n), a} (index 0, 1..d-1, d): the weights xoff of x(t) and the
 // history, and mu of a (docs/theory.md 12.6). The same operations as UpdateDerivatives,
 // CommitNode, RemapHistory and PositionFromNode perform on the vectors.
-void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn,
-                       sunrealtype* xoff, sunrealtype* mu) {
+void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn, sunrealtype* xoff,
+                       sunrealtype* mu) {
   using Co = std::array<sunrealtype, kMaxDegree + 1>;
   const int d = ce->degree;
   const StepCoeffs& co = ce->co;
@@ -280,12 +280,13 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
     if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
     ++am->netf;
     ++nef;
-    const bool restart = am->first || constrained;  // the start's stencils were too wide, or
+    const bool restart = am->first || constrained;      // the start's stencils were too wide, or
     if (restart && am->start_fails + 1 < am->maxnef) {  // x(t) must be solved for again
       ++am->start_fails;
       am->h_restart = AdaptRetryStep(ce, err);
       return kStartAgain;
     }
+    if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
     if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
     const sunrealtype h = AdaptRetryStep(ce, err);
     RemapHistory(ce, am, h);
@@ -333,9 +334,8 @@ void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
 
 }  // namespace
 
-
-int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
-                N_Vector vout, sunrealtype* tret, int itask) {
+int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
+                sunrealtype* tret, int itask) {
   AdaptMem* am = ce->adapt.get();
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   if (itask == CE_NORMAL && tout < ce->tcur - am->hlast - troundoff) {
@@ -401,7 +401,9 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
     *tret = ce->tretlast = ce->tcur;
     return flag;
   }
-  const bool at_stop = ce->tstop_set && ce->tcur >= tlimit - troundoff;
+  // tout inside the last step, before the stop time, is returned as without a stop time.
+  const bool tout_first = itask == CE_NORMAL && tout < tlimit - troundoff;
+  const bool at_stop = ce->tstop_set && ce->tcur >= tlimit - troundoff && !tout_first;
   sunrealtype tret_v = itask == CE_ONE_STEP || at_stop ? ce->tcur : tout;
   if (itask == CE_NORMAL && !at_stop && tout > ce->tcur) tret_v = ce->tcur;
   Output(ce, tret_v - ce->tcur, xout, vout);

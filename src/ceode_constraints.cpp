@@ -72,7 +72,7 @@ struct ConWork {
   // x(t+h; a) = xoff[0] x(t) + sum_j xoff[j] D_j(t-h) + mu a: the step's update restricted to
   // the position, affine in the acceleration (AffineWeights).
   sunrealtype xoff[kMaxDegree] = {};
-  sunrealtype mu_step = 0;  // the step's mu: the method's, or error control's for its two steps
+  sunrealtype mu_step = 0;      // the step's mu: the method's, or error control's for its two steps
   bool lam_prev_valid = false;  // lam_prev holds lambda(t - 2h) for the predictor
 };
 
@@ -647,8 +647,9 @@ int ConstrSolveStep(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector 
     V0 = w->vbase;
   }
   const StepCoeffs& co = ce->co;
-  const SolveSpec sp{t,  x,     tnext, w->mu_step, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
-                     V0, false, true};
+  const SolveSpec sp{
+      t,  x,     tnext, w->mu_step, ce->vel_dependent ? co.kappa : 0, ce->vel_dependent,
+      V0, false, true};
   const int flag = ConstrainedNewton(ce, w, sp, a, w->lam, nullptr);
   if (flag != CE_SUCCESS) return flag;
   N_VScale(1, ce->con.lambda, w->lam_prev);

@@ -32,6 +32,9 @@ struct MethodSet {
   // method does not solve its order conditions (about 25 000 instructions); test_pc checks
   // every entry against the rule.
   int pc_corrections;
+  // The order in x (CEodeMethodOrder), for error control: solving the order conditions costs up
+  // to a millisecond a start; test_adapt checks every entry.
+  int order_x;
 };
 const MethodSet* FindMethodSet(const char* name);
 // The named set with exactly these parameters, or nullptr (custom parameters).

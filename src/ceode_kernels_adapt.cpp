@@ -73,7 +73,8 @@ sunrealtype AdaptKernels::Weights(N_Vector x, sunrealtype rtol, sunrealtype atol
   const sunrealtype* xd = NV_DATA_S(x);
   const sunrealtype* ad = atolv != nullptr ? NV_DATA_S(atolv) : nullptr;
   sunrealtype* wd = NV_DATA_S(ewt);
-  for (sunindextype i = 0; i < n; ++i) wd[i] = rtol * std::fabs(xd[i]) + (ad != nullptr ? ad[i] : atol);
+  for (sunindextype i = 0; i < n; ++i)
+    wd[i] = rtol * std::fabs(xd[i]) + (ad != nullptr ? ad[i] : atol);
   sunrealtype dmin = wd[0];  // as N_VMin: a NaN first entry stays the minimum
   for (sunindextype i = 1; i < n; ++i) {
     if (wd[i] < dmin) dmin = wd[i];

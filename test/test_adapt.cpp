@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "ceode_impl.hpp"   // the named sets' table
 #include "ceode_testing.h"  // CEodeSetStepSchedule, CEodeSetFusedKernel
 #include "test_util.hpp"
 
@@ -78,8 +79,8 @@ Setup KeplerSetup() { return {Kepler, {1 - kEcc, 0}, {0, std::sqrt((1 + kEcc) / 
 
 // A run to T with tolerances (rtol = atol = tol), or on a step schedule when one is given.
 RunResult Integrate(const Setup& s, const char* set, double tol, double T,
-              const std::vector<double>& exact, CEodeStepScheduleFn schedule = nullptr,
-              double h0 = 0) {
+                    const std::vector<double>& exact, CEodeStepScheduleFn schedule = nullptr,
+                    double h0 = 0) {
   Context ctx;
   const auto n = static_cast<sunindextype>(s.x0.size());
   Vector x = SerialVector(n, ctx);
@@ -139,14 +140,22 @@ TEST_P(ErrorConstant, MatchesTheExactRationalValue) {
   EXPECT_NEAR(cerr, c.cerr, 2e-5 * std::fabs(c.cerr));
 }
 
-INSTANTIATE_TEST_SUITE_P(NamedSets, ErrorConstant,
-                         ::testing::Values(ConstantCase{"G3_CD", 2, -1.0 / 12},
-                                           ConstantCase{"G4_A34", 3, -1.0 / 12},
-                                           ConstantCase{"G5_O4", 4, -0.285540},
-                                           ConstantCase{"G6_O5", 5, 0.0284049},
-                                           ConstantCase{"G7_O7", 7, -0.0249537},
-                                           ConstantCase{"G8_O8", 8, -0.0766957}),
-                         [](const auto& info) { return std::string(info.param.set); });
+INSTANTIATE_TEST_SUITE_P(
+    NamedSets, ErrorConstant,
+    ::testing::Values(ConstantCase{"G3_CD", 2, -1.0 / 12}, ConstantCase{"G4_A34", 3, -1.0 / 12},
+                      ConstantCase{"G5_O4", 4, -0.285540}, ConstantCase{"G6_O5", 5, 0.0284049},
+                      ConstantCase{"G7_O7", 7, -0.0249537}, ConstantCase{"G8_O8", 8, -0.0766957}),
+    [](const auto& info) { return std::string(info.param.set); });
+
+// The order in x that the table gives error control for each named set is CEodeMethodOrder's.
+TEST(ErrorControl, TheTablesOrderOfEverySetIsTheOrderConditionsOrder) {
+  for (int i = 0; i < ceode::NumMethodSets(); ++i) {
+    const ceode::MethodSet& m = ceode::MethodSetAt(i);
+    int ox = 0, ov = 0;
+    ASSERT_EQ(CEodeMethodOrder(m.degree, m.params.data(), &ox, &ov), CE_SUCCESS);
+    EXPECT_EQ(m.order_x, ox) << m.name;
+  }
+}
 
 // ---- order on a varying step sequence -------------------------------------------------------
 
@@ -173,7 +182,7 @@ TEST_P(VariableStepOrder, KeplerWithStepsFollowingTheRadiusKeepsTheSetsOrder) {
   for (int i = 0; i < 4; ++i) {
     g_step_scale = c.scale_coarse / std::pow(2.0, i);
     const RunResult r = Integrate(KeplerSetup(), c.set, 1e-3, T, {1 - kEcc, 0}, RadiusSchedule,
-                            g_step_scale * std::pow(1 - kEcc, 1.5));
+                                  g_step_scale * std::pow(1 - kEcc, 1.5));
     ASSERT_EQ(r.flag, CE_SUCCESS) << c.set;
     hs.push_back(g_step_scale);
     errs.push_back(r.err);
@@ -185,9 +194,11 @@ TEST_P(VariableStepOrder, KeplerWithStepsFollowingTheRadiusKeepsTheSetsOrder) {
 }
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, VariableStepOrder,
-                         ::testing::Values(OrderCase{"G3_CD", 2, 0.02}, OrderCase{"G4_A34", 3, 0.04},
+                         ::testing::Values(OrderCase{"G3_CD", 2, 0.02},
+                                           OrderCase{"G4_A34", 3, 0.04},
                                            OrderCase{"G5_O4", 4, 0.04}, OrderCase{"G6_O5", 5, 0.04},
-                                           OrderCase{"G7_O7", 7, 0.04}, OrderCase{"G8_O8", 8, 0.08}),
+                                           OrderCase{"G7_O7", 7, 0.04},
+                                           OrderCase{"G8_O8", 8, 0.08}),
                          [](const auto& info) { return std::string(info.param.set); });
 
 // ---- tolerance proportionality --------------------------------------------------------------
@@ -311,8 +322,7 @@ TEST(ErrorControl, ReturnsAtEveryToutAndStopsExactlyAtTstop) {
   Vector x = SerialVector(1, ctx, 1);
   Vector v = SerialVector(1, ctx, 0);
   Mem mem(CEodeCreate(ctx));
-  ASSERT_EQ(CEodeInit(mem.get(), Damped, 0, x.get(), v.get()),
-            CE_SUCCESS);
+  ASSERT_EQ(CEodeInit(mem.get(), Damped, 0, x.get(), v.get()), CE_SUCCESS);
   ASSERT_EQ(CEodeSetVelocityMode(mem.get(), CE_VELOCITY_DEPENDENT), CE_SUCCESS);
   ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G5_O4"), CE_SUCCESS);
   ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-9, 1e-9), CE_SUCCESS);
@@ -336,8 +346,8 @@ TEST(ErrorControl, ReturnsAtEveryToutAndStopsExactlyAtTstop) {
   EXPECT_EQ(t, 9);
   ASSERT_EQ(CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
   EXPECT_EQ(t, 10);
-  EXPECT_NEAR(NV_Ith_S(x.get(), 0), std::exp(-1.0) * (std::cos(10 * w) + 0.1 / w * std::sin(10 * w)),
-              1e-7);
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0),
+              std::exp(-1.0) * (std::cos(10 * w) + 0.1 / w * std::sin(10 * w)), 1e-7);
   long netf = -1;
   EXPECT_EQ(CEodeGetNumErrTestFails(mem.get(), &netf), CE_SUCCESS);
   EXPECT_GE(netf, 0);
@@ -348,6 +358,24 @@ TEST(ErrorControl, ReturnsAtEveryToutAndStopsExactlyAtTstop) {
   CEodeGetCurrentTime(mem.get(), &tcur);
   ASSERT_EQ(CEodeGetDky(mem.get(), tcur, 0, xnode.get()), CE_SUCCESS);
   EXPECT_DOUBLE_EQ(NV_Ith_S(ewt.get(), 0), 1 / (1e-9 * std::fabs(NV_Ith_S(xnode.get(), 0)) + 1e-9));
+}
+
+// A tout before the stop time is returned as such even when the step that reaches it lands on
+// the stop time; the next call returns the stop time.
+TEST(ErrorControl, AToutJustBeforeTheStopTimeIsReturnedFirst) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx, 1);
+  Vector v = SerialVector(1, ctx, 0);
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), Forced, 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-6, 1e-6), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStopTime(mem.get(), 1), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 0.99999, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  EXPECT_EQ(t, 0.99999);
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0), 2 - std::cos(0.99999), 1e-5);
+  ASSERT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_TSTOP_RETURN);
+  EXPECT_EQ(t, 1);
 }
 
 // Each bad argument is refused with CE_ILL_INPUT and leaves a memory that still runs.

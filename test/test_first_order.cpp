@@ -74,7 +74,7 @@ enum class Form { kNative, kManyVector, kSerial };
 
 struct Case {
   const char* method;
-  bool damped;  // velocity-dependent: Newton with a dense linear solver
+  bool damped;            // velocity-dependent: Newton with a dense linear solver
   bool adaptive = false;  // tolerances instead of the fixed step
 };
 
@@ -202,8 +202,7 @@ std::string CaseName(const ::testing::TestParamInfo<std::tuple<Case, Form>>& inf
   const Case c = std::get<0>(info.param);
   const Form f = std::get<1>(info.param);
   return std::string(c.method) + (c.damped ? "_DampedNewton" : "_Undamped") +
-         (c.adaptive ? "_Tolerances" : "") +
-         (f == Form::kManyVector ? "_ManyVector" : "_Serial2n");
+         (c.adaptive ? "_Tolerances" : "") + (f == Form::kManyVector ? "_ManyVector" : "_Serial2n");
 }
 
 INSTANTIATE_TEST_SUITE_P(
