@@ -294,7 +294,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   if (flag == CE_SUCCESS)
     flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
   if (flag != CE_SUCCESS) return flag;
-  ceode::AdaptSetTarget(ce, tout);
+  if (ce->adapt != nullptr) ceode::AdaptSetTarget(ce, tout);
   flag = ceode::Prepare(ce, __func__);
   if (flag == CE_SUCCESS && ce->guard.pending) flag = ceode::GuardCheckPending(ce, __func__);
   if (flag < 0) {

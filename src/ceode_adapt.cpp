@@ -155,7 +155,7 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
   }
 }
 
-bool AdaptOn(const CEodeMemRec* ce) { return ce->adapt != nullptr && ce->adapt->on; }
+bool AdaptEnabled(const CEodeMemRec* ce) { return ce->adapt->on; }
 
 sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
   return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
@@ -254,7 +254,6 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
   am.first = true;
-  am.tw_h = 0;
   am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
   am.plan_key[0] = am.plan_key[1] = nullptr;
   am.capped_last = false;

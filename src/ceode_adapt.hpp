@@ -71,10 +71,8 @@ struct AdaptMem {
   sunrealtype h_plan = 0;  // the first step failed its test: the next start's step
   int start_fails = 0;     // failed first steps of this CEodeEvolve
 
-  // What a step keeps while h stays: the position's Taylor weights, the derivative update's
-  // plans of the two history configurations (keyed by D_1's buffer).
-  sunrealtype tw[kMaxDegree + 1] = {};
-  sunrealtype tw_h = 0;
+  // What a step keeps while h stays: the derivative update's plans of the two history
+  // configurations (keyed by D_1's buffer).
   KernelPlan plans[2];
   sunrealtype plan_h[2] = {};
   N_Vector plan_key[2] = {};

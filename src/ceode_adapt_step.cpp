@@ -44,11 +44,12 @@ void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
 // z_n (before the remap).
 void PositionFromNode(CEodeMemRec* ce, AdaptMem& am, sunrealtype h, N_Vector out) {
   const int d = ce->degree;
-  if (h != am.tw_h) {  // the weights of the last step are kept: h often stays
-    TaylorWeights(h, d, am.tw);
-    am.tw_h = h;
+  sunrealtype own[kMaxDegree + 1];
+  const sunrealtype* tw = ce->co.tw;  // the step's own weights unless h is another
+  if (h != ce->co.h) {
+    TaylorWeights(h, d, own);
+    tw = own;
   }
-  const sunrealtype* tw = am.tw;
   sunrealtype c[kMaxDegree + 2];
   N_Vector X[kMaxDegree + 2];
   int m = 0;
@@ -193,8 +194,8 @@ int RefreshStableStep(CEodeMemRec* ce, AdaptMem* am, const char* func) {
 // The node's next step becomes h (the history remapped, the position again).
 void ReviseStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   RemapHistory(ce, am, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
   SetStep(ce, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
 }
 
 int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err, int nef) {
@@ -290,8 +291,8 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
     if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
     const sunrealtype h = AdaptRetryStep(ce, err);
     RemapHistory(ce, am, h);
-    PositionFromNode(ce, *am, h, ce->xnext);
     SetStep(ce, h);
+    PositionFromNode(ce, *am, h, ce->xnext);
   }
   CommitNode(ce, am, t, err);
   int flag = AdaptWeights(ce, ce->xcur, func);
@@ -309,8 +310,8 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   if (capped) ++am->ncapped;
   am->capped_last = capped;
   RemapHistory(ce, am, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
   SetStep(ce, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
   // Growth that the relative error weights follow: stop long before overflow, as the fixed step.
   const sunrealtype xl1 = am->kernels.L1Norm(ce->xnext);
   if (!(xl1 <= kGrowthLimit * (1 + ce->xl1_start))) {

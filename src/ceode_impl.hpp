@@ -60,6 +60,7 @@ struct StepCoeffs {
   sunrealtype kappa = 0;
   sunrealtype mu = 0;
   sunrealtype pred[kMaxDegree] = {};  // h^i/i!, i < d - 2: the predictor's weights of D_2..
+  sunrealtype tw[kMaxDegree + 1] = {};  // h^i/i!, i < d: the position's Taylor weights
 };
 void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
 
@@ -339,8 +340,10 @@ void Restart(CEodeMemRec* ce);
 // The access guard every exported function starts with.
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
 
-// ceode_adapt.cpp: whether the run chooses its steps from tolerances (error control).
-bool AdaptOn(const CEodeMemRec* ce);
+// ceode_adapt.cpp: whether the run chooses its steps from tolerances (error control). Inline on
+// the record's pointer: a run that never set tolerances pays one test per call.
+bool AdaptEnabled(const CEodeMemRec* ce);
+inline bool AdaptOn(const CEodeMemRec* ce) { return ce->adapt != nullptr && AdaptEnabled(ce); }
 
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);

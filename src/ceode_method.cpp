@@ -128,10 +128,10 @@ const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co) {
   *co = StepCoeffs{};
   co->h = h;
-  sunrealtype tw[kMaxDegree + 1] = {};  // h^i / i!
+  sunrealtype* tw = co->tw;  // h^i / i!
   TaylorWeights(h, d, tw);
   // The predictor's weights, once per h: every step reads them (PredictAccel, SolvePC).
-  TaylorWeights(h, d - 2, co->pred);
+  std::copy(tw, tw + d - 2, co->pred);
   // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
   for (int k = 1; k <= d - 2; ++k) {
     for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = tw[i];
