@@ -59,7 +59,7 @@ struct StepCoeffs {
   sunrealtype V0[kMaxDegree] = {};
   sunrealtype kappa = 0;
   sunrealtype mu = 0;
-  sunrealtype pred[kMaxDegree] = {};  // h^i/i!, i < d - 2: the predictor's weights of D_2..
+  sunrealtype pred[kMaxDegree] = {};    // h^i/i!, i < d - 2: the predictor's weights of D_2..
   sunrealtype tw[kMaxDegree + 1] = {};  // h^i/i!, i < d: the position's Taylor weights
 };
 void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);

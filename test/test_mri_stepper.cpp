@@ -102,9 +102,9 @@ struct OrderRun {
 };
 
 // velocity: declare (unneeded) velocity dependence, which takes the implicit path and so
-// the full consistent start at every restart.
+// the full consistent start at every restart. tol > 0: the inner steps under error control.
 OrderRun RunProblemA(SUNContext ctx, int nslow, const char* method = "G4_A34",
-                     bool velocity = false) {
+                     bool velocity = false, double tol = 0) {
   ManyState st(ctx, 2);
   double q, s, p;
   ExactA(0, &q, &s, &p);
@@ -115,6 +115,7 @@ OrderRun RunProblemA(SUNContext ctx, int nslow, const char* method = "G4_A34",
   OrderRun r{-1, 0, 0, 0, 0};
   MRIStepInnerStepper raw = nullptr;
   if (!ce || (velocity && CEodeSetVelocityDependence(ce.get(), SUNTRUE) != CE_SUCCESS) ||
+      (tol > 0 && CEodeSStolerances(ce.get(), tol, tol) != CE_SUCCESS) ||
       CEodeCreateMRIStepInnerStepper(ce.get(), &raw) != CE_SUCCESS) {
     return r;
   }
@@ -151,23 +152,10 @@ TEST(MriInnerStepper, WithTolerancesKeepsTheSlowMethodsOrder) {
   Context ctx;
   std::vector<double> H, E;
   for (int nslow : {40, 80, 160}) {
-    ManyState st(ctx, 2);
-    double q, s, p;
-    ExactA(0, &q, &s, &p);
-    sunrealtype* x = N_VGetArrayPointer(st.x.get());
-    sunrealtype* v = N_VGetArrayPointer(st.v.get());
-    x[0] = q, x[1] = s, v[0] = p, v[1] = 0;
-    Mem ce(CEodeCreate(ctx));
-    ASSERT_EQ(CEodeInit(ce.get(), FastA, 0, st.x.get(), st.v.get()), CE_SUCCESS);
-    ASSERT_EQ(CEodeSetMethodByName(ce.get(), "G6_O5"), CE_SUCCESS);
-    ASSERT_EQ(CEodeSStolerances(ce.get(), 1e-12, 1e-12), CE_SUCCESS);
-    MRIStepInnerStepper raw = nullptr;
-    ASSERT_EQ(CEodeCreateMRIStepInnerStepper(ce.get(), &raw), CE_SUCCESS);
-    Inner inner(raw);
-    ASSERT_GE(RunMri(ctx, SlowA, raw, st.y.get(), 2.0, nslow), 0);
-    ExactA(2.0, &q, &s, &p);
+    const OrderRun r = RunProblemA(ctx, nslow, "G6_O5", false, 1e-12);
+    ASSERT_GT(r.err, 0) << "MRI run with " << nslow << " slow steps failed";
     H.push_back(2.0 / nslow);
-    E.push_back(std::max({std::fabs(x[0] - q), std::fabs(x[1] - s), std::fabs(v[0] - p) / kOmega}));
+    E.push_back(r.err);
   }
   const double order = ceode_test::FitOrder(H, E);
   EXPECT_GE(order, 2.8);
