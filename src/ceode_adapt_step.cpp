@@ -240,67 +240,81 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   ++ce->nsteps_h;
 }
 
-// One accepted step (with as many retries as the error test asks for), then the next step's
-// size and position.
-int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
-  N_Vector est = am->est;
-  StepMem* sm = ce->step.get();
-  // With constraints x(t_n + h) lies on the constraint manifold as solved: a new h means a new
-  // start there (a rare event: the first step, a failed test).
-  const bool constrained = sm->solve_kind == SolveKind::kConstrained;
-  if (am->first) {  // the guard's estimate became known after the start chose h
-    const sunrealtype hs = AdaptStableStep(ce);
-    if (ce->h > hs) {
-      ++am->ncapped;
-      if (constrained) {
-        am->h_restart = hs;
-        return kStartAgain;
-      }
-      ReviseStep(ce, am, hs);
-      am->h0 = hs;
-    }
+// The first step once the guard's estimate is known (it comes after the start chose h): within
+// the stable step. With constraints x(t0 + h) lies on the constraint manifold as solved, so a
+// new h means a new start.
+int FirstStepWithinStableStep(CEodeMemRec* ce, AdaptMem* am, bool constrained) {
+  if (!am->first) return CE_SUCCESS;
+  const sunrealtype hs = AdaptStableStep(ce);
+  if (ce->h <= hs) return CE_SUCCESS;
+  ++am->ncapped;
+  if (constrained) {
+    am->h_restart = hs;
+    return kStartAgain;
   }
-  int nef = 0;
-  sunrealtype err = 0;
-  sunrealtype t = 0;
-  for (;;) {
-    t = ce->tcur + ce->h;
-    if (ce->h == tlimit - ce->tcur) t = tlimit;  // lands on tstop exactly
-    sunrealtype tnext = t + ce->h;
-    if (constrained) {  // the constraint holds at t + h_plan
-      sunrealtype xoff[kMaxDegree];
-      sunrealtype mu = 0;
-      AffineStepWeights(ce, *am, am->h_plan, xoff, &mu);
-      ConstrSetStepPosition(ce, xoff, mu);
-      tnext = t + am->h_plan;
-    }
-    int flag = sm->solve(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
-    if (flag != CE_SUCCESS) return flag;
-    UpdateDerivatives(ce, am);
-    err = EstimateError(ce, am, t, est);
-    if (err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
-    ++am->netf;
-    ++nef;
-    const bool restart = am->first || constrained;      // the start's stencils were too wide, or
-    if (restart && am->start_fails + 1 < am->maxnef) {  // x(t) must be solved for again
-      ++am->start_fails;
-      am->h_restart = AdaptRetryStep(ce, err);
-      return kStartAgain;
-    }
-    if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
-    if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
-    const sunrealtype h = AdaptRetryStep(ce, err);
-    RemapHistory(ce, am, h);
-    SetStep(ce, h);
-    PositionFromNode(ce, *am, h, ce->xnext);
+  ReviseStep(ce, am, hs);
+  am->h0 = hs;
+  return CE_SUCCESS;
+}
+
+// The solve at t = tcur + h, the derivatives there and the error estimate of the step; with
+// constraints the constraint holds at t + h_plan.
+int AttemptStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype* err,
+                const char* func) {
+  sunrealtype tnext = t + ce->h;
+  if (constrained) {
+    sunrealtype xoff[kMaxDegree];
+    sunrealtype mu = 0;
+    AffineStepWeights(ce, *am, am->h_plan, xoff, &mu);
+    ConstrSetStepPosition(ce, xoff, mu);
+    tnext = t + am->h_plan;
   }
-  CommitNode(ce, am, t, err);
-  int flag = AdaptWeights(ce, ce->xcur, func);
-  if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
+  const int flag = ce->step->solve(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
   if (flag != CE_SUCCESS) return flag;
+  UpdateDerivatives(ce, am);
+  *err = EstimateError(ce, am, t, am->est);
+  return CE_SUCCESS;
+}
+
+// After a failed test (the nef-th on this step): a new start with a smaller step while the start
+// is on trial or x(t) must be solved for again (constraints); otherwise the position update from
+// the node again with a smaller step; CE_ERR_FAILURE after maxnef failures or at hmin.
+int RetryAfterFailure(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t,
+                      sunrealtype err, int nef, const char* func) {
+  if ((am->first || constrained) && am->start_fails + 1 < am->maxnef) {
+    ++am->start_fails;
+    am->h_restart = AdaptRetryStep(ce, err);
+    return kStartAgain;
+  }
+  if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
+  if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
+  const sunrealtype h = AdaptRetryStep(ce, err);
+  RemapHistory(ce, am, h);
+  SetStep(ce, h);
+  PositionFromNode(ce, *am, h, ce->xnext);
+  return CE_SUCCESS;
+}
+
+// Growth that the relative error weights follow: stop long before overflow, as the fixed step.
+int CheckGrowth(CEodeMemRec* ce, const AdaptMem& am, sunrealtype t, const char* func) {
+  const sunrealtype xl1 = am.kernels.L1Norm(ce->xnext);
+  if (xl1 <= kGrowthLimit * (1 + ce->xl1_start)) return CE_SUCCESS;
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The state grew explosively or stopped being finite (||x||_1 = %g at t = "
+                      "%.17g, %g at the start) although every step passed its error test: the "
+                      "step sequence excited a parasitic mode of %s (docs/theory.md section "
+                      "12.5). Tighten the tolerances or use a set of lower degree.",
+                      static_cast<double>(xl1), static_cast<double>(t),
+                      static_cast<double>(ce->xl1_start), ce->method_name.c_str());
+}
+
+// The accepted node's next step (with constraints the planned one, and the plan of the step after
+// it) and the position at its end.
+int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype err,
+             int nef, sunrealtype tlimit, const char* func) {
   bool capped = false;
   sunrealtype h = 0;
-  if (constrained) {  // the planned step, and the plan of the one after it
+  if (constrained) {
     h = am->h_plan;
     am->h_plan = AdaptNextStep(ce, err, h, ce->tcur + h, tlimit, &capped);
   } else {
@@ -312,17 +326,30 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   RemapHistory(ce, am, h);
   SetStep(ce, h);
   PositionFromNode(ce, *am, h, ce->xnext);
-  // Growth that the relative error weights follow: stop long before overflow, as the fixed step.
-  const sunrealtype xl1 = am->kernels.L1Norm(ce->xnext);
-  if (!(xl1 <= kGrowthLimit * (1 + ce->xl1_start))) {
-    return ProcessError(ce, CE_UNSTABLE, func,
-                        "The state grew explosively or stopped being finite (||x||_1 = %g at t = "
-                        "%.17g, %g at the start) although every step passed its error test: the "
-                        "step sequence excited a parasitic mode of %s (docs/theory.md section "
-                        "12.5). Tighten the tolerances or use a set of lower degree.",
-                        static_cast<double>(xl1), static_cast<double>(t),
-                        static_cast<double>(ce->xl1_start), ce->method_name.c_str());
+  return CheckGrowth(ce, *am, t, func);
+}
+
+// One accepted step (with as many retries as the error test asks for), then the next step's
+// size and position.
+int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
+  const bool constrained = ce->step->solve_kind == SolveKind::kConstrained;
+  int flag = FirstStepWithinStableStep(ce, am, constrained);
+  int nef = 0;
+  sunrealtype err = 0;
+  sunrealtype t = 0;
+  while (flag == CE_SUCCESS) {
+    t = ce->h == tlimit - ce->tcur ? tlimit : ce->tcur + ce->h;  // lands on tstop exactly
+    flag = AttemptStep(ce, am, constrained, t, &err, func);
+    if (flag != CE_SUCCESS || err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
+    ++am->netf;
+    flag = RetryAfterFailure(ce, am, constrained, t, err, ++nef, func);
   }
+  if (flag != CE_SUCCESS) return flag;
+  CommitNode(ce, am, t, err);
+  flag = AdaptWeights(ce, ce->xcur, func);
+  if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
+  if (flag == CE_SUCCESS) flag = NextStep(ce, am, constrained, t, err, nef, tlimit, func);
+  if (flag != CE_SUCCESS) return flag;
   if (ce->guard.every > 0 && ce->nst % ce->guard.every == 0) return GuardCheck(ce, func);
   return CE_SUCCESS;
 }
@@ -335,12 +362,68 @@ void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
 
 }  // namespace
 
+namespace {
+
+// The stop time for this call (SUN_BIG_REAL without one), with the next step ending on it or the
+// two before it sharing what remains (with constraints a next step past it starts the method
+// again there).
+int ApproachStopTime(CEodeMemRec* ce, AdaptMem* am, sunrealtype troundoff, sunrealtype* tlimit,
+                     const char* func) {
+  *tlimit = SUN_BIG_REAL;
+  if (!ce->tstop_set) return CE_SUCCESS;
+  if (ce->tstop < ce->tcur - troundoff) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The stop time %.17g is behind the current time %.17g.",
+                        static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
+  }
+  *tlimit = ce->tstop;
+  const sunrealtype rem = *tlimit - ce->tcur;
+  if (ce->step->solve_kind != SolveKind::kConstrained) {
+    if (rem > 0 && ce->h > rem) ReviseStep(ce, am, rem);
+    if (rem > 0 && ce->h < rem && 2 * ce->h > rem) ReviseStep(ce, am, rem / 2);
+    return CE_SUCCESS;
+  }
+  if (rem > 0 && ce->h > rem) {
+    am->h_restart = rem;
+    const int flag = StartMethod(ce);
+    if (flag != CE_SUCCESS) return flag;
+  }
+  if (rem - ce->h > 0 && am->h_plan > rem - ce->h) am->h_plan = rem - ce->h;
+  return CE_SUCCESS;
+}
+
+// Accepted steps until done() (a new start, where a step asks for one, is not a step).
+template <typename Done>
+int StepUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit, Done done,
+              const char* func) {
+  long int nsteps = 0;
+  while (!done(nsteps)) {
+    if (nsteps >= ce->mxstep) {
+      return ProcessError(ce, CE_TOO_MUCH_WORK, func,
+                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise the "
+                          "limit with CEodeSetMaxNumSteps or loosen the tolerances.",
+                          nsteps, static_cast<double>(tout), static_cast<double>(ce->tcur));
+    }
+    int flag = OneStep(ce, am, tlimit, func);
+    if (flag == kStartAgain)
+      flag = StartMethod(ce);
+    else if (flag == CE_SUCCESS) {
+      am->start_fails = 0;
+      ++nsteps;
+    }
+    if (flag != CE_SUCCESS) return flag;
+  }
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
                 sunrealtype* tret, int itask) {
   AdaptMem* am = ce->adapt.get();
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
+  *tret = ce->tcur;
   if (itask == CE_NORMAL && tout < ce->tcur - am->hlast - troundoff) {
-    *tret = ce->tcur;
     return ProcessError(ce, CE_BAD_T, func,
                         "tout = %.17g is behind the last step [%.17g, %.17g]: CEODE integrates "
                         "forward only; call CEodeReInit to go back.",
@@ -348,55 +431,16 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
                         static_cast<double>(ce->tcur));
   }
   sunrealtype tlimit = SUN_BIG_REAL;
-  if (ce->tstop_set) {
-    if (ce->tstop < ce->tcur - troundoff) {
-      *tret = ce->tcur;
-      return ProcessError(ce, CE_ILL_INPUT, func,
-                          "The stop time %.17g is behind the current time %.17g.",
-                          static_cast<double>(ce->tstop), static_cast<double>(ce->tcur));
-    }
-    tlimit = ce->tstop;
-    // The next step ends on the stop time, or the two before it share what remains (with
-    // constraints, a next step past it starts the method again there).
-    const sunrealtype rem = tlimit - ce->tcur;
-    if (ce->step->solve_kind == SolveKind::kConstrained) {
-      if (rem > 0 && ce->h > rem) {
-        am->h_restart = rem;
-        const int flag = StartMethod(ce);
-        if (flag != CE_SUCCESS) {
-          *tret = ce->tcur;
-          return flag;
-        }
-      }
-      if (rem - ce->h > 0 && am->h_plan > rem - ce->h) am->h_plan = rem - ce->h;
-    } else {
-      if (rem > 0 && ce->h > rem) ReviseStep(ce, am, rem);
-      if (rem > 0 && ce->h < rem && 2 * ce->h > rem) ReviseStep(ce, am, rem / 2);
-    }
-  }
-  long int nsteps = 0;
-  int flag = CE_SUCCESS;
-  const auto reached = [&]() {
-    if (ce->tstop_set && ce->tcur >= tlimit - troundoff) return true;
-    return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
-  };
-  while (!reached()) {
-    if (nsteps >= ce->mxstep) {
-      flag = ProcessError(ce, CE_TOO_MUCH_WORK, func,
-                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise the "
-                          "limit with CEodeSetMaxNumSteps or loosen the tolerances.",
-                          nsteps, static_cast<double>(tout), static_cast<double>(ce->tcur));
-      break;
-    }
-    flag = OneStep(ce, am, tlimit, func);
-    if (flag == kStartAgain) {
-      flag = StartMethod(ce);
-      if (flag == CE_SUCCESS) continue;
-    }
-    if (flag != CE_SUCCESS) break;
-    am->start_fails = 0;
-    ++nsteps;
-  }
+  int flag = ApproachStopTime(ce, am, troundoff, &tlimit, func);
+  if (flag != CE_SUCCESS) return flag;
+  const auto at_limit = [&] { return ce->tstop_set && ce->tcur >= tlimit - troundoff; };
+  flag = StepUntil(
+      ce, am, tout, tlimit,
+      [&](long int nsteps) {
+        if (at_limit()) return true;
+        return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
+      },
+      func);
   if (flag != CE_SUCCESS) {
     Output(ce, 0, xout, vout);
     *tret = ce->tretlast = ce->tcur;
@@ -404,16 +448,13 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
   }
   // tout inside the last step, before the stop time, is returned as without a stop time.
   const bool tout_first = itask == CE_NORMAL && tout < tlimit - troundoff;
-  const bool at_stop = ce->tstop_set && ce->tcur >= tlimit - troundoff && !tout_first;
-  sunrealtype tret_v = itask == CE_ONE_STEP || at_stop ? ce->tcur : tout;
-  if (itask == CE_NORMAL && !at_stop && tout > ce->tcur) tret_v = ce->tcur;
-  Output(ce, tret_v - ce->tcur, xout, vout);
-  *tret = ce->tretlast = tret_v;
-  if (at_stop) {
-    ce->tstop_set = false;
-    return CE_TSTOP_RETURN;
-  }
-  return CE_SUCCESS;
+  const bool at_stop = at_limit() && !tout_first;
+  const sunrealtype tr = itask == CE_ONE_STEP || at_stop ? ce->tcur : std::min(tout, ce->tcur);
+  Output(ce, tr - ce->tcur, xout, vout);
+  *tret = ce->tretlast = tr;
+  if (!at_stop) return CE_SUCCESS;
+  ce->tstop_set = false;
+  return CE_TSTOP_RETURN;
 }
 
 }  // namespace ceode
