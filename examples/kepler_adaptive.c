@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   fail |= check_flag(CEodeSetMethodByName(mem, method), "CEodeSetMethodByName");
   fail |= check_flag(CEodeSStolerances(mem, rtol, rtol), "CEodeSStolerances");
   /* Named, not left to the default, so that the figures in the header stay this controller's. */
-  fail |= check_flag(CEodeSetAdaptController(mem, CE_ADAPT_PI), "CEodeSetAdaptController");
+  fail |= check_flag(CEodeSetAdaptivityMethod(mem, CE_ADAPT_PI), "CEodeSetAdaptivityMethod");
   /* One output is an orbit: about 2900 steps for G5_O4 at rtol 1e-10, 280 for G8_O8. */
   fail |= check_flag(CEodeSetMaxNumSteps(mem, 1000000), "CEodeSetMaxNumSteps");
   if (fail) return 1;

@@ -126,8 +126,30 @@ constexpr sunrealtype kEtaMin = 0.2;
 constexpr sunrealtype kEtaMax = 2;
 constexpr sunrealtype kStableSafety = 0.9;
 constexpr sunrealtype kEnvelope = 0.85;
+constexpr sunrealtype kSunSafety = 0.9;
 constexpr sunrealtype kHoldLow = 0.97;
 constexpr sunrealtype kHoldHigh = 1.05;
+
+// SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
+// error norm err, which it is told of (UpdateH); false without one or when it fails (CEODE's
+// own controller decides then).
+bool SunControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype* eta) {
+#if SUNDIALS_VERSION_MAJOR >= 7
+  auto* C = static_cast<SUNAdaptController>(ce->adapt->sun_controller);
+  if (C == nullptr) return false;
+  sunrealtype hnew = 0;
+  if (SUNAdaptController_EstimateStep(C, hbase, ce->adapt->order, err, &hnew) != SUN_SUCCESS ||
+      SUNAdaptController_UpdateH(C, hbase, err) != SUN_SUCCESS || !(hnew > 0) ||
+      !std::isfinite(hnew)) {
+    return false;
+  }
+  *eta = kSunSafety * hnew / hbase;  // SUNDIALS' controllers aim at an error norm of 1
+  return true;
+#else
+  (void)ce, (void)err, (void)hbase, (void)eta;
+  return false;
+#endif
+}
 
 }  // namespace
 
@@ -256,6 +278,11 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.first = true;
   am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
   am.plan_key[0] = am.plan_key[1] = nullptr;
+#if SUNDIALS_VERSION_MAJOR >= 7
+  if (am.sun_controller != nullptr) {
+    SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));
+  }
+#endif
   am.capped_last = false;
   am.nst_refresh = ce->nst;
   am.err = am.err_prev = 0;
@@ -330,7 +357,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     }
     const sunrealtype e = std::max(err, 1e-10) / kTarget;
     const sunrealtype ep = am.err_prev > 0 ? std::max(am.err_prev, 1e-10) / kTarget : e;
-    if (am.controller == CE_ADAPT_PI) {
+    if (SunControllerRatio(ce, err, hbase, &eta)) {
+      // the user's SUNAdaptController chose
+    } else if (am.controller == CE_ADAPT_PI) {
       eta = 0.9 * std::pow(e, -0.7 / k) * std::pow(ep / e, 0.4 / k);
     } else {
       eta = std::pow(e * ep, -1 / (kFilterB * k)) * std::pow(am.eta_prev, -1 / kFilterB);
@@ -525,7 +554,7 @@ int CEodeSetMaxErrTestFails(void* mem, int maxnef) {
   return CE_SUCCESS;
 }
 
-int CEodeSetAdaptController(void* mem, int controller) {
+int CEodeSetAdaptivityMethod(void* mem, int controller) {
   CEodeMemRec* ce = nullptr;
   int flag = AdaptAccess(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
@@ -563,6 +592,21 @@ int CEodeSetStepSchedule(void* mem, CEodeStepScheduleFn schedule, void* data) {
   ce->adapt->schedule_data = data;
   return CE_SUCCESS;
 }
+
+#if SUNDIALS_VERSION_MAJOR >= 7
+int CEodeSetAdaptController(void* mem, SUNAdaptController C) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (C != nullptr && SUNAdaptController_GetType(C) != SUN_ADAPTCONTROLLER_H) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "The controller is not of type SUN_ADAPTCONTROLLER_H (a single-rate "
+                        "step controller).");
+  }
+  ce->adapt->sun_controller = C;
+  return CE_SUCCESS;
+}
+#endif
 
 int CEodeGetLastStep(void* mem, sunrealtype* hlast) {
   CEodeMemRec* ce = nullptr;

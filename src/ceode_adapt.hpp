@@ -31,6 +31,7 @@ struct AdaptMem {
   sunrealtype hmax = 0;  // 0: no limit
   int maxnef = 7;
   int controller = CE_ADAPT_PI;
+  void* sun_controller = nullptr;  // SUNDIALS 7: the user's SUNAdaptController (not owned)
   CEodeStepScheduleFn schedule = nullptr;  // CEodeSetStepSchedule (tests)
   void* schedule_data = nullptr;
   sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step

@@ -2,6 +2,9 @@
 // on a varying step sequence, tolerance proportionality, no divergence over the tolerance range,
 // the dense output at tout and tstop, the implicit path, and bad input.
 #include <ceode/ceode_stability.h>
+#if SUNDIALS_VERSION_MAJOR >= 7
+#include <sunadaptcontroller/sunadaptcontroller_soderlind.h>
+#endif
 
 #include <random>
 
@@ -397,7 +400,7 @@ TEST(ErrorControl, RefusesBadTolerancesAndStepBoundsAndStaysUsable) {
   EXPECT_EQ(CEodeSetMaxStep(mem.get(), INFINITY), CE_ILL_INPUT);
   EXPECT_EQ(CEodeSetMaxStep(mem.get(), 0.5), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMinStep(mem.get(), 1), CE_ILL_INPUT);
-  EXPECT_EQ(CEodeSetAdaptController(mem.get(), 7), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeSetAdaptivityMethod(mem.get(), 7), CE_ILL_INPUT);
   EXPECT_EQ(CEodeGetErrWeights(mem.get(), x.get()), CE_ILL_INPUT);  // no tolerances yet
   EXPECT_EQ(CEodeSetMaxNumSteps(nullptr, 1), CE_MEM_NULL);
   ASSERT_EQ(CEodeSetVelocityMode(mem.get(), CE_VELOCITY_DEPENDENT), CE_SUCCESS);
@@ -448,6 +451,44 @@ TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
 }
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, Backends, ::testing::ValuesIn(kSets));
+
+// SUNDIALS 7: a SUNAdaptController chooses the steps; the run reaches the accuracy of CEODE's
+// own controller within a factor of a few, and a multirate controller is refused.
+TEST(ErrorControl, ASundialsControllerChoosesTheSteps) {
+#if SUNDIALS_VERSION_MAJOR >= 7
+  Context ctx;
+  SUNAdaptController C = SUNAdaptController_PI(ctx);
+  ASSERT_NE(C, nullptr);
+  const auto s = KeplerSetup();
+  double err[2];
+  long nst[2];
+  for (int own = 0; own < 2; ++own) {
+    Vector x = SerialVector(2, ctx);
+    Vector v = SerialVector(2, ctx);
+    for (int i = 0; i < 2; ++i) {
+      NV_Ith_S(x.get(), i) = s.x0[i];
+      NV_Ith_S(v.get(), i) = s.v0[i];
+    }
+    Mem mem(CEodeCreate(ctx));
+    ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G6_O5"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-9, 1e-9), CE_SUCCESS);
+    if (own == 0) ASSERT_EQ(CEodeSetAdaptController(mem.get(), C), CE_SUCCESS);
+    sunrealtype t = 0;
+    ASSERT_EQ(CEodeEvolve(mem.get(), 4 * M_PI, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    err[own] = std::hypot(NV_Ith_S(x.get(), 0) - s.x0[0], NV_Ith_S(x.get(), 1) - s.x0[1]);
+    CEodeGetNumSteps(mem.get(), &nst[own]);
+  }
+  std::printf("SUNAdaptController_PI: %ld steps, error %.3e; CEODE's PI: %ld steps, error %.3e\n",
+              nst[0], err[0], nst[1], err[1]);
+  EXPECT_NE(nst[0], nst[1]);  // the steps are the attached controller's
+  EXPECT_LT(err[0], 1e4 * 1e-9);
+  EXPECT_LT(std::max(nst[0], nst[1]), 3 * std::min(nst[0], nst[1]));
+  SUNAdaptController_Destroy(C);
+#else
+  GTEST_SKIP() << "SUNAdaptController is SUNDIALS 7's";
+#endif
+}
 
 // A fixed step after tolerances takes the run back to fixed steps: the numbers of a run that
 // never had tolerances, bit for bit.

@@ -146,7 +146,7 @@ class Sequence {
         CEodeSetMaxErrTestFails(m, Int(-1, 9));
         break;
       case 4:
-        CEodeSetAdaptController(m, Int(-1, 2));
+        CEodeSetAdaptivityMethod(m, Int(-1, 2));
         break;
       case 5: {
         sunrealtype h = 0;

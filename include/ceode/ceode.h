@@ -29,6 +29,9 @@
 #include <sundials/sundials_nonlinearsolver.h>
 #include <sundials/sundials_nvector.h>
 #include <sundials/sundials_types.h>
+#if SUNDIALS_VERSION_MAJOR >= 7
+#include <sundials/sundials_adaptcontroller.h>
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -165,7 +168,7 @@ SUNDIALS_EXPORT int CEodeSetUserData(void* mem, void* user_data);
  * extra f evaluation, and never above the stable step of the stability guard's
  * frequency estimate (0.9 Omega_max / omega_max). CEodeSetFixedStep switches back to
  * fixed steps; the last of the two calls decides. The controller is CE_ADAPT_PI unless
- * CEodeSetAdaptController chooses CE_ADAPT_H211B (a digital filter: smoother step
+ * CEodeSetAdaptivityMethod chooses CE_ADAPT_H211B (a digital filter: smoother step
  * sequences, more failed tests). */
 #define CE_ADAPT_H211B 0
 #define CE_ADAPT_PI 1
@@ -176,7 +179,15 @@ SUNDIALS_EXPORT int CEodeSetInitStep(void* mem, sunrealtype hin);
 SUNDIALS_EXPORT int CEodeSetMinStep(void* mem, sunrealtype hmin);
 SUNDIALS_EXPORT int CEodeSetMaxStep(void* mem, sunrealtype hmax);
 SUNDIALS_EXPORT int CEodeSetMaxErrTestFails(void* mem, int maxnef);
-SUNDIALS_EXPORT int CEodeSetAdaptController(void* mem, int controller);
+SUNDIALS_EXPORT int CEodeSetAdaptivityMethod(void* mem, int controller);
+#if SUNDIALS_VERSION_MAJOR >= 7
+/* SUNDIALS 7: any SUNAdaptController of single-rate type chooses the steps in place of
+ * CEODE's own (EstimateStep with the set's order in x, UpdateH after every accepted
+ * step, Reset at every start); CEODE's ratio bounds, hmin/hmax, the stable step and the
+ * stop time still apply. The controller is not owned: destroy it after CEodeFree. NULL
+ * returns to CEodeSetAdaptivityMethod's controller. */
+SUNDIALS_EXPORT int CEodeSetAdaptController(void* mem, SUNAdaptController C);
+#endif
 
 /* Velocity dependence. CEodeSetVelocityDependence is the SUNDIALS-style boolean:
  * SUNTRUE is CE_VELOCITY_DEPENDENT, SUNFALSE CE_VELOCITY_INDEPENDENT, any other
