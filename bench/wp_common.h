@@ -6,11 +6,12 @@
 //    first-order form y = (x, x') of ARKODE, CVODE and the peers (bench/peers.h), and a DAE
 //    scene adds its residual form for IDA.
 //  * One runner family: CeodeRun (second-order form, optionally a mass matrix, index-3
-//    constraints, the implicit step), SundialsRun (ARKODE ERKStep with a fixed Butcher table or
-//    adaptive, ARKStep DIRK / IMEX, CVODE Adams / BDF with a dense, SPGMR or KLU solver), IdaRun
-//    (residual form), each in one of two modes: one step at a time with the error measured
-//    after every step, or (Problem::nout > 0) to nout output instants in the normal mode.
-//    Every solver of a scene is driven, observed and timed the same way in the same process.
+//    constraints, the implicit step; fixed steps or error control), SundialsRun (ARKODE ERKStep
+//    with a fixed Butcher table or adaptive, ARKStep DIRK / IMEX, CVODE Adams / BDF with a dense,
+//    SPGMR or KLU solver), IdaRun (residual form), each in one of two modes: one step at a time
+//    with the error measured after every step, or (Problem::nout > 0) to nout output instants in
+//    the normal mode. Every solver of a scene is driven, observed and timed the same way in the
+//    same process.
 //  * Timing: every configuration is run back to back until one repetition has lasted >= 50 ms,
 //    and the per-run time is the median of 5 repetitions (3 for runs of >= 0.5 s; a run of
 //    >= 2 s is its own measurement), either configuration by configuration (Measure) or in
@@ -303,6 +304,78 @@ inline void PrintEqualError(const Table& table, const std::vector<double>& level
   }
 }
 
+// f evaluations at which one curve reaches error <= e: TimeAtError's rule on rhs_evals.
+inline double EvalsAtError(const std::vector<Row>& rows, const std::string& solver,
+                           const std::string& config, double e) {
+  std::vector<Row> f;
+  for (const Row& r : rows) {
+    if (r.solver != solver || r.config != config) continue;
+    f.push_back(r);
+    f.back().seconds = static_cast<double>(r.rhs_evals);
+  }
+  return TimeAtError(f, solver, config, e);
+}
+
+inline bool IsCeodeAdaptive(const std::string& solver, const std::string& config) {
+  return solver == "CEODE" && config.find("adaptive") != std::string::npos;
+}
+
+// CEODE's error control at equal error. At each level: every CEODE adaptive curve's f
+// evaluations and CPU seconds, then the fastest of them against CEODE's fastest fixed-step curve
+// and against every curve of another solver, as ratios CEODE adaptive / curve (< 1: CEODE
+// adaptive cheaper). f and seconds by TimeAtError's rule; '-': the curve does not reach it.
+inline void PrintAdaptiveEqualError(const Table& table, const std::vector<double>& levels) {
+  const std::vector<Row>& rows = table.rows();
+  std::vector<std::pair<std::string, std::string>> curves;
+  for (const Row& r : rows) {
+    const auto key = std::make_pair(r.solver, r.config);
+    if (std::find(curves.begin(), curves.end(), key) == curves.end()) curves.push_back(key);
+  }
+  std::printf(
+      "\nCEODE adaptive at equal error (f evaluations and CPU seconds per run, each the cheapest "
+      "of its curve at that error by TimeAtError's rule; ratios: the fastest CEODE adaptive curve "
+      "/ the curve, < 1: CEODE adaptive cheaper):\n");
+  for (double e : levels) {
+    const std::pair<std::string, std::string>* best = nullptr;
+    const std::pair<std::string, std::string>* fixed = nullptr;
+    double tb = -1, tf = -1;
+    for (const auto& k : curves) {
+      const double t = TimeAtError(rows, k.first, k.second, e);
+      if (!(t > 0) || k.first != "CEODE") continue;
+      if (IsCeodeAdaptive(k.first, k.second)) {
+        if (tb < 0 || t < tb) tb = t, best = &k;
+      } else if (tf < 0 || t < tf) {
+        tf = t, fixed = &k;
+      }
+    }
+    std::printf("error %.0e:", e);
+    if (best == nullptr) {
+      std::printf(" no CEODE adaptive curve reaches it\n");
+      continue;
+    }
+    const double fb = EvalsAtError(rows, best->first, best->second, e);
+    std::printf(" fastest CEODE adaptive: %s, %.0f f, %.3e s\n", best->second.c_str(), fb, tb);
+    std::printf("  %-44s %10s %11s %8s %8s\n", "curve", "f", "seconds", "f ratio", "t ratio");
+    std::string missed;
+    for (const auto& k : curves) {
+      const bool adaptive = IsCeodeAdaptive(k.first, k.second);
+      if (&k == best || (k.first == "CEODE" && !adaptive && &k != fixed)) continue;
+      std::string name = k.first + " " + k.second;
+      const double f = EvalsAtError(rows, k.first, k.second, e);
+      const double t = TimeAtError(rows, k.first, k.second, e);
+      if (!(t > 0)) {
+        missed += (missed.empty() ? "" : ", ") + name;
+        continue;
+      }
+      if (&k == fixed) name += " (fastest fixed)";
+      const char* verdict = tb <= t ? "CEODE adaptive faster" : "CEODE adaptive SLOWER";
+      std::printf("  %-44s %10.0f %11.3e %8.3f %8.3f  %s\n", name.c_str(), f, t, fb / f, tb / t,
+                  adaptive ? "" : verdict);
+    }
+    if (!missed.empty()) std::printf("  not reached: %s\n", missed.c_str());
+  }
+}
+
 // Observed order of one fixed-step curve from its last three rows (h_or_tol is the step).
 inline double CurveOrder(const Table& table, const std::string& solver, const std::string& config) {
   std::vector<const Row*> c;
@@ -390,7 +463,10 @@ struct Problem {
   int ny = 0;
   IDAResFn res = nullptr;
   IDALsJacFn res_jac = nullptr;  // dense iteration matrix (nullptr: difference quotients)
-  double init_step = 0;          // 0: IDA's own estimate
+  // The first step of IDA and of CEODE's error control (0: the solver's own estimate). With
+  // constraints CEODE's estimate comes from x and v alone: from rest a tenth of the interval,
+  // where the constrained start's Newton iteration fails (CE_CONV_FAILURE at t0).
+  double init_step = 0;
   Vec y0, yp0, id;
   // -- the peers --
   bool separable = false;  // a depends on x only (not t, not v: v may be nullptr)
@@ -484,11 +560,17 @@ struct CeodeOpts {
   int pc_corrections = 0;                  // CEodeSetPCCorrections (0: the set's default)
   int max_nonlin_iters = 0;                // CEodeSetMaxNonlinIters (0: the default)
   int maxl = 20;                           // SPGMR's Krylov dimension
+  // Error control: CeodeRun's h_or_tol is then rtol = atol (CEodeSStolerances), the stability
+  // guard keeps its defaults (its stable-step cap is part of the adaptive step, and its f
+  // evaluations are counted with the run's), and output mode does not round a step.
+  bool adaptive = false;
 };
 
 struct CeodeStats {
   long nni = 0, npc = 0, nnls = 0;
   double coupling = 0;
+  long netf = 0, ncapped = 0;  // error control: failed error tests, steps the stable step decided
+  long nfe = 0, guard_fe = 0;  // f evaluations of the integration and of the stability guard
 };
 
 // The objects of one CEODE run, freed together.
@@ -555,6 +637,14 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
       return true;
     }
   }
+  // The guard's estimate caps the adaptive step: in the lumped-mass inner product it is an upper
+  // bound of omega_max (CEodeSetGuardMass), as a user of a lumped-mass model sets it.
+  if (c.adaptive && !p.lumped_mass.empty() && p.mass == nullptr) {
+    o->m = N_VNew_Serial(p.n, ctx);
+    if (o->m == nullptr) return true;
+    std::copy(p.lumped_mass.begin(), p.lumped_mass.end(), N_VGetArrayPointer(o->m));
+    if (Failed(CEodeSetGuardMass(mem, o->m), "CEodeSetGuardMass")) return true;
+  }
   if (p.mass != nullptr) {
     o->M = SUNDenseMatrix(p.n, p.n, ctx);
     if (o->M == nullptr || Failed(CEodeSetMassFn(mem, p.mass, o->M, SUNTRUE), "CEodeSetMassFn")) {
@@ -578,26 +668,34 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
          Failed(CEodeSetConstraints(mem, o->phi, p.phi, p.G), "CEodeSetConstraints");
 }
 
-// One CEODE run at fixed step h, the stability guard off (runs past a stability limit are part
-// of the picture). One-step mode observes every step; output mode rounds h down to divide the
-// output interval (FixedStep) and appends x at every output instant to *xs (if given).
-inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double h, Outcome* out,
-                    CeodeStats* st = nullptr, std::vector<Vec>* xs = nullptr) {
+// One CEODE run. Fixed steps (h_or_tol = h): the stability guard off (runs past a stability
+// limit are part of the picture); output mode rounds h down to divide the output interval
+// (FixedStep). With c.adaptive, h_or_tol = rtol = atol and the guard at its defaults. One-step
+// mode observes every step; output mode every output instant, appending x there to *xs (if
+// given). rhs_evals counts every f evaluation: the steps', the difference quotients', the guard's.
+inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double h_or_tol,
+                    Outcome* out, CeodeStats* st = nullptr, std::vector<Vec>* xs = nullptr) {
   CeodeObjects o;
   if (!o.Create(ctx, p)) return 1;
   const bool outputs = p.nout > 0;
-  if (outputs) h = FixedStep(p, h);
+  const double h = outputs && !c.adaptive ? FixedStep(p, h_or_tol) : h_or_tol;
   void* mem = o.mem;
-  bool bad = Failed(CEodeInit(mem, p.f2, p.t0, o.x, o.v), "CEodeInit") ||
-             Failed(CEodeSetUserData(mem, p.user), "CEodeSetUserData") ||
-             Failed(CEodeSetMethodByName(mem, c.method), "CEodeSetMethodByName") ||
-             Failed(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep") ||
-             (!outputs && Failed(CEodeSetZeroStart(mem, c.zero_start ? SUNTRUE : SUNFALSE),
-                                 "CEodeSetZeroStart")) ||
-             Failed(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard") ||
-             Failed(CEodeSetMaxNumSteps(mem, 100000000L), "CEodeSetMaxNumSteps") ||
-             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") ||
-             CeodeAttach(ctx, p, c, &o);
+  auto set_step = [&]() {
+    if (c.adaptive) {
+      return Failed(CEodeSStolerances(mem, h_or_tol, h_or_tol), "CEodeSStolerances") ||
+             (p.init_step > 0 && Failed(CEodeSetInitStep(mem, p.init_step), "CEodeSetInitStep"));
+    }
+    return Failed(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep") ||
+           Failed(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard");
+  };
+  bool bad =
+      Failed(CEodeInit(mem, p.f2, p.t0, o.x, o.v), "CEodeInit") ||
+      Failed(CEodeSetUserData(mem, p.user), "CEodeSetUserData") ||
+      Failed(CEodeSetMethodByName(mem, c.method), "CEodeSetMethodByName") || set_step() ||
+      (!outputs &&
+       Failed(CEodeSetZeroStart(mem, c.zero_start ? SUNTRUE : SUNFALSE), "CEodeSetZeroStart")) ||
+      Failed(CEodeSetMaxNumSteps(mem, 100000000L), "CEodeSetMaxNumSteps") ||
+      Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") || CeodeAttach(ctx, p, c, &o);
   Track tr(p);
   double t = p.t0;
   const double* xd = N_VGetArrayPointer(o.x);
@@ -609,22 +707,29 @@ inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double
       if (!bad && xs != nullptr) xs->emplace_back(xd, xd + p.n);
     }
   }
-  while (!outputs && !bad && t < p.tend - 0.5 * h) {
+  // Fixed steps end half a step before tend, adaptive ones at tend (the stop time).
+  const double margin = c.adaptive ? 1e-12 * std::max(1.0, std::fabs(p.tend)) : 0.5 * h;
+  while (!outputs && !bad && t < p.tend - margin) {
     // One step at a time: x and x' are then known at the same instant.
     bad = Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve");
     if (!bad) tr.Step(t, xd, vd);
   }
-  long nfe = 0, nfe_dq = 0, nfc = 0;
+  CeodeStats s;
+  long nfc = 0, nfe_dq = 0, nme = 0, nls = 0;
   bad = bad || Failed(CEodeGetNumSteps(mem, &out->steps), "CEodeGetNumSteps") ||
-        Failed(CEodeGetNumRhsEvals(mem, &nfe), "CEodeGetNumRhsEvals") ||
+        Failed(CEodeGetNumRhsEvals(mem, &s.nfe), "CEodeGetNumRhsEvals") ||
         Failed(CEodeGetNumRhsEvalsJacDQ(mem, &nfe_dq), "CEodeGetNumRhsEvalsJacDQ") ||
+        Failed(CEodeGetGuardStats(mem, &s.guard_fe, &nme, &nls), "CEodeGetGuardStats") ||
         Failed(CEodeGetNumJacEvals(mem, &out->jac_evals), "CEodeGetNumJacEvals") ||
         Failed(CEodeGetNumLinSolvSetups(mem, &out->lin_setups), "CEodeGetNumLinSolvSetups") ||
+        Failed(CEodeGetNumErrTestFails(mem, &s.netf), "CEodeGetNumErrTestFails") ||
+        Failed(CEodeGetNumStableStepLimited(mem, &s.ncapped), "CEodeGetNumStableStepLimited") ||
         (st != nullptr &&
-         (Failed(CEodeGetNumNonlinSolvIters(mem, &st->nni), "CEodeGetNumNonlinSolvIters") ||
-          Failed(CEodeGetImplicitStats(mem, &st->npc, &st->nnls, &nfc, &st->coupling),
+         (Failed(CEodeGetNumNonlinSolvIters(mem, &s.nni), "CEodeGetNumNonlinSolvIters") ||
+          Failed(CEodeGetImplicitStats(mem, &s.npc, &s.nnls, &nfc, &s.coupling),
                  "CEodeGetImplicitStats")));
-  out->rhs_evals = nfe + nfe_dq;
+  out->rhs_evals = s.nfe + nfe_dq + s.guard_fe;
+  if (st != nullptr) *st = s;
   return tr.Finish(bad, out);
 }
 
@@ -1026,11 +1131,12 @@ class Rounds {
   std::vector<Entry> entries_;
 };
 
-// One CEODE configuration at step h (one-step mode: h as given; output mode: FixedStep(h)).
+// One CEODE configuration at step h (one-step mode: h as given; output mode: FixedStep(h)), or
+// at rtol = atol = h with c.adaptive.
 inline bool MeasureCeode(Table* table, SUNContext ctx, const Problem& p, const CeodeOpts& c,
                          double h, const std::string& config, Outcome* got = nullptr) {
   return Measure(
-      table, "CEODE", config, p.nout > 0 ? FixedStep(p, h) : h,
+      table, "CEODE", config, p.nout > 0 && !c.adaptive ? FixedStep(p, h) : h,
       [&](Outcome* o) { return CeodeRun(ctx, p, c, h, o); }, got);
 }
 
@@ -1041,6 +1147,72 @@ inline bool MeasureCeode(Table* table, SUNContext ctx, const Problem& p, const c
   CeodeOpts c(method);
   c.zero_start = zero_start;
   return MeasureCeode(table, ctx, p, c, h, config, got);
+}
+
+// ------------------------------------------------------------ CEODE adaptive
+// A CEODE error-control curve: one row per tolerance (rtol = atol), config "<set> adaptive"
+// unless a label is given.
+struct TolCurve {
+  std::string label;
+  CeodeOpts opts;
+  std::vector<double> tols;
+  std::string Config() const {
+    return label.empty() ? std::string(opts.method) + " adaptive" : label;
+  }
+};
+
+// What error control did in a run: failed tests, capped steps, and where the f evaluations went.
+inline void PrintAdaptStats(const std::string& config, double tol, const Outcome& o,
+                            const CeodeStats& st) {
+  std::printf(
+      "    %s tol %.0e: %ld failed error tests, %ld steps capped by the stable step, f: %ld by "
+      "the step, %ld by the guard, %ld in all\n",
+      config.c_str(), tol, st.netf, st.ncapped, st.nfe, st.guard_fe, o.rhs_evals);
+}
+
+// The curve in one-step (or output) mode, configuration by configuration (Measure); the outcome
+// of every run that succeeded goes to *got_all (if given). Returns the failed runs (also failure
+// rows of the table).
+inline int MeasureTolCurve(Table* table, SUNContext ctx, const Problem& p, const TolCurve& c,
+                           std::vector<Outcome>* got_all = nullptr) {
+  CeodeOpts opts = c.opts;
+  opts.adaptive = true;
+  const std::string config = c.Config();
+  int failed = 0;
+  for (double tol : c.tols) {
+    CeodeStats st;  // the numbers run's; the timed calls overwrite it with the same figures
+    Outcome got;
+    if (!Measure(
+            table, "CEODE", config, tol,
+            [&](Outcome* o) { return CeodeRun(ctx, p, opts, tol, o, &st); }, &got)) {
+      ++failed;
+      continue;
+    }
+    PrintAdaptStats(config, tol, got, st);
+    if (got_all != nullptr) got_all->push_back(got);
+  }
+  return failed;
+}
+
+// The curves in interleaved rounds (output mode); a curve stops after the first run that costs
+// more than max_seconds or fails, as SundialsCurves.
+inline void TolCurves(SUNContext ctx, const Problem* p, const std::vector<TolCurve>& curves,
+                      double max_seconds, Rounds* rounds) {
+  for (const TolCurve& c : curves) {
+    CeodeOpts opts = c.opts;
+    opts.adaptive = true;
+    const std::string config = c.Config();
+    for (double tol : c.tols) {
+      auto st = std::make_shared<CeodeStats>();
+      Outcome got;
+      const double first = rounds->Measure(
+          "CEODE", config, tol,
+          [ctx, p, opts, tol, st](Outcome* o) { return CeodeRun(ctx, *p, opts, tol, o, st.get()); },
+          &got);
+      if (first >= 0) PrintAdaptStats(config, tol, got, *st);
+      if (first < 0 || first > max_seconds) break;
+    }
+  }
 }
 
 inline const char* SunName(Sun s) {
@@ -1132,6 +1304,39 @@ inline void FeSundialsCurves(SUNContext ctx, const Problem* p, Sun extra,
       {{extra}, SunName(extra), extra == Sun::kBdfKlu ? "KLU" : "SPGMR"},
       {{Sun::kDirkSpgmr}, "ARKODE-DIRK", "SPGMR"}};
   SundialsCurves(ctx, p, curves, tols, max_seconds, rounds);
+}
+
+// CEODE's error-control curves of the FE plate scenes: each set of `sets` with the options
+// `opts`, config "<set><suffix> adaptive". The step is the stable step of the guard's omega_max
+// (in the lumped-mass inner product) wherever the error allows more: at the loose tolerances for
+// G3_CD, G4_A34 and G5_O4; from G6_O5 on (degree >= 6) at nearly every step of 1e-3 ... 1e-8,
+// so those curves run at 1e-3 and 1e-8 only. G3_CD stops at 1e-7 (its steps grow like
+// tol^(-1/2)). --quick: G3_CD at 1e-4 and 1e-6, G5_O4 at 1e-5 (the cap on the quick mesh) and
+// 1e-7.
+inline std::vector<TolCurve> FeTolCurves(const CeodeOpts& opts, const std::string& suffix,
+                                         const std::vector<const char*>& sets, bool quick) {
+  std::vector<TolCurve> curves;
+  for (const char* m : sets) {
+    const std::string name(m);
+    std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+    if (name == "G3_CD") tols.pop_back();
+    int degree = 0;
+    double params[8];
+    if (CEodeGetMethodParams(m, &degree, params, 8) == 0 && degree >= 6) tols = {1e-3, 1e-8};
+    if (quick) {
+      if (name == "G3_CD") {
+        tols = {1e-4, 1e-6};
+      } else if (name == "G5_O4") {
+        tols = {1e-5, 1e-7};
+      } else {
+        continue;
+      }
+    }
+    CeodeOpts o = opts;
+    o.method = m;
+    curves.push_back({name + suffix + " adaptive", o, tols});
+  }
+  return curves;
 }
 
 // CEODE curves in output mode at fractions of each set's own stable step (GuardStep), queued in

@@ -7,8 +7,9 @@
 // Reference: CEODE G7_O7 at 0.1 of its stable step, checked by its own convergence (runs at 0.4,
 // 0.2, 0.1: observed order p and the error estimate d(0.2, 0.1) / (2^p - 1) <= 1e-8); the same
 // run at amplitude 1e-3 A, scaled back, must differ by more than 1e-3 (f is nonlinear there).
-// Curves: the hand loop (equal to CEODE G3_CD), CEODE G3_CD, G4_A34, G5_O4, G7_O7; ARKODE ERK
-// 3/4/5, CVODE Adams, CVODE BDF + SPGMR, ARKStep IMEX (K x implicit) and DIRK + SPGMR.
+// Curves: the hand loop (equal to CEODE G3_CD), CEODE G3_CD, G4_A34, G5_O4, G7_O7; CEODE error
+// control (wp::FeTolCurves, config "<set> adaptive"); ARKODE ERK 3/4/5, CVODE Adams, CVODE BDF +
+// SPGMR, ARKStep IMEX (K x implicit) and DIRK + SPGMR.
 // Usage: wp_fe_nonlinear [--csv FILE] [--quick]. Exit code 0 when the modes and the reference
 // converged, f is nonlinear, the hand loop equals G3_CD, G3_CD has order 2, every run succeeded.
 // -----------------------------------------------------------------------------
@@ -244,6 +245,10 @@ void CeodeCurves(SUNContext ctx, Scene* s, bool quick, wp::Rounds* rounds) {
       {"G7_O7", wp::CeodeOpts("G7_O7"), quick ? V{0.9} : V{0.9, 0.6}}};
   wp::FractionCurves(ctx, &s->prob, curves, rounds,
                      [s](double hr, wp::Outcome* o) { return HandRun(s, hr, o); });
+  wp::TolCurves(ctx, &s->prob,
+                wp::FeTolCurves(wp::CeodeOpts(), "",
+                                {"G3_CD", "G4_A34", "G5_O4", "G6_O5", "G7_O7", "G8_O8"}, quick),
+                quick ? 0.3 : wp::kSundialsCutoff, rounds);
 }
 
 }  // namespace
@@ -277,6 +282,7 @@ int main(int argc, char** argv) {
     bad += wp::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6) +
            wp::CheckSecondOrder(table, "G3_CD");
     wp::PrintEqualError(table, {1e-4, 1e-6});
+    wp::PrintAdaptiveEqualError(table, {1e-4, 1e-6});
     bad += table.failures();
   }
   std::printf("%d problem(s)\n", bad);

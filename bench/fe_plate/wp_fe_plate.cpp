@@ -5,7 +5,8 @@
 // codes; the estimate within 2 % of the exact limit, both bounds never below omega_max.
 // Part 2, work-precision at equal error against the exact two-mode solution: the hand loop,
 // CEODE G3_CD, G4_A34, G5_O4 at fractions of the stable step (G5, weakly unstable, as an untimed
-// probe), ARKODE ERK 3/4/5, CVODE Adams, CVODE BDF + SPGMR / + KLU, ARKStep DIRK + SPGMR.
+// probe), CEODE error control (wp::FeTolCurves), ARKODE ERK 3/4/5, CVODE Adams, CVODE BDF +
+// SPGMR / + KLU, ARKStep DIRK + SPGMR.
 // Part 3, scaling: time per step and DOF of the hand loop and CEODE from 10^4 to 10^6 DOF and the
 // log-log slope, written to <csv>_scaling.csv.
 // Usage: wp_fe_plate [--csv FILE] [--quick]
@@ -243,6 +244,10 @@ void CeodeCurves(SUNContext ctx, Scene* s, wp::Rounds* rounds, bool quick, WpRes
                                              {"G5_O4", wp::CeodeOpts("G5_O4"), frac_high}};
   res->h_cd = wp::FractionCurves(ctx, &s->p, curves, rounds,
                                  [s](double hr, wp::Outcome* o) { return HandRun(s, hr, o); });
+  wp::TolCurves(ctx, &s->p,
+                wp::FeTolCurves(wp::CeodeOpts(), "",
+                                {"G3_CD", "G4_A34", "G5_O4", "G6_O5", "G7_O7", "G8_O8"}, quick),
+                quick ? 0.3 : wp::kSundialsCutoff, rounds);
 }
 
 // G5 is weakly unstable for every step (CEodeStabilityLimit = 0): its fastest mode
@@ -276,6 +281,7 @@ WpResult WorkPrecisionPart(SUNContext ctx, Scene* s, const wp::Args& args) {
   res.bad += wp::CheckSameMethod(table, "CEODE", "G3_CD", "CEODE-hand", "G3_CD", 1e-6) +
              wp::CheckSecondOrder(table, "G3_CD");
   wp::PrintEqualError(table, {1e-4, 1e-6});
+  wp::PrintAdaptiveEqualError(table, {1e-4, 1e-6});
   res.bad += table.failures();
   return res;
 }

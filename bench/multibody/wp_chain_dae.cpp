@@ -7,9 +7,14 @@
 // KLU, G5_ONES also dense; ARKODE RK3 on the index-1 form (the saddle system solved at every
 // stage by KLU or dense), with and without a projection after every step; ERKStep adaptive,
 // rtol = atol = 1e-4 ... 1e-12; IDA on the GGL form (48 unknowns), 1e-4 ... 1e-10 (at 1e-11 it
-// fails in its first steps).
+// fails in its first steps); CEODE error control (config "<set> adaptive KLU", h_or_tol the
+// tolerance) with G4_A34 and G5_O4, rtol = atol = 1e-5 ... 1e-13, IDA's first step (CEODE's own,
+// from x and v alone, is a tenth of the interval from rest: too long for the constrained start).
+// Prints every curve's best per side and CEODE adaptive against every other curve at equal error
+// (f evaluations and time).
 // Checks (exit code): every run succeeds; every CEODE and RK3+proj run has drift <= 1e-10 l^2;
-// every fixed-step RK3 run takes 3 f per step. --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6.
+// every fixed-step RK3 run takes 3 f per step. --quick: h = 6e-3 ... 1e-3, tolerances to 1e-6
+// (CEODE adaptive 1e-5 ... 1e-7).
 // -----------------------------------------------------------------------------
 #include "chain_model.h"
 
@@ -280,7 +285,7 @@ int IdaJac(sunrealtype, sunrealtype cj, N_Vector yy, N_Vector, N_Vector, SUNMatr
 namespace {
 
 struct Config {
-  enum Kind { kCeode, kRk3, kRk3Proj, kErk, kIda } kind;
+  enum Kind { kCeode, kCeodeAdaptive, kRk3, kRk3Proj, kErk, kIda } kind;
   const char* name;    // CSV config column
   const char* method;  // CEODE method name
   bool dense;          // dense saddle matrix instead of CSR + KLU
@@ -324,6 +329,15 @@ void RunPoint(Scene* sc, const Config& c, double h) {
     const wp::Problem p = chain::Problem(&ce_chain, kTend, c.dense);
     ok = wp::MeasureCeode(sc->table, sc->ctx, p, c.method, h, false, c.name, &o);
     if (ok) wp::PrintMatrixReuse(c.name, h, o);
+  } else if (c.kind == Config::kCeodeAdaptive) {
+    // h is the tolerance. IDA's first step: CEODE's own, from x and v alone, is a tenth of the
+    // interval from rest, too long for the constrained start.
+    wp::Problem p = chain::Problem(&ce_chain, kTend, c.dense);
+    p.init_step = sc->ida.init_step;
+    const wp::TolCurve curve{c.name, wp::CeodeOpts(c.method), {h}};
+    std::vector<wp::Outcome> got;
+    ok = wp::MeasureTolCurve(sc->table, sc->ctx, p, curve, &got) == 0;
+    if (ok) o = got.back();
   } else if (c.kind == Config::kIda) {
     ok = wp::MeasureIda(sc->table, sc->ctx, sc->ida, h, c.name, &o);
   } else {
@@ -334,7 +348,9 @@ void RunPoint(Scene* sc, const Config& c, double h) {
     ++sc->bad;
     return;
   }
-  if ((c.kind == Config::kCeode || c.kind == Config::kRk3Proj) && !(o.drift <= 1e-10 * l2)) {
+  if ((c.kind == Config::kCeode || c.kind == Config::kCeodeAdaptive ||
+       c.kind == Config::kRk3Proj) &&
+      !(o.drift <= 1e-10 * l2)) {
     ++sc->bad;
     std::printf("  <-- %s %g: drift above 1e-10 l^2\n", c.name, h);
   }
@@ -373,6 +389,8 @@ int main(int argc, char** argv) {
       {Config::kCeode, "G5_ONES dense", "G5_ONES", true},
       {Config::kCeode, "G4_A34 KLU", "G4_A34", false},
       {Config::kCeode, "G3_CD KLU", "G3_CD", false},
+      {Config::kCeodeAdaptive, "G4_A34 adaptive KLU", "G4_A34", false},
+      {Config::kCeodeAdaptive, "G5_O4 adaptive KLU", "G5_O4", false},
       {Config::kRk3, "RK3 index-1 KLU", nullptr, false},
       {Config::kRk3, "RK3 index-1 dense", nullptr, true},
       {Config::kRk3Proj, "RK3+proj index-1 KLU", nullptr, false},
@@ -381,6 +399,8 @@ int main(int argc, char** argv) {
   };
   const double hs[] = {6e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5};
   const double tols[] = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
+  // CEODE's energy error is 100 to 500 times its tolerance here (ERKStep's about 80 times).
+  const double ce_tols[] = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
   std::printf(
       "Chain of N = %ld pendulums (n = %ld, nc = %ld), t in [0, %g] s, from rest at 60 deg\n", kN,
       2 * kN, kN, kTend);
@@ -389,12 +409,15 @@ int main(int argc, char** argv) {
   wp::Table table("chain_dae_wp", args.csv);
   sc.table = &table;
   for (const Config& c : configs) {
-    const bool adaptive = c.kind == Config::kErk || c.kind == Config::kIda;
+    const bool adaptive =
+        c.kind == Config::kErk || c.kind == Config::kIda || c.kind == Config::kCeodeAdaptive;
     int np = c.kind == Config::kIda ? 7 : args.full ? 10 : 9;
     if (args.quick) np = adaptive ? 3 : 4;
-    for (int j = 0; j < np; ++j) RunPoint(&sc, c, adaptive ? tols[j] : hs[j]);
+    const double* grid = c.kind == Config::kCeodeAdaptive ? ce_tols : adaptive ? tols : hs;
+    for (int j = 0; j < np; ++j) RunPoint(&sc, c, grid[j]);
   }
   wp::PrintEqualError(table, {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11});
+  wp::PrintAdaptiveEqualError(table, {1e-4, 1e-6, 1e-8, 1e-10});
   ARKodeButcherTable_Free(sc.rk3);
   SUNContext_Free(&sc.ctx);
   std::printf("work-precision: %d runs failed or checks off\n", sc.bad);

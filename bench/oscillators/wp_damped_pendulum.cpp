@@ -7,10 +7,13 @@
 // Methods: CEODE's sets at h = 10/N, velocity dependence declared, Newton (dense, analytic
 // df/dtheta') and AUTO; a set's sweep stops below an error of 3e-14. ARKODE ERKStep with Kutta's
 // RK3 at the same h; ERKStep adaptive, CVODE Adams and BDF at rtol = atol = 1e-3 ... 1e-13; the
-// peers (not the symplectic ones: f depends on theta').
+// peers (not the symplectic ones: f depends on theta'). CEODE error control (config "<set>
+// adaptive", h_or_tol the tolerance) with G5_O4, G6_O5, G7_O7, G8_O8 at rtol = atol = 1e-4 ...
+// 1e-14, the implicit step at the library's default (AUTO).
 // Usage: wp_damped_pendulum [--csv FILE] [--quick]. Prints CEODE's best time over odeint RK4's at
-// 1e-6 and 1e-9 (not a check). Exit code 0 when every run succeeded, the reference checks
-// passed and every peer converges at its order (peers::CheckPeerOrders).
+// 1e-6 and 1e-9 (not a check) and CEODE adaptive against every other curve at equal error (f
+// evaluations and time). Exit code 0 when every run succeeded, the reference checks passed and
+// every peer converges at its order (peers::CheckPeerOrders).
 // -----------------------------------------------------------------------------
 #include <cmath>
 #include <cstdio>
@@ -121,8 +124,8 @@ void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& set
 constexpr double kRoundOff = 3e-14;  // below: the sweep of a fixed-step curve stops
 
 struct Plan {
-  std::vector<double> steps, tols;
-  std::vector<std::string> sets;
+  std::vector<double> steps, tols, ce_tols;
+  std::vector<std::string> sets, adaptive_sets;
 };
 
 Plan MakePlan(bool quick) {
@@ -130,10 +133,14 @@ Plan MakePlan(bool quick) {
   Plan plan;
   plan.tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
   plan.sets = {"G3_CD", "G4_A34", "G5", "G5_TOP", "G5_ONES", "G6_O5", "G6_O6", "G7_O7", "G8_O8"};
+  plan.ce_tols = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
+  plan.adaptive_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   if (quick) {
     ns = {200, 1000};
     plan.tols = {1e-5, 1e-9};
     plan.sets = {"G5", "G8_O8"};
+    plan.ce_tols = {1e-6, 1e-10};
+    plan.adaptive_sets = {"G6_O5", "G8_O8"};
   }
   for (long n : ns) plan.steps.push_back(kTend / static_cast<double>(n));
   return plan;
@@ -168,6 +175,12 @@ void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table*
         if (o.error < kRoundOff) break;
       }
     }
+  }
+  // Error control at the library's default implicit step (AUTO).
+  c.implicit_mode = CE_IMPLICIT_AUTO;
+  for (const std::string& m : plan.adaptive_sets) {
+    c.method = m.c_str();
+    wp::MeasureTolCurve(table, ctx, p, {"", c, plan.ce_tols});
   }
 }
 
@@ -223,6 +236,7 @@ int main(int argc, char** argv) {
   bad += RunPeers(p, plan, &table);
   bad += table.failures();
   wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
+  wp::PrintAdaptiveEqualError(table, {1e-6, 1e-9, 1e-11});
 #ifdef CEODE_BENCH_PEERS
   std::printf("\n");
   for (double e : {1e-6, 1e-9}) PrintAgainstRk4(table, plan.sets, e);

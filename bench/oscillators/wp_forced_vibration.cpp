@@ -5,11 +5,17 @@
 // CEODE G3_CD, G3_A43, G3_A2, G4_A14, G4_A34, G5 at h = f Omega_max / w (the library's own
 // CEodeStabilityLimit; G5, unstable for every h, at h = 0.5 ... 0.005), and at f = 1.05 to show
 // the limit is real; ERKStep adaptive, CVODE Adams and BDF, ARKStep DIRK at rtol = atol.
-// Usage: wp_forced_vibration [--csv FILE] [--quick]. Exit code 0 when every run inside the limits
+// CEODE error control (config "<set> adaptive", h_or_tol the tolerance, rtol = atol = 1e-4 ...
+// 1e-12; G3_CD to 1e-9) with G3_CD, G4_A34, G5_O4, G6_O5, G7_O7, G8_O8: the stable-step cap of
+// the guard's omega_max decides the step where the error allows more (from G6_O5 on, at every
+// tolerance: those curves sit at rounding), the error below.
+// Usage: wp_forced_vibration [--csv FILE] [--quick]. Prints CEODE adaptive against every other
+// curve at equal error (f evaluations and time). Exit code 0 when every run inside the limits
 // succeeded and every set went unstable (or lost all accuracy) just beyond its limit.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode_stability.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -57,10 +63,14 @@ int main(int argc, char** argv) {
   std::vector<double> fractions = {0.95, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01, 0.005};
   std::vector<double> fixed_steps = {0.5, 0.2, 0.1, 0.05, 0.02, 0.01, 0.005};
   std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  std::vector<double> ce_tols = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  std::vector<const char*> adaptive_sets = {"G3_CD", "G4_A34", "G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   if (args.quick) {
     fixed_steps = {0.1};
     fractions = {0.95, 0.1};
     tols = {1e-4, 1e-8};
+    ce_tols = {1e-6, 1e-10};
+    adaptive_sets = {"G4_A34", "G6_O5"};
   }
   int bad = 0;
   const char* methods[] = {"G3_CD", "G3_A43", "G3_A2", "G4_A14", "G4_A34", "G5"};
@@ -111,10 +121,21 @@ int main(int argc, char** argv) {
     notes.push_back(line);
     if (!blew_up) ++bad;
   }
+  // Error control: at loose tolerances the stable-step cap (the guard's omega_max) decides the
+  // step, at tight ones the error.
+  for (const char* m : adaptive_sets) {
+    std::vector<double> tl = ce_tols;
+    // G3_CD's steps grow like tol^(-1/2): below 1e-9 a run takes seconds and its error is
+    // rounding (1.1e-12 at 1e-10 with 4.7e5 steps, 5.6e-12 at 1e-11 with 1.5e6).
+    const auto below = [](double t) { return t < 1e-9; };
+    if (std::string(m) == "G3_CD") tl.erase(std::remove_if(tl.begin(), tl.end(), below), tl.end());
+    wp::MeasureTolCurve(&table, ctx, p, {"", wp::CeodeOpts(m), tl});
+  }
   for (wp::Sun k : {wp::Sun::kErk, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf, wp::Sun::kArkDirk}) {
     for (double tol : tols) wp::MeasureSundials(&table, ctx, p, {k}, tol, "adaptive");
   }
   for (const std::string& n : notes) std::printf("%s\n", n.c_str());
+  wp::PrintAdaptiveEqualError(table, {1e-6, 1e-8, 1e-10});
   bad += table.failures();
   std::printf("%d problem(s)\n", bad);
   SUNContext_Free(&ctx);

@@ -5,7 +5,10 @@
 //   * Boost.Odeint runge_kutta_fehlberg78 (controlled) and bulirsch_stoer (these three
 //     through bench/peers.h, the peer runners of every scene: one evolve step at a time),
 //   * ARKODE ERKStep at order 8 (Fehlberg 13-7-8), adaptive, stop time at t_end,
-//   * CEODE at fixed steps (h divides t_end), stability guard off.
+//   * CEODE at fixed steps (h divides t_end), stability guard off;
+//   * CEODE error control (CEodeSStolerances, rtol = atol = tol, stop time t_end, the guard at
+//     its defaults) with G5_O4, G6_O5, G7_O7, G8_O8: solver "<set> adaptive", config
+//     "adaptive tol", the tolerance in h_or_tol, as the peers' rows.
 // Problems: the IFToMM pendulum theta'' = -9.81 cos theta, theta(0) = theta'(0) = 0, error
 // |theta(10) - ref|; and an FPU-beta chain of 16 masses (fixed ends, beta = 1, released from
 // rest in mode 1 (amplitude 1) plus mode 5 (amplitude 0.3): strongly nonlinear), error
@@ -17,9 +20,10 @@
 //   wp_high_order --count METHOD STEPS REPS [comp]   (for callgrind: REPS untimed pendulum runs,
 //                                                     bench/step_cost/instructions.sh high-order)
 //   wp_high_order --count gsl_rk8pd TOL REPS         (the same for rk8pd at one tolerance)
-// Prints one row per run and a summary: per solver, the CPU time at errors 1e-9 and 1e-11
-// (wp::TimeAtError, the equal-error rule of every scene) and the smallest error reached.
-// --quick: a few runs; exit code 1 unless G8_O8 reaches 1e-11 on the pendulum.
+// Prints one row per run and a summary: per solver, the CPU time and the f evaluations at errors
+// 1e-9 and 1e-11 (wp::TimeAtError, the equal-error rule of every scene) and the smallest error
+// reached. --quick: a few runs (CEODE adaptive: G8_O8 at 1e-9 and 1e-12); exit code 1 unless
+// G8_O8 reaches 1e-11 on the pendulum.
 // -----------------------------------------------------------------------------
 #include <algorithm>
 #include <map>
@@ -134,9 +138,11 @@ struct Result {
   long evals = 0;
 };
 
-// ---- CEODE: fixed steps (h divides t_end) in normal mode, one output at t_end ----------------
+// ---- CEODE in normal mode, one output at t_end: fixed steps (h divides t_end), stability guard
+// off; or (tol > 0, steps ignored) error control at rtol = atol = tol to the stop time t_end, the
+// guard at its defaults (its f evaluations are counted by Acc as every other) ------------------
 int CeodeRun(SUNContext ctx, const wp::Problem& p, const char* method, long steps, bool comp,
-             double* err) {
+             double* err, double tol = 0) {
   N_Vector x = N_VNew_Serial(p.n, ctx), v = N_VNew_Serial(p.n, ctx);
   std::copy(p.x0.begin(), p.x0.end(), N_VGetArrayPointer(x));
   std::copy(p.v0.begin(), p.v0.end(), N_VGetArrayPointer(v));
@@ -144,10 +150,16 @@ int CeodeRun(SUNContext ctx, const wp::Problem& p, const char* method, long step
   int flag = CEodeInit(mem, p.f2, 0, x, v);
   if (flag == 0) flag = CEodeSetUserData(mem, p.user);
   if (flag == 0) flag = CEodeSetMethodByName(mem, method);
-  if (flag == 0) flag = CEodeSetFixedStep(mem, p.tend / steps);
-  if (flag == 0) flag = CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0);
-  if (flag == 0 && comp) flag = CEodeSetCompensatedSummation(mem, SUNTRUE);
-  if (flag == 0) flag = CEodeSetMaxNumSteps(mem, steps + 10);
+  if (tol > 0) {
+    if (flag == 0) flag = CEodeSStolerances(mem, tol, tol);
+    if (flag == 0) flag = CEodeSetStopTime(mem, p.tend);
+    if (flag == 0) flag = CEodeSetMaxNumSteps(mem, 100000000L);
+  } else {
+    if (flag == 0) flag = CEodeSetFixedStep(mem, p.tend / steps);
+    if (flag == 0) flag = CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0);
+    if (flag == 0 && comp) flag = CEodeSetCompensatedSummation(mem, SUNTRUE);
+    if (flag == 0) flag = CEodeSetMaxNumSteps(mem, steps + 10);
+  }
   sunrealtype t = 0;
   if (flag == 0) flag = CEodeEvolve(mem, p.tend, x, v, &t, CE_NORMAL);
   *err = ErrorOf(p, N_VGetArrayPointer(x));
@@ -202,24 +214,30 @@ bool Measure(const wp::Problem& p, const std::string& solver, double param, F ru
   return r.seconds >= 0;
 }
 
-// CPU time at a target error: wp::TimeAtError, the one equal-error rule of every scene;
-// < 0: the curve does not reach the target.
-double TimeAt(const std::vector<Result>& rs, double target) {
+// CPU time (evals: f evaluations) at a target error: wp::TimeAtError, the one equal-error rule
+// of every scene; < 0: the curve does not reach the target.
+double TimeAt(const std::vector<Result>& rs, double target, bool evals = false) {
   std::vector<wp::Row> rows;
   for (const Result& r : rs) {
     wp::Row w;
     w.solver = r.solver;
     w.error = r.error;
-    w.seconds = r.seconds;
+    w.seconds = evals ? static_cast<double>(r.evals) : r.seconds;
     rows.push_back(w);
   }
   return rs.empty() ? -1 : wp::TimeAtError(rows, rs.front().solver, "", target);
+}
+
+bool IsFixedStep(const std::string& solver) {
+  return solver.rfind("G", 0) == 0 && solver.find("adaptive") == std::string::npos;
 }
 
 struct Plan {
   std::vector<const char*> sets;
   std::vector<long> steps;
   std::vector<double> tols;
+  std::vector<const char*> adaptive_sets;  // CEODE error control, solver "<set> adaptive"
+  std::vector<double> ce_tols;
 };
 
 // Every solver on one problem; *g8_best: G8_O8's smallest error (the quick check).
@@ -235,6 +253,13 @@ bool RunSolvers(SUNContext ctx, const Plan& plan, const wp::Problem& p, std::vec
             p, name, p.tend / n, [&](double* e) { return CeodeRun(ctx, p, m, n, comp, e); }, rs);
         if (!comp && std::strcmp(m, "G8_O8") == 0) *g8_best = std::min(*g8_best, rs->back().error);
       }
+    }
+  }
+  for (const char* m : plan.adaptive_sets) {
+    const std::string name = std::string(m) + " adaptive";
+    for (double tol : plan.ce_tols) {
+      ok &= Measure(
+          p, name, tol, [&](double* e) { return CeodeRun(ctx, p, m, 0, false, e, tol); }, rs);
     }
   }
   const std::pair<const char*, peers::Kind> peer_runs[] = {
@@ -259,19 +284,27 @@ void Summarise(const wp::Problem& p, const std::vector<Result>& rs, FILE* csv) {
     by[r.solver].push_back(r);
     if (csv) {
       std::fprintf(csv, "%s,%s,%s,%.6g,%.6e,0,0,%ld,%.6e\n", M(p).name, r.solver.c_str(),
-                   r.solver.rfind("G", 0) == 0 ? "fixed h" : "adaptive tol", r.param, r.error,
-                   r.evals, r.seconds);
+                   IsFixedStep(r.solver) ? "fixed h" : "adaptive tol", r.param, r.error, r.evals,
+                   r.seconds);
     }
   }
-  const double g9 = TimeAt(by["gsl_rk8pd"], 1e-9), g11 = TimeAt(by["gsl_rk8pd"], 1e-11);
-  std::printf("\n%s: CPU time at error 1e-9 / 1e-11 (ratio to gsl_rk8pd), best error\n",
-              M(p).name);
+  const std::vector<Result>& g = by["gsl_rk8pd"];
+  const double g9 = TimeAt(g, 1e-9), g11 = TimeAt(g, 1e-11);
+  const double f9 = TimeAt(g, 1e-9, true), f11 = TimeAt(g, 1e-11, true);
+  std::printf(
+      "\n%s: CPU time and f evaluations at error 1e-9 / 1e-11 (ratios to gsl_rk8pd), best "
+      "error\n",
+      M(p).name);
+  auto ratio = [](double a, double b) { return a > 0 && b > 0 ? a / b : -1; };
   for (const auto& kv : by) {
     const double t9 = TimeAt(kv.second, 1e-9), t11 = TimeAt(kv.second, 1e-11);
+    const double e9 = TimeAt(kv.second, 1e-9, true), e11 = TimeAt(kv.second, 1e-11, true);
     double best = 1e300;
     for (const Result& r : kv.second) best = std::min(best, r.error);
-    std::printf("  %-14s %10.3e s (%5.2f)  %10.3e s (%5.2f)  best %.2e\n", kv.first.c_str(), t9,
-                t9 > 0 && g9 > 0 ? t9 / g9 : -1, t11, t11 > 0 && g11 > 0 ? t11 / g11 : -1, best);
+    std::printf(
+        "  %-16s %10.3e s (%5.2f) %7.0f f (%5.2f)  %10.3e s (%5.2f) %7.0f f (%5.2f)  best %.2e\n",
+        kv.first.c_str(), t9, ratio(t9, g9), e9, ratio(e9, f9), t11, ratio(t11, g11), e11,
+        ratio(e11, f11), best);
   }
 }
 
@@ -325,12 +358,14 @@ int main(int argc, char** argv) {
   if (!args.quick) problems.push_back(MakeProblem(&chain, chain_x0));
   Plan plan;
   if (args.quick) {
-    plan = {{"G8_O8"}, {400, 1600}, {1e-10}};
+    plan = {{"G8_O8"}, {400, 1600}, {1e-10}, {"G8_O8"}, {1e-9, 1e-12}};
   } else {
     plan.sets = {"G4_A34", "G5", "G6_O5", "G7_O7", "G8_O8"};
     plan.steps = {40,  60,   80,   100,  130,  160,  200,  250,  320,  400,  500,  650,
                   800, 1000, 1300, 1600, 2000, 2500, 3200, 4000, 5000, 8000, 16000};
     plan.tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
+    plan.adaptive_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
+    plan.ce_tols = plan.tols;
   }
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
   if (csv) std::fputs(wp::kCsvHeader, csv);

@@ -13,11 +13,17 @@
 //    (explicit path: f does not depend on theta');
 //  * the same G5 and G3_CD steps as a hand-written loop on raw doubles: the
 //    floor for per-step overhead (its errors must equal CEODE's);
+//  * CEODE error control (CEodeSStolerances, rtol = atol = 1e-4 ... 1e-14, config
+//    "<set> adaptive", h_or_tol the tolerance) with G5_O4, G6_O5, G7_O7, G8_O8, the stability
+//    guard at its defaults; its f evaluations are counted with the run's;
 //  * ARKODE ERKStep with Kutta's RK3 (the paper's comparison) at the same h; ERKStep adaptive
 //    and CVODE Adams at rtol = atol = 1e-3 ... 1e-12; the peers (bench/peers.h), the
 //    symplectic ones too (f depends on theta only).
+// Summaries: the best curve per side at equal error (time), and CEODE adaptive against every
+// other curve at equal error (f evaluations and time).
 //
 // Usage: wp_pendulum_ode [--csv FILE] [--quick]
+// --quick: fewer steps and tolerances (CEODE adaptive: G6_O5 and G8_O8 at 1e-6 and 1e-10).
 // Exit code 0 when every run succeeded, ARKODE's RK3 is Kutta's method (checked
 // against a hand-written RK3), the hand loops agree with CEODE to 1 %
 // (or 1e-13 absolute), G5 at h = 1e-3 is within a factor 2 of the paper's
@@ -151,9 +157,15 @@ int main(int argc, char** argv) {
 
   std::vector<double> steps = {1e-1, 1e-2, 1e-3, 1e-4, 1e-5};
   std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  // CEODE's tolerances reach below ERKStep's: its energy error is 10 to 100 times the tolerance.
+  std::vector<double> ce_tols = {1e-4,  1e-5,  1e-6,  1e-7,  1e-8, 1e-9,
+                                 1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
+  std::vector<const char*> adaptive_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   if (args.quick) {
     steps = {1e-2, 1e-3};
     tols = {1e-4, 1e-8};
+    ce_tols = {1e-6, 1e-10};
+    adaptive_sets = {"G6_O5", "G8_O8"};
   }
   int bad = 0;
   double g5_1e3 = -1;
@@ -166,6 +178,11 @@ int main(int argc, char** argv) {
         if (wp::CeodeRun(ctx, p, m, h, &o) == 0) g5_1e3 = o.error;
       }
     }
+  }
+
+  // Error control with the sets a user picks for a smooth problem.
+  for (const char* m : adaptive_sets) {
+    wp::MeasureTolCurve(&table, ctx, p, {"", wp::CeodeOpts(m), ce_tols});
   }
 
   // Hand-written loops: the same arithmetic without any API or N_Vector.
@@ -227,6 +244,7 @@ int main(int argc, char** argv) {
   std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
 #endif
   wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
+  wp::PrintAdaptiveEqualError(table, {1e-6, 1e-9, 1e-11});
   bad += table.failures();
   if (!args.quick) {
     const bool ok = g5_1e3 > 0 && g5_1e3 < 2 * 6.71e-11 && g5_1e3 > 6.71e-11 / 2;

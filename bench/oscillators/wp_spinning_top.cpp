@@ -21,7 +21,11 @@
 // G8_O8 with CE_IMPLICIT_AUTO; G5_TOP Newton with df/dv every step at a Newton tolerance of
 // 1e-8. ARKODE ERKStep with Kutta's RK3 at the same h (the paper's Table 8); ERKStep adaptive,
 // CVODE Adams and BDF at rtol = 1e-3 ... 1e-12, atol = 1e-3 rtol; the peers (not the
-// symplectic ones: f depends on q').
+// symplectic ones: f depends on q'). CEODE error control (config "<set> adaptive", h_or_tol the
+// tolerance) with G5_O4, G6_O5, G7_O7, G8_O8 at rtol = atol = 1e-4 ... 1e-14, the implicit step
+// at the library's default (AUTO), dense, analytic df/dq'; printed against every other curve at
+// equal error (f evaluations and time). Each run includes the stability guard's estimate at
+// the start, most of its time here (the f "by the guard" of every row).
 //
 // Usage: wp_spinning_top [--csv FILE] [--quick]
 // Exit code 0 when every run succeeded, the zero-start G5_TOP errors at
@@ -139,9 +143,14 @@ int main(int argc, char** argv) {
 
   std::vector<double> steps = {1e-2, 1e-3, 1e-4, 1e-5};
   std::vector<double> tols = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  std::vector<double> ce_tols = {1e-4,  1e-5,  1e-6,  1e-7,  1e-8, 1e-9,
+                                 1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
+  std::vector<const char*> adaptive_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   if (args.quick) {
     steps = {1e-2, 1e-3};
     tols = {1e-4, 1e-8};
+    ce_tols = {1e-6, 1e-10};
+    adaptive_sets = {"G6_O5", "G8_O8"};
   }
   c.zero_start = true;
   for (double h : steps) wp::MeasureCeode(&table, ctx, p, c, h, "G5_TOP-zero");
@@ -180,6 +189,14 @@ int main(int argc, char** argv) {
     wp::MeasureSundials(&table, ctx, p, {wp::Sun::kErkFixed, 0, rk3}, h, "RK3-Kutta");
   }
   ARKodeButcherTable_Free(rk3);
+  // Error control with the sets a user picks, the implicit step at the library's default (AUTO).
+  wp::CeodeOpts ca("G5_O4");
+  ca.vel = true;
+  ca.implicit_mode = CE_IMPLICIT_AUTO;
+  for (const char* m : adaptive_sets) {
+    ca.method = m;
+    wp::MeasureTolCurve(&table, ctx, p, {"", ca, ce_tols});
+  }
   // BDF for completeness: the top is not stiff, so its Newton work per step is the price here.
   for (wp::Sun kind : {wp::Sun::kErk, wp::Sun::kCvodeAdams, wp::Sun::kCvodeBdf}) {
     for (double tol : tols) {
@@ -199,6 +216,7 @@ int main(int argc, char** argv) {
   std::printf("(built without GSL/Boost: no odeint/GSL peer curves)\n");
 #endif
   wp::PrintEqualError(table, {1e-6, 1e-9, 1e-11});
+  wp::PrintAdaptiveEqualError(table, {1e-6, 1e-9, 1e-11});
 
   // The paper's Table 7 (zero start): within a factor 2.
   const double paper_h[2] = {1e-2, 1e-3}, paper_e[2] = {2.28e-5, 3.09e-9};
