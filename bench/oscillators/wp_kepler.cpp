@@ -361,12 +361,9 @@ struct Curve {
   std::string Name() const { return solver + " " + config; }
 };
 
-// f evaluations at error e by TimeAtError's rule (the cheapest point at or below e, or the
-// log-log interpolation on a segment that crosses e); < 0 when the curve never reaches e.
+// f evaluations at error e by the harness's rule; < 0 when the curve never reaches e.
 double EvalsAtError(const std::vector<wp::Row>& rows, const Curve& c, double e) {
-  std::vector<wp::Row> f(rows);
-  for (wp::Row& r : f) r.seconds = static_cast<double>(r.rhs_evals);
-  return wp::TimeAtError(f, c.solver, c.config, e);
+  return wp::EvalsAtError(rows, c.solver, c.config, e);
 }
 
 std::vector<Curve> CurvesOf(const wp::Table& table) {
@@ -379,9 +376,7 @@ std::vector<Curve> CurvesOf(const wp::Table& table) {
   return cs;
 }
 
-bool IsCeodeAdaptive(const Curve& c) {
-  return c.solver == "CEODE" && c.config.find("_adaptive") != std::string::npos;
-}
+bool IsCeodeAdaptive(const Curve& c) { return wp::IsCeodeAdaptive(c.solver, c.config); }
 
 // seconds = a + b steps by least squares on the relative residuals (weights 1 / seconds^2, so
 // that the long runs do not decide the intercept): the cost per run (create, set up, free) and
