@@ -16,6 +16,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only, no display needed
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import LogFormatterSciNotation  # noqa: E402
 
 # CEODE's named sets: (colour, marker). Distinct hues for the sets users pick most (G3_CD,
 # G4_A34, G5_O4, G8_O8); the paper's weakly unstable sets in muted tones.
@@ -41,7 +42,7 @@ HAND = ("#555555", "x")
 OTHERS = {
     "ARKODE RK3": ("#8c2d04", "s", "ARKODE RK3, fixed h"),
     "ARKODE RK3+proj": ("#8c8ce0", "D", "ARKODE RK3 + projection, fixed h"),
-    "ARKODE-ERK adaptive": ("#009e73", "o", "ARKODE ERK adaptive (order 4)"),
+    "ARKODE-ERK adaptive": ("#009e73", "o", "ARKODE ERK adaptive, order 4"),
     "ARKODE-ERK order3": ("#56b4e9", "v", "ARKODE ERK adaptive, order 3"),
     "ARKODE-ERK order5": ("#004c6d", "p", "ARKODE ERK adaptive, order 5"),
     "ARKODE-ERK order6": ("#5e3c99", "h", "ARKODE ERK adaptive, order 6"),
@@ -212,6 +213,13 @@ def draw_curves(ax, curves, xkey="seconds", ykey="error"):
 
 
 def grid(ax):
+    """Grid lines; on a log axis spanning less than about two decades the minor ticks get numbers
+    too (2, 3, 5 x 10^k), so that every panel has more than one labelled tick."""
+    for axis in (ax.xaxis, ax.yaxis):
+        if axis.get_scale() == "log":
+            axis.set_minor_formatter(LogFormatterSciNotation(labelOnlyBase=False,
+                                                             minor_thresholds=(2, 0.5)))
+    ax.tick_params(which="minor", labelsize=7)
     ax.grid(True, which="major", alpha=0.4)
     ax.grid(True, which="minor", alpha=0.12)
 
