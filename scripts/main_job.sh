@@ -243,16 +243,23 @@ dae=()
 wp=()
 for c in "${scenes[@]}"; do
   case $(basename "$c") in
-    pendulum_dae.csv | chain_dae.csv) dae+=("$c") ;;
-    pendulum_dae_o3.csv | chain_dae_o3.csv) ;;  # plot_dae.py names its plots itself
+    chain_dae.csv | chain_dae_o3.csv) dae+=("$c") ;;  # N-scaling: plot_dae.py only
+    pendulum_dae*.csv | chain_dae_wp*.csv) dae+=("$c"); mine+=("$c") ;;
     *) mine+=("$c") ;;
   esac
   # chain_dae.csv is the N-scaling study (CEODE only): no ratio to compute
   case $(basename "$c") in chain_dae.csv | chain_dae_o3.csv) ;; *) wp+=("$c") ;; esac
 done
+# Work-precision figures of every scene (panels of <= 10 curves, scripts/plot_style.py)
 if ((${#mine[@]})); then "$PYTHON" scripts/plot_results.py "${mine[@]}" || status=1; fi
-# pendulum_dae (work-precision with drift) and chain_dae (time per step against N)
+# pendulum_dae and chain_dae_wp: constraint drift against cost; chain_dae: time per step against N
 if ((${#dae[@]})); then "$PYTHON" scripts/plot_dae.py --outdir "$OUT" "${dae[@]}" || status=1; fi
+# Charts from every scene and docs/data/ (each skips what is absent): speed ratios at equal
+# error, long-run energy error against time, order against stability limit for every set
+# (orders and limits from ./build/libceode.so, written to docs/data/set_summary.csv)
+"$PYTHON" scripts/plot_summary.py --results "$OUT" --out "$OUT/summary_ratios.png" || status=1
+"$PYTHON" scripts/plot_long_run.py --out "$OUT/long_run_energy.png" || status=1
+"$PYTHON" scripts/plot_which_set.py --lib "$BUILD/libceode.so" --out "$OUT/which_set.png" || status=1
 
 step "ratios at equal error"
 "$PYTHON" scripts/ratios.py --out "$OUT/ratios.csv" --scene-levels fe_=1e-4,1e-6 "${wp[@]}" ||

@@ -1,22 +1,18 @@
 #!/usr/bin/env python3
-"""Plot the results of the constrained (DAE) bench scenes.
+"""Plots of the constrained (DAE) scenes beyond work-precision (plot_results.py draws that).
 
-Reads the CSV written by `bench/wp_pendulum_dae --csv FILE` (and, optionally, by
-`bench/chain_scaling --csv FILE`; rows: scene,solver,config,h_or_tol,error,drift,steps,
-rhs_evals,seconds) and writes
-
-  * for scene pendulum_dae: a log-log work-precision plot, max energy error
-    against run time, one curve per solver/configuration, points joined from
-    the largest step/tolerance to the smallest, to OUTDIR/pendulum_dae.png;
-  * for scene chain_dae: time per step against the number of bodies N, with
-    the least-squares log-log slope and a linear-growth guide, to
-    OUTDIR/chain_dae.png.
+For each CSV given (rows: scene,solver,config,h_or_tol,error,drift,steps,rhs_evals,seconds):
+  * scene pendulum_dae or chain_dae_wp: the constraint drift of every run (its drift column:
+    the largest position-level constraint residual over the run) against CPU time, log-log, to
+    OUTDIR/<csv stem>_drift.png. The scenes record the largest drift of a run, not the drift at
+    each instant, so this is drift against cost, not against simulated time;
+  * scene chain_dae (bench/chain_scaling): CPU time per step against the number of bodies N,
+    with the least-squares log-log slope and a linear-growth guide, to OUTDIR/<csv stem>.png.
+A CSV given but absent is skipped with a message.
 
 Usage:
-  python3 scripts/plot_dae.py [CSV ...] [--outdir docs/results]
-Defaults: docs/results/pendulum_dae.csv and docs/results/chain_dae.csv (the
-ones that exist). Needs matplotlib (Debian: python3-matplotlib; run it with
-/usr/bin/python3 if another python3 comes first on PATH).
+  /usr/bin/python3 scripts/plot_dae.py [CSV ...] [--outdir docs/results]
+Defaults: docs/results/{pendulum_dae,chain_dae_wp,chain_dae}[_o3].csv, those that exist.
 """
 import argparse
 import csv
@@ -25,15 +21,16 @@ import os
 import sys
 from collections import OrderedDict
 
-import matplotlib
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import plot_style as ps  # noqa: E402
+from plot_style import plt  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-STYLE = {
-    "ARKODE": dict(marker="s", linestyle="--"),
-    "IDA": dict(marker="^", linestyle=":"),
-    "CEODE": dict(marker="o", linestyle="-"),
+# A drift of exactly 0 (the constraint met to the last bit) is drawn here.
+ZERO_DRIFT = 1e-18
+DRIFT_LABEL = {
+    "pendulum_dae": "max |x² + y² − L²| over the run [m²]",
+    "chain_dae_wp": "max |Φ(q)| over the run (position constraints of the 8 links)",
 }
 
 
@@ -46,7 +43,7 @@ def read_rows(paths):
                     r["h_or_tol"] = float(r["h_or_tol"])
                     r["error"] = float(r["error"])
                     r["drift"] = float(r["drift"])
-                    r["steps"] = int(r["steps"])
+                    r["steps"] = int(float(r["steps"]))
                     r["seconds"] = float(r["seconds"])
                 except (KeyError, ValueError) as exc:
                     sys.exit(f"{path}: malformed row {r}: {exc}")
@@ -54,35 +51,25 @@ def read_rows(paths):
     return rows
 
 
-def save(fig, outdir, stem):
-    os.makedirs(outdir, exist_ok=True)
-    path = os.path.join(outdir, f"{stem}.png")
-    fig.savefig(path, dpi=150, bbox_inches="tight")
-    plt.close(fig)
-    return [path]
-
-
-def plot_pendulum(rows, outdir):
+def plot_drift(rows, scene, png):
     curves = OrderedDict()
     for r in rows:
-        curves.setdefault((r["solver"], r["config"]), []).append(r)
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
-    for (solver, config), pts in curves.items():
-        pts = sorted(pts, key=lambda r: -r["h_or_tol"])  # cheapest first
-        pts = [p for p in pts if p["error"] > 0 and p["seconds"] > 0]
-        if not pts:
-            continue
-        style = STYLE.get(solver, dict(marker="x", linestyle="-"))
-        kind = "tol" if solver == "IDA" else "h"
-        lo, hi = pts[-1]["h_or_tol"], pts[0]["h_or_tol"]
-        label = f"{solver} {config} ({kind} {hi:.0e}..{lo:.0e})"
-        ax.loglog([p["seconds"] for p in pts], [p["error"] for p in pts], label=label, **style)
-    ax.set_xlabel("CPU time per run [s] (median of 5 repetitions of >= 50 ms)")
-    ax.set_ylabel("max |E - E0| over 10 s [J]")
-    ax.set_title("DAE pendulum (index 3, I_zz = 0): work-precision")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return save(fig, outdir, "pendulum_dae")
+        if math.isfinite(r["drift"]) and r["seconds"] > 0:
+            pt = {"seconds": r["seconds"], "drift": max(r["drift"], ZERO_DRIFT)}
+            curves.setdefault(ps.normalise(r["solver"], r["config"]), []).append(pt)
+    fig, ax = plt.subplots(figsize=(7.5, 6.2))
+    ps.draw_curves(ax, [(s, c, p) for (s, c), p in curves.items()], ykey="drift")
+    ax.axhline(2.2e-16, color="0.5", lw=0.8, ls=":")
+    ax.text(ax.get_xlim()[0], 2.6e-16, " double-precision ε", fontsize=7, color="0.4")
+    ax.set_xlabel(ps.TIME_LABEL)
+    ax.set_ylabel(DRIFT_LABEL.get(scene, "max constraint residual over the run"))
+    build = "SUNDIALS -O3" if os.path.basename(png).startswith(f"{scene}_o3") else "SUNDIALS -O0"
+    ax.set_title(f"{scene}: constraint drift of each run against its cost ({build})\n"
+                 "lower is better; the scene records each run's largest drift, not a time series",
+                 fontsize=9)
+    ps.grid(ax)
+    ps.legend_below(ax)
+    ps.save(fig, png)
 
 
 def chain_slope(rows):
@@ -105,19 +92,42 @@ def chain_slope(rows):
     return pts, slope
 
 
-def plot_chain(rows, outdir):
+def plot_chain(rows, png):
     pts, slope = chain_slope(rows)
     ns = [p[0] for p in pts]
     ts = [p[1] for p in pts]
     fig, ax = plt.subplots(figsize=(6.5, 5))
-    ax.loglog(ns, ts, "o-", label=f"CEODE {pts[0][2]} + KLU (slope {slope:.2f})")
+    st = ps.style("CEODE", pts[0][2])
+    ax.loglog(ns, ts, label=f"CEODE {pts[0][2]} + KLU (slope {slope:.2f})", **st)
     ax.loglog(ns, [ts[-1] * n / ns[-1] for n in ns], "k:", label="linear growth")
     ax.set_xlabel("N (masses; n + nc = 3N)")
     ax.set_ylabel("CPU time per step [s]")
     ax.set_title("Planar chain, index-3 DAE: cost per step")
-    ax.grid(True, which="both", alpha=0.3)
+    ps.grid(ax)
     ax.legend(fontsize=8)
-    return save(fig, outdir, "chain_dae")
+    ps.save(fig, png)
+
+
+def plot_file(path, outdir):
+    if not os.path.exists(path):
+        print(f"{path}: missing, skipped")
+        return 0
+    rows = read_rows([path])
+    stem = os.path.splitext(os.path.basename(path))[0]
+    scenes = {r["scene"] for r in rows}
+    n = 0
+    for scene in ("pendulum_dae", "chain_dae_wp"):
+        if scene in scenes:
+            plot_drift([r for r in rows if r["scene"] == scene], scene,
+                       os.path.join(outdir, f"{stem}_drift.png"))
+            n += 1
+    chain = [r for r in rows if r["scene"] == "chain_dae"]
+    if chain:
+        plot_chain(chain, os.path.join(outdir, f"{stem}.png"))
+        n += 1
+    if not n:
+        print(f"{path}: no pendulum_dae, chain_dae_wp or chain_dae rows, skipped")
+    return n
 
 
 def main():
@@ -125,24 +135,14 @@ def main():
     ap.add_argument("csv", nargs="*", help="CSV files written with --csv")
     ap.add_argument("--outdir", default="docs/results")
     args = ap.parse_args()
-    paths = args.csv or [
-        p for p in ("docs/results/pendulum_dae.csv", "docs/results/chain_dae.csv") if os.path.exists(p)
-    ]
-    if not paths:
-        sys.exit("no CSV given and none found in docs/results")
-    rows = read_rows(paths)
-    written = []
-    pend = [r for r in rows if r["scene"] == "pendulum_dae"]
-    chain = [r for r in rows if r["scene"] == "chain_dae"]
-    if pend:
-        written += plot_pendulum(pend, args.outdir)
-    if chain:
-        written += plot_chain(chain, args.outdir)
-    if not written:
-        sys.exit("no pendulum_dae or chain_dae rows found")
-    for w in written:
-        print("wrote", w)
+    paths = args.csv or [os.path.join("docs/results", f"{s}{sfx}.csv")
+                         for s in ("pendulum_dae", "chain_dae_wp", "chain_dae") for sfx in ("", "_o3")
+                         if os.path.exists(os.path.join("docs/results", f"{s}{sfx}.csv"))]
+    os.makedirs(args.outdir, exist_ok=True)
+    for p in paths:
+        plot_file(p, args.outdir)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

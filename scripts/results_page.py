@@ -229,11 +229,44 @@ def scene_section(page, rows, name, title, sentence):
         page.add("Not run in this job (no `docs/results/%s[_o3].csv`)." % name, "")
         return
     page.add(*page.figure(name, f"{name} work-precision"))
+    page.add(*loss_lines(rows, name))
     mine = [r for r in rows if r["scene"] == name]
     if mine:
         page.add(*summary_table.table(mine, {name}))
         page.add("")
+    page.add(*drift_lines(page, name))
     page.add(*scaling_lines(page, name))
+
+
+def loss_lines(rows, name):
+    """A plain sentence for every headline level where CEODE is slower than a competitor."""
+    out = []
+    for scene, level, r in summary_table.headline(rows):
+        if scene != name:
+            continue
+        for col, who in (("ratio_ceode_over_sundials", "sundials_best"),
+                         ("ratio_ceode_over_peer", "peer_best")):
+            if r[col] and float(r[col]) > 1:
+                out.append(f"* **CEODE loses here at {level}:** its fastest configuration "
+                           f"({summary_table.strip(r['ceode_best'])}) takes {r[col]}× the time "
+                           f"of {r[who]}.")
+        if r["ceode_best"] == "not reached" and r["sundials_best"] != "not reached":
+            out.append(f"* **CEODE loses here at {level}:** no CEODE configuration reaches it; "
+                       f"{r['sundials_best']} does.")
+    return out + [""] if out else []
+
+
+def drift_lines(page, name):
+    """The constraint-drift figure of a DAE scene (scripts/plot_dae.py), headline build."""
+    for stem in (f"{name}_o3", name):
+        png = f"{stem}_drift.png"
+        if page.exists(png) and page.exists(f"{stem}.csv"):
+            return [f"Constraint drift: the largest position-constraint residual of each run "
+                    f"against its CPU time (`{stem}.csv`, column drift). The scene records each "
+                    "run's largest residual, not the residual along the run, so there is no "
+                    "drift-against-simulated-time curve.", "",
+                    f"![{name} constraint drift](results/{png})", ""]
+    return []
 
 
 def scaling_lines(page, name):
@@ -332,6 +365,23 @@ def compact_summary(rows):
     return lines
 
 
+def damping_note(page):
+    """The sets that are stable undamped but lose their whole interval at xi = 0.05."""
+    path = os.path.join(os.path.dirname(os.path.abspath(page.dir)), "data", "set_summary.csv")
+    if not os.path.exists(path):
+        return ""
+    with open(path, newline="") as f:
+        lost = [r["set"] for r in csv.DictReader(f)
+                if float(r["omega_max_xi0"]) > 0 and float(r["omega_max_xi005"]) == 0]
+    return (f" {' and '.join(lost)} lose their whole interval at ξ = 0.05 (`set_summary.csv`)."
+            if lost else "")
+
+
+def image(page, png, alt):
+    """Markdown lines of a chart in docs/results/, or [] when it was not drawn."""
+    return [f"![{alt}](results/{png})"] if page.exists(png) else []
+
+
 def section(page, heading, intro, body, missing="Not run in this job."):
     """Heading, intro paragraph, then body (a list of lines) or the missing line."""
     page.add(heading, "", intro, "")
@@ -371,8 +421,8 @@ def chain_lines(page):
         return []
     import plot_dae  # noqa: E402  (matplotlib only when the scene ran)
     pts, slope = plot_dae.chain_slope(plot_dae.read_rows([page.path(chain)]))
-    png = "chain_dae.png"  # scripts/plot_dae.py draws the unoptimised half's CSV
-    lines = [f"![chain N-scaling, chain_dae.csv](results/{png})", ""] if page.exists(png) else []
+    png = chain[:-4] + ".png"  # scripts/plot_dae.py names the plot after its CSV
+    lines = [f"![chain N-scaling, {chain}](results/{png})", ""] if page.exists(png) else []
     return lines + [f"N = {pts[0][0]} … {pts[-1][0]}: {fmt(pts[0][1] * 1e6)} µs to "
                     f"{fmt(pts[-1][1] * 1e6)} µs per step, log-log slope **{slope:.3f}** "
                     f"(`{chain}`)."]
@@ -441,9 +491,39 @@ def write(results, out_path):
             "column; –: not measured or a level one side does not reach. FE levels are relative "
             "position errors. Each scene below has the full row: which configurations were best and "
             "their times.", compact_summary(rows) if rows else [], "No `ratios.csv` in this run.")
+    section(page, "### Summary chart",
+            "The fastest CEODE configuration against the fastest curve of each kind of competitor "
+            "at every error level, from the scene CSVs (`scripts/plot_summary.py`, the same "
+            "interpolation as the table); bars to the right of 1 (hatched) are where CEODE is "
+            "slower.", image(page, "summary_ratios.png", "speed ratios at equal error"),
+            "Not drawn: its data are absent.")
     section(page, "## Where CEODE loses", "Every ratio above 1 in this run, from the data.",
             losses_lines(rows, bs, ho, mri_best), "Nowhere in this run.")
-    page.add("## Scenes", "")
+    section(page, "## Which set",
+            "Every named set's order in x against its stability limit Ω_max = ω_max·h (undamped; "
+            "the arrow goes to the limit at damping ratio ξ = 0.05), ringed by its long-run "
+            "behaviour on the pendulum and the oscillator at h = 1e-3 and 2e-3, the worst of the "
+            "four runs. Orders and limits are computed by the library (`CEodeMethodOrder`, "
+            "`CEodeStabilityLimit`, written to `docs/data/set_summary.csv`), the long-run classes "
+            "come from `docs/data/long_run_*.csv` ([stability.md](stability.md)). Up and to the "
+            "right is better." + damping_note(page),
+            image(page, "which_set.png", "order against stability limit for every set"),
+            "Not drawn: its data are absent.")
+    section(page, "## Long runs: energy error against time",
+            "10⁷ steps of h = 1e-3 (10⁴ s) on the pendulum and the linear oscillator, the largest "
+            "|E − E0| over the first 1 %, the 1 % before T/2 and the last 1 % of the run (the "
+            "windows the study keeps, `docs/data/long_run_*.csv`); × marks a blow-up. Flat is "
+            "bounded (G3_CD only), slope 1 is a linear drift, steeper is growth. "
+            "([stability.md](stability.md#long-runs-what-each-set-conserves))",
+            image(page, "long_run_energy.png", "long-run energy error against time"),
+            "Not drawn: its data are absent.")
+    page.add("## Scenes", "",
+             "Each figure is the scene's -O3 run in panels that share their axes: the headline "
+             "CEODE curves (the fastest at each error level, the recommended sets G5_O4, G8_O8 "
+             "and G4_A34 and the fastest error-control curve, those the scene ran) against every "
+             "SUNDIALS curve, the same CEODE curves against Boost.Odeint and GSL, then every "
+             "CEODE configuration. A method has one colour and marker in every figure; CEODE is "
+             "solid, the others dashed; dotted lines mark the error levels of the ratios.", "")
     for name, title, sentence in SCENES:
         scene_section(page, rows, name, title, sentence)
     name, title, sentence = HIGH_ORDER
@@ -467,7 +547,10 @@ def write(results, out_path):
              "`docs/results/<scene>.csv` (schema `scene,solver,config,h_or_tol,error,drift,steps,"
              "rhs_evals,seconds`) and `<scene>.txt` for the unoptimised SUNDIALS, `<scene>_o3.*` for "
              "the `-O3` build; `ratios.csv`; `bench_step[_o3].json`; `mpi_*`, `mri_inner_cost*`; "
-             "`run_info.json`. Regenerate this page with "
+             "`run_info.json`; the charts `summary_ratios.png` (scripts/plot_summary.py), "
+             "`which_set.png` (scripts/plot_which_set.py), `long_run_energy.png` "
+             "(scripts/plot_long_run.py) and `<scene>[_o3]_drift.png` (scripts/plot_dae.py). "
+             "Regenerate this page with "
              "`/usr/bin/python3 scripts/results_page.py`.")
     text = "\n".join(page.lines).rstrip() + "\n"
     with open(out_path, "w") as f:
