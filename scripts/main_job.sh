@@ -126,7 +126,7 @@ if [ -e "${SUNDIALS_O3_PREFIX:-$BUILD/sundials-6.4.1-O3}/lib/cmake/sundials/SUND
 fi
 run_build "$BUILD" ""
 
-# ---- wp_high_order (issue 14) ----------------------------------------------------------------
+# ---- wp_high_order ---------------------------------------------------------------------------
 # CEODE's high-degree sets against the order-8 integrators users pick outside
 # SUNDIALS (GSL rk8pd, Boost.Odeint rkf78 and Bulirsch-Stoer; ARKODE ERK 8).
 # Run on both builds: outputs wp_high_order.* and, on the -O3 SUNDIALS build, wp_high_order_o3.*
@@ -160,7 +160,7 @@ if [ -e "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfig.cmake" ] ||
         -DCMAKE_PREFIX_PATH="$O3_PREFIX" > "$BUILD/main_job_o3.log" 2>&1 &&
       cmake --build "$O3_BUILD" -j"$JOBS" --target "${targets[@]}" >> "$BUILD/main_job_o3.log" 2>&1; then
     run_build "$O3_BUILD" _o3
-    high_order "$O3_BUILD" _o3  # issue 14
+    high_order "$O3_BUILD" _o3
     o3_note="SUNDIALS -O3: every scene also run against $O3_PREFIX (outputs *_o3.*)"
   else
     step "SUNDIALS -O3 build FAILED (log: $BUILD/main_job_o3.log)"
@@ -170,7 +170,7 @@ if [ -e "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfig.cmake" ] ||
 fi
 step "$o3_note"
 
-# ---- MPI (issue 11, docs/mpi.md) ------------------------------------------------------------
+# ---- MPI (docs/mpi.md) ---------------------------------------------------------------------
 # Two partitioned models on NVECTOR_PARALLEL at N = 10^6, halo exchange in f, against
 # NVECTOR_SERIAL: the membrane (bench/mpi_membrane: one row strip per rank) and the Q4 plate of
 # wp_fe_plate (bench/mpi_fe_plate: one block of node columns per rank). Bitwise equality (the
@@ -208,7 +208,7 @@ else
 fi
 # ---- end MPI --------------------------------------------------------------------------------
 
-# ---- MRI inner cost (issue 12, docs/porting.md "CEODE inside ARKODE") ------------------------
+# ---- MRI inner cost (docs/porting.md "CEODE inside ARKODE") ---------------------------------
 # CEODE against ARKStep RK4 as MRIStep's inner stepper at equal error, omega = 10 and 100 on the
 # slow manifold and omega = 100 with the fast mode excited, in one run (bench/mri_inner_cost
 # equal-error): fast f evaluations are exact counts, not timings, so one run per build. Its own

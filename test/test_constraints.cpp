@@ -532,7 +532,7 @@ TEST(Constraints, TheDensePathAndTheKluSparsePathGiveTheSameNumbers) {
   }
 }
 
-// Issue 10: the saddle-point matrix of an earlier step serves until msbj steps have passed (20
+// The saddle-point matrix of an earlier step serves until msbj steps have passed (20
 // here; f independent of v, only when msbj is set): at most one Jacobian evaluation in ten steps,
 // and the answer of a run that refreshes the matrix at every step (msbj = 1) to within its
 // round-off. f depending on v: only df/dv is reused (default 20), the matrix is formed at every
@@ -621,7 +621,7 @@ TEST(Constraints, WithoutALinearSolverCeodeBuildsItsOwnDenseSaddlePointSolver) {
   EXPECT_LE(err, 1e-8);
 }
 
-// Issue 10: the Schur complement (theory 8.3) takes the same Newton step as the full saddle
+// The Schur complement (theory 8.3) takes the same Newton step as the full saddle
 // solve, so both give the same run; the pendulum's M = diag(m, m, 0) is singular, which B =
 // A + rho G0^T G0 covers. The multipliers agree to their resolution (see the KLU test above).
 TEST(Constraints, TheSchurComplementAndTheFullSaddleSolveGiveTheSameNumbersOnThePendulum) {

@@ -1,5 +1,5 @@
 // The stable step of a finite-element model, the way structural codes give it
-// (issue 11): on Q4 cantilever plates (bench/fe_plate_model.h) whose exact
+//: on Q4 cantilever plates (bench/fe_plate_model.h) whose exact
 // omega_max comes from a dense symmetric eigensolver (Eigen, on M^{-1/2} K
 // M^{-1/2}), the Gershgorin bound CEodeGetFrequencyBound is never below it, and
 // the guard's Lanczos estimate with the lumped masses (CEodeSetGuardMass) is an

@@ -1,5 +1,5 @@
 // CEODE on NVECTOR_PETSC (docs/mpi.md, "NVECTOR_PETSC"): the Q4 cantilever plate of
-// bench/mpi_fe_plate_model.h (issue 11's linear FE scene: K in CSR, lumped M), one block of node
+// bench/mpi_fe_plate_model.h (the linear FE scene: K in CSR, lumped M), one block of node
 // columns per rank on a PETSc MPI Vec wrapped by N_VMake_Petsc, the halo columns exchanged inside
 // f. PETSc vectors expose no array to N_VGetArrayPointer, so CEODE runs its generic N_Vector path
 // and f reaches the entries through VecGetArrayRead / VecGetArray, as a PETSc code does.
