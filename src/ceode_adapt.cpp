@@ -355,16 +355,19 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
       for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
       err = std::max(err, kEnvelope * am.err_prev * grow);
     }
-    const sunrealtype e = std::max(err, 1e-10) / kTarget;
-    const sunrealtype ep = am.err_prev > 0 ? std::max(am.err_prev, 1e-10) / kTarget : e;
+    // In logarithms: one log and one exp a step instead of two pow calls; the last step's
+    // logarithm is kept.
+    const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
+    const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
     if (SunControllerRatio(ce, err, hbase, &eta)) {
       // the user's SUNAdaptController chose
     } else if (am.controller == CE_ADAPT_PI) {
-      eta = 0.9 * std::pow(e, -0.7 / k) * std::pow(ep / e, 0.4 / k);
+      eta = 0.9 * std::exp((-0.7 * le + 0.4 * (lep - le)) / k);  // e^(-0.7/k) (ep/e)^(0.4/k)
     } else {
-      eta = std::pow(e * ep, -1 / (kFilterB * k)) * std::pow(am.eta_prev, -1 / kFilterB);
+      eta = std::exp(-(le + lep) / (kFilterB * k) - std::log(am.eta_prev) / kFilterB);
     }
     am.err_prev = err;
+    am.lerr_prev = le;
   }
   // Small changes are not made: a step kept costs no new coefficients, plans or remap, and
   // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5).

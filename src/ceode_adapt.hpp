@@ -31,7 +31,7 @@ struct AdaptMem {
   sunrealtype hmax = 0;  // 0: no limit
   int maxnef = 7;
   int controller = CE_ADAPT_PI;
-  void* sun_controller = nullptr;  // SUNDIALS 7: the user's SUNAdaptController (not owned)
+  void* sun_controller = nullptr;          // SUNDIALS 7: the user's SUNAdaptController (not owned)
   CEodeStepScheduleFn schedule = nullptr;  // CEodeSetStepSchedule (tests)
   void* schedule_data = nullptr;
   sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step
@@ -62,10 +62,11 @@ struct AdaptMem {
   sunrealtype h0 = 0;     // the first step of the run
   sunrealtype err = 0;    // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
-  sunrealtype eta_prev = 1;  // the last accepted ratio (the filter's memory)
-  bool first = true;         // no step has passed an error test since the start
-  bool capped_last = false;  // the stable step decided the last step
-  long int nst_refresh = 0;  // nst at the last estimate of the frequency behind the cap
+  sunrealtype lerr_prev = 0;  // log(err_prev / the controller's target)
+  sunrealtype eta_prev = 1;   // the last accepted ratio (the filter's memory)
+  bool first = true;          // no step has passed an error test since the start
+  bool capped_last = false;   // the stable step decided the last step
+  long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
   // With constraints the solve at a node imposes the constraint one step ahead, so the step
   // after the next one is planned at each acceptance (docs/theory.md 12.6).
@@ -77,6 +78,7 @@ struct AdaptMem {
   KernelPlan plans[2];
   sunrealtype plan_h[2] = {};
   N_Vector plan_key[2] = {};
+  int plan_last = 1;  // the slot the last step ran
 
   // Counters
   long int netf = 0;

@@ -47,7 +47,7 @@ void PositionFromNode(CEodeMemRec* ce, AdaptMem& am, sunrealtype h, N_Vector out
   sunrealtype own[kMaxDegree + 1];
   const sunrealtype* tw = ce->co.tw;  // the step's own weights unless h is another
   if (h != ce->co.h) {
-    TaylorWeights(h, d, own);
+    TaylorWeightsByProducts(h, d, own);
     tw = own;
   }
   sunrealtype c[kMaxDegree + 2];
@@ -75,12 +75,21 @@ void PositionFromNode(CEodeMemRec* ce, AdaptMem& am, sunrealtype h, N_Vector out
 // step's plan without its position sum.
 // The plans of the two history configurations are kept while h stays.
 void UpdateDerivatives(CEodeMemRec* ce, AdaptMem* am) {
-  const int i = ce->D[1] == am->plan_key[0] ? 0 : 1;
+  // A configuration without a plan takes the slot the other configuration did not use last.
+  int i = ce->D[1] == am->plan_key[0] ? 0 : (ce->D[1] == am->plan_key[1] ? 1 : -1);
+  if (i < 0) i = 1 - am->plan_last;
+  am->plan_last = i;
   KernelPlan& kp = am->plans[i];
   if (am->plan_h[i] != ce->co.h || am->plan_key[i] != ce->D[1]) {
-    BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &kp.plan);
-    --kp.plan.n;
-    PreparePlan(am->kernels.serial, &kp);
+    // Another h on the same vectors changes only the coefficients.
+    const bool same_vectors = am->plan_key[i] == ce->D[1];
+    UpdatePlan plan;
+    BuildUpdatePlan(ce->degree, ce->co, ce->D, ce->Dnew, ce->xnext, ce->xnew, &plan);
+    --plan.n;
+    if (!same_vectors || !RefreshPlanCoefficients(plan, &kp)) {
+      kp.plan = plan;
+      PreparePlan(am->kernels.serial, &kp);
+    }
     am->plan_h[i] = ce->co.h;
     am->plan_key[i] = ce->D[1];
   }
@@ -166,7 +175,7 @@ void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn
     if (r.k == d - 1) top_shift += r.gamma * (hn - h);
   }
   sunrealtype tw[kMaxDegree + 1];
-  TaylorWeights(hn, d, tw);
+  TaylorWeightsByProducts(hn, d, tw);
   Co x = unit(0);
   for (int i = 1; i < d; ++i) axpy(tw[i], D[i], &x);
   axpy(-tw[d - 1] * (top_shift + (1 - ce->params[0]) * hn), yd, &x);
@@ -177,7 +186,7 @@ void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn
 
 // The step's coefficients for a new h.
 void SetStep(CEodeMemRec* ce, sunrealtype h) {
-  if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co);
+  if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co, true);
   ce->h = h;
 }
 

@@ -62,7 +62,10 @@ struct StepCoeffs {
   sunrealtype pred[kMaxDegree] = {};    // h^i/i!, i < d - 2: the predictor's weights of D_2..
   sunrealtype tw[kMaxDegree + 1] = {};  // h^i/i!, i < d: the position's Taylor weights
 };
-void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co);
+// With products, the Taylor weights by w[i] = w[i-1] s / i (the adaptive step, whose h changes
+// often); otherwise by pow, the values every fixed run has had.
+void ComputeStepCoeffs(int degree, const sunrealtype* params, sunrealtype h, StepCoeffs* co,
+                       bool products = false);
 
 // Finite-difference weights w of the q-th derivative at 0 on the m nodes x (Fornberg).
 void FornbergWeights(int q, int m, const sunrealtype* x, sunrealtype* w);
@@ -379,8 +382,10 @@ bool SerialBackend(const CEodeMemRec* ce);
 
 // ceode_method.cpp
 sunrealtype Factorial(int n);
-// w[i] = s^i / i!, i = 0 .. m-1, by the recurrence w[i] = w[i-1] * (s / i).
+// w[i] = s^i / i!, i = 0 .. m-1 (pow(s, i) / i!).
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w);
+// The same by products, w[i] = w[i-1] s / i: no pow call, other rounding.
+void TaylorWeightsByProducts(sunrealtype s, int m, sunrealtype* w);
 // The predicted acceleration at t: the Taylor polynomial of the history from t - h.
 void PredictAccel(const CEodeMemRec* ce, N_Vector a);
 // V0 of v(a) = V0 + kappa a: the part of the velocity at t the history fixes.

@@ -163,6 +163,10 @@ struct KernelPlan {
   bool serial = false;
 };
 void PreparePlan(bool serial_allowed, KernelPlan* kp);
+// kp with the coefficients of plan, a plan on the same vectors with the same terms (the same
+// step at another h): the raw-pointer form keeps its pointers. Returns false, leaving kp to be
+// prepared again, when the terms or a sum's form differ.
+bool RefreshPlanCoefficients(const UpdatePlan& plan, KernelPlan* kp);
 void RunPlan(const KernelPlan& kp, sunindextype n);
 
 // ---- The adaptive step's vector work (ceode_kernels_adapt.cpp) ----

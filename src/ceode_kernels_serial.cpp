@@ -583,6 +583,35 @@ void PreparePlan(bool serial_allowed, KernelPlan* kp) {
   kp->serial = serial_allowed && BuildFusedPlan(kp->plan, {}, &kp->fused);
 }
 
+namespace {
+
+bool SameTerms(const UpdatePlan& a, const UpdatePlan& b) {
+  if (a.n != b.n) return false;
+  for (int k = 0; k < a.n; ++k) {
+    const Combo& x = a.combos[k];
+    const Combo& y = b.combos[k];
+    if (x.m != y.m || x.old != y.old || x.out != y.out || x.level != y.level) return false;
+    if (!std::equal(x.X, x.X + x.m, y.X)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool RefreshPlanCoefficients(const UpdatePlan& plan, KernelPlan* kp) {
+  if (!SameTerms(plan, kp->plan)) return false;
+  bool same_forms = true;
+  for (int k = 0; k < plan.n; ++k) {
+    const Combo& cb = plan.combos[k];
+    std::copy(cb.c, cb.c + cb.m, kp->plan.combos[k].c);
+    if (!kp->serial) continue;
+    FusedTerms& tk = kp->fused.terms[k];
+    std::copy(cb.c, cb.c + cb.m, tk.c);  // the accumulated term's 1 stays
+    same_forms = same_forms && FormOf(tk.m, tk.c) == tk.form;
+  }
+  return same_forms;
+}
+
 void RunPlan(const KernelPlan& kp, sunindextype n) {
   if (kp.serial) {
     UpdateSerial(kp.fused, n);

@@ -125,11 +125,15 @@ int NumMethodSets() { return static_cast<int>(sizeof(kMethodSets) / sizeof(kMeth
 
 const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 
-void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co) {
+void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co, bool products) {
   *co = StepCoeffs{};
   co->h = h;
   sunrealtype* tw = co->tw;  // h^i / i!
-  TaylorWeights(h, d, tw);
+  if (products) {
+    TaylorWeightsByProducts(h, d, tw);
+  } else {
+    TaylorWeights(h, d, tw);
+  }
   // The predictor's weights, once per h: every step reads them (PredictAccel, SolvePC).
   std::copy(tw, tw + d - 2, co->pred);
   // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
@@ -158,6 +162,10 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
 // The first two weights are exactly 1 and s (pow(s, 0) and pow(s, 1) are exact): no pow call.
 void TaylorWeights(sunrealtype s, int m, sunrealtype* w) {
   for (int i = 0; i < m; ++i) w[i] = i == 0 ? 1 : (i == 1 ? s : std::pow(s, i) / Factorial(i));
+}
+
+void TaylorWeightsByProducts(sunrealtype s, int m, sunrealtype* w) {
+  for (int i = 0; i < m; ++i) w[i] = i == 0 ? 1 : w[i - 1] * s / i;
 }
 
 void PredictAccel(const CEodeMemRec* ce, N_Vector a) {
