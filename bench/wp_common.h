@@ -220,7 +220,16 @@ class Table {
     std::printf("%-16s %-14s %9.2e   (%s)\n", solver.c_str(), config.c_str(), h_or_tol, why);
     ++nfail_;
   }
+  // A run that ended with the solver's own failure flag (an adaptive run that gives up at a
+  // tolerance, say): a result to show, not a failed check.
+  void Flagged(const std::string& solver, const std::string& config, double h_or_tol,
+               const char* flag_name) {
+    std::printf("%-16s %-14s %9.2e   (returned %s: a result, not a failed check)\n",
+                solver.c_str(), config.c_str(), h_or_tol, flag_name);
+    ++nflagged_;
+  }
   int failures() const { return nfail_; }
+  int flagged() const { return nflagged_; }
   const std::vector<Row>& rows() const { return rows_; }
 
  private:
@@ -228,6 +237,7 @@ class Table {
   std::vector<Row> rows_;
   FILE* csv_ = nullptr;
   int nfail_ = 0;
+  int nflagged_ = 0;
 };
 
 // --------------------------------------------------------------- equal error
@@ -521,6 +531,7 @@ struct Outcome {
   double error = 0, drift = 0;
   long steps = 0, rhs_evals = 0;
   long jac_evals = 0, lin_setups = 0;  // CEODE: iteration-matrix evaluations, factorisations
+  int flag = 0;                        // CEODE: CEodeEvolve's failure flag, when it returned one
 };
 
 // Keeps the largest error and drift over the instants a runner observes.
@@ -702,7 +713,8 @@ inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double
   const double* vd = N_VGetArrayPointer(o.v);
   if (outputs) {
     for (int k = 1; k <= p.nout && !bad; ++k) {
-      bad = Failed(CEodeEvolve(mem, OutputTime(p, k), o.x, o.v, &t, CE_NORMAL), "CEodeEvolve");
+      out->flag = CEodeEvolve(mem, OutputTime(p, k), o.x, o.v, &t, CE_NORMAL);
+      bad = Failed(out->flag, "CEodeEvolve");
       if (!bad) tr.Output(k, xd);
       if (!bad && xs != nullptr) xs->emplace_back(xd, xd + p.n);
     }
@@ -711,7 +723,8 @@ inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double
   const double margin = c.adaptive ? 1e-12 * std::max(1.0, std::fabs(p.tend)) : 0.5 * h;
   while (!outputs && !bad && t < p.tend - margin) {
     // One step at a time: x and x' are then known at the same instant.
-    bad = Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve");
+    out->flag = CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP);
+    bad = Failed(out->flag, "CEodeEvolve");
     if (!bad) tr.Step(t, xd, vd);
   }
   CeodeStats s;
@@ -1036,14 +1049,21 @@ inline Row OutcomeRow(const std::string& solver, const std::string& config, doub
   return Row{solver, config, h_or_tol, o.error, o.drift, o.steps, o.rhs_evals, seconds};
 }
 
-// Runs once for the numbers, then times the same call; adds a row or a failure.
+// Runs once for the numbers, then times the same call; adds a row or a failure. With
+// flag_is_result, a run that ends with CEODE's own failure flag is a flagged result instead.
 // Returns true when the row was added; *got (if given) receives the figures.
 template <class F>
 bool Measure(Table* table, const std::string& solver, const std::string& config, double h_or_tol,
-             F&& once, Outcome* got = nullptr) {
+             F&& once, Outcome* got = nullptr, bool flag_is_result = false) {
   Outcome o;
   if (once(&o) != 0) {
-    table->Fail(solver, config, h_or_tol, "failed or unstable");
+    if (flag_is_result && o.flag < 0) {
+      char* name = CEodeGetReturnFlagName(o.flag);  // the caller owns it
+      table->Flagged(solver, config, h_or_tol, name != nullptr ? name : "a failure flag");
+      std::free(name);
+    } else {
+      table->Fail(solver, config, h_or_tol, "failed or unstable");
+    }
     return false;
   }
   Outcome scratch;
@@ -1171,8 +1191,9 @@ inline void PrintAdaptStats(const std::string& config, double tol, const Outcome
 }
 
 // The curve in one-step (or output) mode, configuration by configuration (Measure); the outcome
-// of every run that succeeded goes to *got_all (if given). Returns the failed runs (also failure
-// rows of the table).
+// of every run that succeeded goes to *got_all (if given). A run that ends with CEODE's failure
+// flag (the controller gives up at a tolerance) is a flagged result. Returns the runs that failed
+// otherwise (also failure rows of the table).
 inline int MeasureTolCurve(Table* table, SUNContext ctx, const Problem& p, const TolCurve& c,
                            std::vector<Outcome>* got_all = nullptr) {
   CeodeOpts opts = c.opts;
@@ -1182,10 +1203,11 @@ inline int MeasureTolCurve(Table* table, SUNContext ctx, const Problem& p, const
   for (double tol : c.tols) {
     CeodeStats st;  // the numbers run's; the timed calls overwrite it with the same figures
     Outcome got;
+    const int flagged = table->flagged();
     if (!Measure(
             table, "CEODE", config, tol,
-            [&](Outcome* o) { return CeodeRun(ctx, p, opts, tol, o, &st); }, &got)) {
-      ++failed;
+            [&](Outcome* o) { return CeodeRun(ctx, p, opts, tol, o, &st); }, &got, true)) {
+      if (table->flagged() == flagged) ++failed;
       continue;
     }
     PrintAdaptStats(config, tol, got, st);

@@ -336,8 +336,13 @@ void RunPoint(Scene* sc, const Config& c, double h) {
     p.init_step = sc->ida.init_step;
     const wp::TolCurve curve{c.name, wp::CeodeOpts(c.method), {h}};
     std::vector<wp::Outcome> got;
-    ok = wp::MeasureTolCurve(sc->table, sc->ctx, p, curve, &got) == 0;
-    if (ok) o = got.back();
+    if (wp::MeasureTolCurve(sc->table, sc->ctx, p, curve, &got) != 0) {
+      ++sc->bad;
+      return;
+    }
+    if (got.empty()) return;  // a flagged result: no row to check
+    ok = true;
+    o = got.back();
   } else if (c.kind == Config::kIda) {
     ok = wp::MeasureIda(sc->table, sc->ctx, sc->ida, h, c.name, &o);
   } else {
