@@ -224,8 +224,8 @@ class Table {
   // tolerance, say): a result to show, not a failed check.
   void Flagged(const std::string& solver, const std::string& config, double h_or_tol,
                const char* flag_name) {
-    std::printf("%-16s %-14s %9.2e   (returned %s: a result, not a failed check)\n",
-                solver.c_str(), config.c_str(), h_or_tol, flag_name);
+    std::printf("%-16s %-14s %9.2e   (returned %s: a result, not a failed check)\n", solver.c_str(),
+                config.c_str(), h_or_tol, flag_name);
     ++nflagged_;
   }
   int failures() const { return nfail_; }
@@ -291,8 +291,9 @@ inline void PrintEqualError(const Table& table, const std::vector<double>& level
   }
   std::printf("\ntime at equal error (best curve per side; ratio CEODE / side):\n%9s", "error");
   for (int s = 0; s < 4; ++s) {
-    if (present[s]) std::printf(" %-30s %11s%s", (std::string("best ") + kSide[s]).c_str(),
-                                "seconds", s > 0 ? "    ratio" : "");
+    if (present[s])
+      std::printf(" %-30s %11s%s", (std::string("best ") + kSide[s]).c_str(), "seconds",
+                  s > 0 ? "    ratio" : "");
   }
   std::printf("\n");
   for (double e : levels) {
@@ -452,7 +453,7 @@ struct Problem {
   CEodeRhsFn f2 = nullptr;  // CEODE
   ARKRhsFn f1 = nullptr;    // y' = (v, a) on y = (x, v)
   // -- the first-order form's extras --
-  ARKRhsFn fe = nullptr, fi = nullptr;  // IMEX split of f1 (fi stiff, implicit)
+  ARKRhsFn fe = nullptr, fi = nullptr;        // IMEX split of f1 (fi stiff, implicit)
   bool fi_linear = false, f1_linear = false;  // ARKStepSetLinear
   CVLsJacFn jac1 = nullptr;                   // CSR Jacobian of f1 (CVODE BDF + KLU)
   long jac_nnz = 0;
@@ -561,7 +562,7 @@ struct Track {
 // the Newton iteration's linear solver (kNone: CEODE's own choice).
 struct CeodeOpts {
   explicit CeodeOpts(const char* set = "G3_CD") : method(set) {}
-  const char* method;  // a name CEodeSetMethodByName knows (a literal: runs may be queued)
+  const char* method;       // a name CEodeSetMethodByName knows (a literal: runs may be queued)
   bool zero_start = false;  // one-step mode only
   bool vel = false;
   enum Ls { kDense, kSpgmr, kNone } ls = kDense;
@@ -827,7 +828,7 @@ enum class Sun {
 
 struct SunOpts {
   Sun kind = Sun::kErk;
-  int order = 0;                        // ERK adaptive: ERKStepSetOrder (0: default)
+  int order = 0;                       // ERK adaptive: ERKStepSetOrder (0: default)
   ARKodeButcherTable table = nullptr;  // kErkFixed
   double atol_factor = 1;              // atol = atol_factor * rtol
 };
@@ -985,8 +986,8 @@ inline int SundialsRun(SUNContext ctx, const Problem& p, const SunOpts& c, doubl
     if (!bad) tr.Output(k, Y);
   }
   // Fixed steps end half a step before tend (as CeodeRun), adaptive ones at tend.
-  const double margin = c.kind == Sun::kErkFixed ? 0.5 * h_or_rtol
-                                                 : 1e-12 * std::max(1.0, std::fabs(p.tend));
+  const double margin =
+      c.kind == Sun::kErkFixed ? 0.5 * h_or_rtol : 1e-12 * std::max(1.0, std::fabs(p.tend));
   while (p.nout == 0 && !bad && t < p.tend - margin) {
     bad = Failed(SunEvolve(o, p.tend, &t, true), "Evolve");
     if (!bad) tr.Step(t, Y, Y + p.n);
@@ -1295,9 +1296,9 @@ inline void SundialsCurves(SUNContext ctx, const Problem* p, const std::vector<S
                            const std::vector<double>& tols, double max_seconds, Rounds* rounds) {
   for (const SunCurve& c : curves) {
     for (double tol : tols) {
-      const double first = rounds->Measure(
-          c.solver, c.config, tol,
-          [ctx, p, c, tol](Outcome* o) { return SundialsRun(ctx, *p, c.opts, tol, o); });
+      const double first = rounds->Measure(c.solver, c.config, tol, [ctx, p, c, tol](Outcome* o) {
+        return SundialsRun(ctx, *p, c.opts, tol, o);
+      });
       if (first < 0 || first > max_seconds) break;
     }
   }
