@@ -1,4 +1,4 @@
-// Consistent initial conditions of the constrained problem (docs/theory.md section 8.6): the
+// Consistent initial conditions of the constrained problem (docs/theory.md section 8.5): the
 // first start's check that x0 lies on Phi(x, t0) = 0 and v0 on G(x0) v = -Phi_t(x0, t0), and
 // CEodeCalcIC, which projects them there (IDACalcIC's counterpart).
 //

@@ -1,6 +1,6 @@
 // Consistent initial conditions of a constrained problem: the first start's check of x0 against
 // Phi(x, t0) = 0 and of v0 against G v = -Phi_t (CE_INCONSISTENT_IC and its message), and
-// CEodeCalcIC's projection (docs/theory.md section 8.6).
+// CEodeCalcIC's projection (docs/theory.md section 8.5).
 //
 // Problems: the Cartesian pendulum x = (p, q), M = I, f = (0, -g), Phi = p^2 + q^2 - L^2, whose
 // minimum-norm projections are known in closed form (x radially onto the circle, v onto its
