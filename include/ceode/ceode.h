@@ -92,9 +92,9 @@ extern "C" {
  *   CE_VELOCITY_DETECT       at every (re)start one directional difference of f in
  *                            x' decides: the implicit step when f depends on x', the
  *                            explicit one otherwise.
- * When no velocity mode is set, the step is explicit and the first start checks
- * once per right-hand side whether f depends on x'; if it does, CEODE warns
- * (CE_WARNING) and keeps the explicit step. */
+ * When no velocity mode is set (default), the first start makes the same check
+ * once per right-hand side function (not again at restarts or CEodeReInit) and
+ * switches the implicit step on when f depends on x'. */
 typedef enum {
   CE_VELOCITY_INDEPENDENT = 0,
   CE_VELOCITY_DEPENDENT = 1,
