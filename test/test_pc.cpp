@@ -651,6 +651,34 @@ TEST(VelocityDetection, SwitchesOnTheImplicitStepAndKeepsTheSecondOrder) {
   EXPECT_NEAR(p_explicit, 1, 0.2);
 }
 
+// The same for a fourth-order set: without a declaration the order is the set's (it was 1 when the
+// default kept the explicit step), and the errors are those of the declared dependence.
+TEST(VelocityDetection, GivesAFourthOrderSetItsOrderWithoutADeclaration) {
+  DampedForced prob;
+  const std::vector<double> hs = ConvergenceSteps(0.08);
+  std::vector<double> e_default, e_explicit;
+  for (double h : hs) {
+    Config c;
+    c.method = "G5_O4";
+    c.h = h;
+    const Outcome declared = Integrate(prob, c);
+    c.vel = -1;
+    const Outcome dflt = Integrate(prob, c);
+    c.vel = CE_VELOCITY_INDEPENDENT;
+    const Outcome expl = Integrate(prob, c);
+    ASSERT_EQ(dflt.flag, CE_SUCCESS);
+    ASSERT_EQ(expl.flag, CE_SUCCESS);
+    EXPECT_EQ(MaxDiff(dflt.x, declared.x), 0);
+    e_default.push_back(dflt.err_x);
+    e_explicit.push_back(expl.err_x);
+    std::printf(
+        "[ detect   ] G5_O4 h = %-7g max error in x: default %.2e, declared independent %.2e\n", h,
+        dflt.err_x, expl.err_x);
+  }
+  EXPECT_NEAR(FitOrder(hs, e_default), 4, kOrderTol);
+  EXPECT_NEAR(FitOrder(hs, e_explicit), 1, 0.2);
+}
+
 TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
   Harmonic prob;
   Config c;
