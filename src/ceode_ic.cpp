@@ -96,10 +96,12 @@ int EvalG(IcWork* w, sunrealtype t, N_Vector x, const char* func) {
   ++ce->con.nge;
   std::fill(w->gnorm.begin(), w->gnorm.end(), SUN_RCONST(0.0));
   bool finite = true;
-  ForEachEntry(w->G, [&](sunindextype r, sunindextype, sunrealtype v) {
-    finite &= std::isfinite(v);
-    w->gnorm[r] += v * v;
-  });
+  if (rv == 0) {  // a failed call may leave a sparse G's index arrays half written
+    ForEachEntry(w->G, [&](sunindextype r, sunindextype, sunrealtype v) {
+      finite &= std::isfinite(v);
+      w->gnorm[r] += v * v;
+    });
+  }
   if (rv != 0 || !finite) {
     return ProcessError(ce, CE_CONSTR_FAIL, func,
                         "The constraint Jacobian function %s at t = %.17g while CEODE checked or "
@@ -157,6 +159,9 @@ Offset LargestOffset(const IcWork& w, N_Vector r) {
   }
   return o;
 }
+
+// The constrained step's requirement (ConstrInitialize): local data on one process.
+bool LocalData(N_Vector v) { return N_VGetArrayPointer(v) != nullptr && sun::IsLocal(v); }
 
 // The velocity scale of the consistency test: |v|_max, or the driving speed |Phi_t,i| / |G_i|.
 sunrealtype VelocityScale(const IcWork& w, N_Vector v) {
@@ -259,10 +264,10 @@ int CheckCalcICInput(CEodeMemRec* ce, const char* func, int what) {
                         "No constraints are set (CEodeSetConstraints): there is nothing to "
                         "project the initial conditions onto.");
   }
-  if (N_VGetArrayPointer(ce->xcur) == nullptr || N_VGetArrayPointer(ce->con.phi) == nullptr) {
+  if (!LocalData(ce->xcur) || !LocalData(ce->con.phi)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The projection needs state and constraint vectors with local data "
-                        "(N_VGetArrayPointer), as the constrained step does.");
+                        "on one process (serial, OpenMP, Pthreads), as the constrained step does.");
   }
   int flag = ValidateMassMatrix(ce, func, ce->ls.M);
   if (flag == CE_SUCCESS) flag = ValidateLinearSolver(ce, func, ce->ls.LS, ce->ls.A, true);
@@ -303,7 +308,7 @@ void IcRequestCheck(CEodeMemRec* ce) {
 
 int IcCheck(CEodeMemRec* ce, const char* func) {
   if (!ce->ic.pending || !HasConstraints(ce)) return CE_SUCCESS;
-  if (N_VGetArrayPointer(ce->xcur) == nullptr || N_VGetArrayPointer(ce->con.phi) == nullptr) {
+  if (!LocalData(ce->xcur) || !LocalData(ce->con.phi)) {
     return CE_SUCCESS;  // refused by the constraint solver with its own message
   }
   IcWork w(ce);
@@ -324,8 +329,7 @@ int IcCheck(CEodeMemRec* ce, const char* func) {
     ce->ic.pending = false;
     return CE_SUCCESS;
   }
-  return ReportInconsistent(ce, func, pos_ok ? nullptr : &pos, tolx, vel_ok ? nullptr : &vel,
-                            tolv);
+  return ReportInconsistent(ce, func, pos_ok ? nullptr : &pos, tolx, vel_ok ? nullptr : &vel, tolv);
 }
 
 }  // namespace ceode
