@@ -115,6 +115,21 @@ TEST(InitialConsistency, AVelocityAcrossTheConstraintIsRefusedNamingTheVelocityC
   EXPECT_FALSE(Contains(msg, "position constraints")) << msg;
 }
 
+TEST(InitialConsistency, APositionAndAVelocityBothOffAreNamedInOneMessage) {
+  PendulumStart s(1.1, -0.2, 0.3, 0.5);
+  EXPECT_EQ(s.Evolve(0.01), CE_INCONSISTENT_IC);
+  const std::string msg = s.Message();
+  EXPECT_TRUE(Contains(msg, "x0 is off the position constraints")) << msg;
+  EXPECT_TRUE(Contains(msg, "v0 violates the velocity constraint")) << msg;
+  EXPECT_TRUE(Contains(msg, "CEodeCalcIC(mem, CE_IC_POSITION | CE_IC_VELOCITY)")) << msg;
+  // after CEodeReInit at a consistent state the check passes and the run starts
+  Vector x = SerialVector(2, s.ctx), v = SerialVector(2, s.ctx);
+  N_VGetArrayPointer(x.get())[1] = -1;
+  N_VGetArrayPointer(v.get())[0] = 0.5;  // tangent at the bottom
+  ASSERT_EQ(CEodeReInit(s.mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(s.Evolve(0.01), CE_SUCCESS) << s.Message();
+}
+
 // The threshold is sqrt(uround) |x0|_max = 1.49e-8 here: an offset of 1e-10 (round-off of data
 // computed in double precision is 1e-16) starts, one of 1e-7 is refused.
 TEST(InitialConsistency, AcceptsOffsetsBelowSqrtUroundAndRefusesThoseAbove) {
