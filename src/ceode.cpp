@@ -114,8 +114,11 @@ int Prepare(CEodeMemRec* ce, const char* func) {
         "No step size: call CEodeSetFixedStep(mem, h) with h > 0 before CEodeEvolve.");
   }
   if (ce->started) return CE_SUCCESS;
-  int flag = NeedsSolverWork(ce) ? AllocSolverWork(ce, func) : CE_SUCCESS;
+  // First: a detected velocity dependence needs the solvers and checks of a declared one.
+  int flag = DetectVelocityDependence(ce);
+  if (flag == CE_SUCCESS && NeedsSolverWork(ce)) flag = AllocSolverWork(ce, func);
   if (flag == CE_SUCCESS) flag = ValidateConfiguration(ce, func);
+  if (flag == CE_SUCCESS) flag = IcCheck(ce, func);
   if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   if (flag != CE_SUCCESS) return flag;
   flag = NlsInitialize(ce, func);
@@ -208,6 +211,7 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
   if (counters) {
     ce->nst = ce->nfe = ce->nfe_start = 0;
     ConstrReset(ce);
+    IcRequestCheck(ce);  // the user's new initial conditions
   }
   LsReset(ce, counters);
   NlsReset(ce, counters);
@@ -230,6 +234,7 @@ int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0,
   ce->n = N_VGetLength(x0);
   ce->f = f;
   ce->initialized = true;
+  PcSetVelocityRequest(ce, ce->pc.vel_request);  // a new problem: its f is probed anew
   return CEodeReInit(ce, t0, x0, v0);
 }
 

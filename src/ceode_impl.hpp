@@ -197,12 +197,14 @@ struct PcMem {
   int corrections = 0;                 // 0: k_default
   int k_default = 1;                   // with the method (DefaultPCCorrections)
   int vel_request = -1;                // CEodeSetVelocityDependence's value; -1: never called
-  CEodeRhsFn vel_checked_f = nullptr;  // f already probed for an undeclared dependence
+  CEodeRhsFn vel_checked_f = nullptr;  // f already probed (no mode set: once per f)
+  bool vel_detected = false;           // the last probe found a dependence
   sunrealtype coupling = 0;            // last estimate of kappa ||M^{-1} df/dv|| (0: none)
   sunrealtype theta = 0;               // last measured contraction of the corrections (0: none)
   bool theta_last = false;             // theta is newer than coupling
   bool serial = false;                 // the velocity combinations run on the serial backend
   long int nsteps = 0;                 // steps solved by prediction-correction
+  long int ncorr = 0;                  // its evaluation-corrections (one f each)
   long int nfe = 0;                    // f evaluations of the detection and the checks
 };
 
@@ -239,6 +241,13 @@ struct ConstrMem {
   long int nsetups = 0;
   long int nsolves = 0;
   void* work = nullptr;  // the saddle-point workspace
+};
+
+// Consistent initial conditions of the constrained problem (ceode_ic.cpp).
+struct IcMem {
+  bool pending = false;  // the next start checks x0, v0 (set by CEodeInit and CEodeReInit)
+  sunrealtype dx = 0;    // the last CEodeCalcIC's move of x (max norm)
+  sunrealtype dv = 0;    // and of v
 };
 
 }  // namespace ceode
@@ -312,6 +321,7 @@ struct CEodeMemRec {
   ceode::PcMem pc;
   ceode::GuardMem guard;
   ceode::ConstrMem con;
+  ceode::IcMem ic;
 
   // Counters of the integrator itself
   long int nst = 0;
@@ -472,6 +482,11 @@ void PcReset(CEodeMemRec* ce, bool counters);  // its estimates; with counters, 
 void PcFree(CEodeMemRec* ce);
 void PcMethodChanged(CEodeMemRec* ce);  // the default number of corrections of the new set
 void PcSetVelocityRequest(CEodeMemRec* ce, int request);  // CEodeSetVelocityDependence
+// Before the solvers are set up (Prepare): the start's probe of f in x' when no dependence was
+// declared; a detected one sets vel_dependent, as a declaration does.
+int DetectVelocityDependence(CEodeMemRec* ce);
+// How the dependence was decided, for the statistics: declared, none (declared), detected, none.
+const char* VelocityDependenceName(const CEodeMemRec* ce);
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func);  // CE_IMPLICIT_AUTO: PC or the nonlinear solver, refreshed
 
@@ -486,6 +501,11 @@ void ConstrReset(CEodeMemRec* ce);  // zeroes its counters (CEodeReInit)
 // Error control: x(t + h_next; a) = xoff[0] x(t) + sum_j xoff[j] D_j + mu a for the step's own
 // pair of steps (kMaxDegree weights), until the next start.
 void ConstrSetStepPosition(CEodeMemRec* ce, const sunrealtype* xoff, sunrealtype mu);
+
+// ceode_ic.cpp: the consistency check of x0, v0 at the first start after CEodeInit/CEodeReInit
+// (requested by them), CE_INCONSISTENT_IC with the constraint that is off.
+void IcRequestCheck(CEodeMemRec* ce);
+int IcCheck(CEodeMemRec* ce, const char* func);
 
 // ceode_guard.cpp: the runtime check, without side effects on the integration
 int GuardCheck(CEodeMemRec* ce, const char* func);

@@ -289,6 +289,14 @@ int CEodeGetNumConstrEvals(void* mem, long int* n) {
 int CEodeGetNumConstrJacEvals(void* mem, long int* n) {
   return GetValue<long int>(mem, __func__, n, [](const CEodeMemRec& ce) { return ce.con.nge; });
 }
+int CEodeGetNumPCSteps(void* mem, long int* npcsteps) {
+  return GetValue<long int>(mem, __func__, npcsteps,
+                            [](const CEodeMemRec& ce) { return ce.pc.nsteps; });
+}
+int CEodeGetNumPCCorrections(void* mem, long int* npccorr) {
+  return GetValue<long int>(mem, __func__, npccorr,
+                            [](const CEodeMemRec& ce) { return ce.pc.ncorr; });
+}
 int CEodeGetMaxFrequencyEstimate(void* mem, sunrealtype* omega_max) {
   return GetValue<sunrealtype>(mem, __func__, omega_max,
                                [](const CEodeMemRec& ce) { return ce.guard.omega_est; });
@@ -321,6 +329,8 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"RHS fn evals in start", static_cast<double>(ce->nfe_start), true},
       {"RHS fn evals in stability guard", static_cast<double>(ce->guard.nfe), true},
       {"NLS iters", static_cast<double>(Nni(*ce)), true},
+      {"PC steps", static_cast<double>(ce->pc.nsteps), true},
+      {"PC corrections", static_cast<double>(ce->pc.ncorr), true},
       {"NLS fails", static_cast<double>(Nnf(*ce)), true},
       {"LS setups", static_cast<double>(Nsetups(*ce)), true},
       {"LS solves", static_cast<double>(Nsolves(*ce)), true},
@@ -331,11 +341,11 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Constraint Jac evals", static_cast<double>(ce->con.nge), true},
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
       {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
-      {"Steps limited by stability",
-       static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
+      {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
+    std::fprintf(outfile, "%-28s = %s\n", "Velocity dependence", ceode::VelocityDependenceName(ce));
     for (const Row& r : rows) {
       if (r.integer) {
         std::fprintf(outfile, "%-28s = %ld\n", r.name, static_cast<long>(r.value));
@@ -344,7 +354,8 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       }
     }
   } else if (fmt == SUN_OUTPUTFORMAT_CSV) {
-    std::fprintf(outfile, "Method,%s", ce->method_name.c_str());
+    std::fprintf(outfile, "Method,%s,Velocity dependence,%s", ce->method_name.c_str(),
+                 ceode::VelocityDependenceName(ce));
     for (const Row& r : rows) {
       if (r.integer) {
         std::fprintf(outfile, ",%s,%ld", r.name, static_cast<long>(r.value));
@@ -391,6 +402,7 @@ const char* ceode::FlagName(long int flag) {
       {CE_BAD_T, "CE_BAD_T"},
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
       {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
+      {CE_INCONSISTENT_IC, "CE_INCONSISTENT_IC"},
   };
   for (const auto& entry : kNames) {
     if (entry.flag == flag) return entry.name;

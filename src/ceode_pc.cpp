@@ -60,11 +60,21 @@ int CountedRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector 
   return CE_SUCCESS;
 }
 
-// a = M^{-1} f(t, x, v) for a check, with f counted as CountedRhs counts it.
+// a = M^{-1} f(t, x, v) for a check inside a step, with f counted as CountedRhs counts it. M is
+// the step's: its first correction evaluated it at the step's position x.
 int CheckAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
                const char* func) {
-  int flag = MassUpdate(ce, t, x, func);
-  if (flag == CE_SUCCESS) flag = CountedRhs(ce, t, x, v, a, func);
+  const int flag = CountedRhs(ce, t, x, v, a, func);
+  return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
+}
+
+// A correction after the step's first: a = M^{-1} f(t, x, v) with the M of that first one. The
+// position of a step is known before its solve, so a position-dependent M is evaluated and
+// factored once per step, not once per correction.
+int CorrectionAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
+                    const char* func) {
+  ++ce->pc.ncorr;
+  const int flag = EvalRhs(ce, t, x, v, a, func);
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
 }
 
@@ -142,43 +152,12 @@ int EstimateCoupling(CEodeMemRec* ce, const char* func) {
   return flag;
 }
 
-// The implicit path was off: one directional difference says whether f depends on x'. Detection
-// switches the implicit step on (checked at every restart); a user who never declared anything
-// is warned once per right-hand side function (restarts and CEodeReInit do not probe again).
-int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
-  const bool detect = ce->pc.vel_request == CE_VELOCITY_DETECT;
-  if (ce->vel_dependent ||
-      !(detect || (ce->pc.vel_request < 0 && ce->pc.vel_checked_f != RhsIdentity(ce)))) {
-    return CE_SUCCESS;
-  }
-  // Vectors of every run (AllocVectors): an explicit run clones no solver work for this check.
-  N_Vector u = ce->atmp, fbase = ce->tmp2;
-  int flag = FirstProbe(ce, ce->tmp3, u, fbase, func);
-  if (flag != CE_SUCCESS) return flag;
-  // Once per right-hand side, not at every restart.
-  if (!detect) ce->pc.vel_checked_f = RhsIdentity(ce);
-  const sunrealtype sig = ProbeIncrement(ce->D[1]);
-  const sunrealtype df = sig * MaxNormOrNaN(u);  // the change of f itself
-  const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * N_VMaxNorm(fbase);
-  if (!(df > floor)) return CE_SUCCESS;  // also for NaN: the start's checks report those
-  ce->pc.coupling = std::fabs(ce->co.kappa) * MaxNormOrNaN(u);
-  ce->pc.theta_last = false;
-  if (!detect) {
-    ProcessError(ce, CE_WARNING, func,
-                 "f depends on the velocity x' (a change of x' by %.2g changed f by %.2g at "
-                 "t0 = %.17g; kappa*|df/dv w| = %.2g) but CEodeSetVelocityDependence was not "
-                 "called: the explicit step feeds f the previous step's velocity, which drops "
-                 "every method to first order. Call CEodeSetVelocityDependence(mem, SUNTRUE), "
-                 "or CEodeSetVelocityMode(mem, CE_VELOCITY_DETECT) to let CEODE switch the "
-                 "implicit step on; SUNFALSE keeps the explicit step and silences this check.",
-                 static_cast<double>(sig), static_cast<double>(df), static_cast<double>(ce->tcur),
-                 static_cast<double>(ce->pc.coupling));
-    return CE_SUCCESS;
-  }
-  ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
-  flag = AllocSolverWork(ce, func);
-  if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
-  return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
+// Whether this start probes f for a velocity dependence: CE_VELOCITY_DETECT at every start; no
+// mode set (the default), once per right-hand side function (restarts and CEodeReInit keep the
+// answer); a declared dependence or independence never.
+bool ProbeWanted(const CEodeMemRec* ce) {
+  if (ce->pc.vel_request == CE_VELOCITY_DETECT) return true;
+  return ce->pc.vel_request < 0 && ce->pc.vel_checked_f != RhsIdentity(ce);
 }
 
 // AUTO's check after a step of the nonlinear solver at (t, x): the solver's last residual
@@ -218,6 +197,31 @@ __attribute__((always_inline)) inline void VelocityCombination(const CEodeMemRec
 
 }  // namespace
 
+// One directional difference of f in x' at (t0, x0, v0), before the solvers are set up, so that a
+// detected dependence goes through the same validation and initialisation as a declared one
+// (Prepare). Its two f evaluations are counted apart from the steps' (CEodeGetImplicitStats). A
+// failing or non-finite probe decides nothing: the start evaluates f again and reports it.
+int DetectVelocityDependence(CEodeMemRec* ce) {
+  if (!ProbeWanted(ce)) return CE_SUCCESS;
+  N_Vector w = ce->tmp3, u = ce->atmp, fbase = ce->tmp2;  // vectors of every run
+  ProbeDirection(w);
+  N_VScale(1 / N_VMaxNorm(w), w, w);
+  N_VLinearSum(1, ce->D[1], ProbeIncrement(ce->D[1]), w, ce->vtmp);
+  ce->pc.nfe += 2;
+  if (CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], fbase) != 0 ||
+      CallRhs(ce, ce->tcur, ce->xcur, ce->vtmp, u) != 0) {
+    return CE_SUCCESS;
+  }
+  N_VLinearSum(1, u, -1, fbase, u);
+  const sunrealtype df = MaxNormOrNaN(u);  // the change of f itself
+  const sunrealtype floor = kDependenceUlps * SUN_UNIT_ROUNDOFF * MaxNormOrNaN(fbase);
+  if (!std::isfinite(df) || !std::isfinite(floor)) return CE_SUCCESS;
+  ce->pc.vel_checked_f = RhsIdentity(ce);
+  ce->vel_dependent = df > floor;
+  ce->pc.vel_detected = ce->vel_dependent;
+  return CE_SUCCESS;
+}
+
 // One correction leaves an error of global order d - 1 (section 4.3): enough for a set whose
 // order in x or x' is below d, one order short for a set of order d in both (G4_A54, measured
 // 3.06 with one correction against 4 with Newton, test_pc). From degree 5 on one correction
@@ -247,16 +251,14 @@ int ImplicitMode(const CEodeMemRec* ce) {
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   // The velocity combinations' backend, once per start (the step module's rule).
   ce->pc.serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
-  if (HasConstraints(ce)) return CE_SUCCESS;
-  int flag = CheckVelocityDependence(ce, func);
-  if (flag != CE_SUCCESS || !ce->vel_dependent) return flag;
+  if (HasConstraints(ce) || !ce->vel_dependent) return CE_SUCCESS;
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
   if (ce->pc.dir == nullptr && (ce->pc.dir = N_VClone(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
-  flag = EstimateCoupling(ce, func);
+  const int flag = EstimateCoupling(ce, func);
   ce->pc.active = flag == CE_SUCCESS && ce->pc.coupling <= kPcContractionLimit;
   SetImplicitSolve(ce, SolveKind::kAuto);
   return flag;
@@ -288,7 +290,7 @@ int NextCorrection(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, bool 
   CorrectedVelocity(ce, a);
   N_VLinearSum(1, ce->vtmp, -1, ce->ycor, ce->ycor);
   // keep: the step's own last correction; otherwise one more, for the check only.
-  const int flag = keep ? EvalAccel(ce, t, x, ce->vtmp, a, func)
+  const int flag = keep ? CorrectionAccel(ce, t, x, ce->vtmp, a, func)
                         : CheckAccel(ce, t, x, ce->vtmp, ce->atmp, func);
   if (keep) {
     N_VLinearSum(1, a, -1, ce->atmp, ce->atmp);
@@ -315,13 +317,14 @@ int CorrectPC(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k, sun
     X[j - 1] = ce->D[j];
   }
   VelocityCombination(ce, d - 1, c, X, ce->vtmp);
-  int flag = EvalAccel(ce, t, x, ce->vtmp, a, func);
+  ++ce->pc.ncorr;
+  int flag = EvalAccel(ce, t, x, ce->vtmp, a, func);  // M(x, t) of the step, once
   for (int i = 2; i <= k && flag == CE_SUCCESS; ++i) {
     if (theta != nullptr && i == k) {
       flag = NextCorrection(ce, t, x, a, true, func);
     } else {
       CorrectedVelocity(ce, a);
-      flag = EvalAccel(ce, t, x, ce->vtmp, a, func);
+      flag = CorrectionAccel(ce, t, x, ce->vtmp, a, func);
     }
   }
   if (flag != CE_SUCCESS || theta == nullptr) return flag;
@@ -378,7 +381,7 @@ int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_V
 
 void PcReset(CEodeMemRec* ce, bool counters) {
   PcMem& pc = ce->pc;
-  if (counters) pc.nsteps = pc.nfe = 0;
+  if (counters) pc.nsteps = pc.ncorr = pc.nfe = 0;
   pc.coupling = pc.theta = 0;
   pc.theta_last = false;
 }
@@ -395,6 +398,13 @@ void PcMethodChanged(CEodeMemRec* ce) {
 void PcSetVelocityRequest(CEodeMemRec* ce, int request) {
   ce->pc.vel_request = request;
   ce->pc.vel_checked_f = nullptr;
+  ce->pc.vel_detected = false;
+}
+
+const char* VelocityDependenceName(const CEodeMemRec* ce) {
+  if (ce->pc.vel_request == CE_VELOCITY_DEPENDENT) return "declared";
+  if (ce->pc.vel_request == CE_VELOCITY_INDEPENDENT) return "none (declared)";
+  return ce->pc.vel_detected ? "detected" : "none";
 }
 
 }  // namespace ceode

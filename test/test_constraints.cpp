@@ -143,6 +143,7 @@ struct RunResult {
   long constr_jac_evals = 0;
   std::vector<double> q, v, lambda;  // at the end
   double tension_err = 0;            // max relative error of the rod tension from lambda
+  sunrealtype ic_dx = -1;            // CEodeGetICCorrection's dx (RunOptions::calc_ic)
 };
 
 // Runs the pendulum with CEODE; checks energy and drift at every step.
@@ -159,6 +160,8 @@ struct RunOptions {
   long msbj = 0;          // > 0: CEodeSetJacEvalFrequency
   bool schur = true;      // false: CEodeSetSchurComplement(SUNFALSE), the full saddle solve
   double tol = 0;         // > 0: error control with rtol = atol = tol instead of the fixed h
+  double x0_offset = 0;   // x(0) = L + x0_offset: off the constraints when not 0
+  bool calc_ic = false;   // CEodeCalcIC(CE_IC_POSITION | CE_IC_VELOCITY) before the first step
   Pendulum* problem = nullptr;
 };
 
@@ -172,7 +175,7 @@ RunResult RunPendulum(const RunOptions& o) {
   Vector q0 = SerialVector(3, ctx);
   Vector v0 = SerialVector(3, ctx);
   double* qd0 = N_VGetArrayPointer(q0.get());
-  qd0[0] = kL;
+  qd0[0] = kL + o.x0_offset;
   qd0[1] = 0;
   qd0[2] = kPi / 2;
   Mem mem(CEodeCreate(ctx));
@@ -211,6 +214,12 @@ RunResult RunPendulum(const RunOptions& o) {
   }
   if (o.msbj > 0) EXPECT_EQ(CEodeSetJacEvalFrequency(mem.get(), o.msbj), CE_SUCCESS);
   if (!o.schur) EXPECT_EQ(CEodeSetSchurComplement(mem.get(), SUNFALSE), CE_SUCCESS);
+  if (o.calc_ic) {
+    sunrealtype dv = 0;
+    EXPECT_EQ(CEodeCalcIC(mem.get(), CE_IC_POSITION | CE_IC_VELOCITY), CE_SUCCESS);
+    EXPECT_EQ(CEodeGetICCorrection(mem.get(), &res.ic_dx, &dv), CE_SUCCESS);
+    EXPECT_EQ(dv, 0);  // at rest: G v = 0 already
+  }
 
   Vector q = SerialVector(3, ctx);
   Vector v = SerialVector(3, ctx);
@@ -428,6 +437,48 @@ TEST(Constraints, TheConstrainedIterationObeysTheNonlinearTolerances) {
   ASSERT_EQ(loose.flag, CE_SUCCESS);
   EXPECT_LT(loose.iters, tight.iters);
   EXPECT_LT(loose.drift, 1e-5);
+}
+
+// A damper nobody declared: the start detects it (f probed in x') and the constrained step solves
+// with df/dv, as declared.
+TEST(Constraints, AnUndeclaredDampingIsDetectedAndGivesTheDeclaredNumbers) {
+  Pendulum pd, pu;
+  pd.damping = pu.damping = 0.5;
+  RunOptions o;
+  o.tend = 1;
+  o.zero_start = false;
+  o.vel_dependent = true;
+  o.problem = &pd;
+  const RunResult declared = RunPendulum(o);
+  o.vel_dependent = false;
+  o.problem = &pu;
+  const RunResult detected = RunPendulum(o);
+  ASSERT_EQ(declared.flag, CE_SUCCESS);
+  ASSERT_EQ(detected.flag, CE_SUCCESS);
+  EXPECT_EQ(detected.q, declared.q);
+  EXPECT_EQ(detected.v, declared.v);
+  EXPECT_EQ(detected.jac_evals, declared.jac_evals);
+}
+
+// A start 1 cm off the rod: refused by the first CEodeEvolve (CE_INCONSISTENT_IC, not a convergence
+// failure); projected by CEodeCalcIC in the metric of the singular M = diag(m, m, 0) on the dense
+// and on the KLU path alike (the projection moves x only: G's first row has no theta entry at 90
+// degrees), after which the run keeps the drift at round-off.
+TEST(Constraints, AStartOffTheRodIsRefusedAndCalcICProjectsItOnTheDenseAndTheKluPath) {
+  RunOptions o;
+  o.tend = 0.1;
+  o.x0_offset = 0.01;
+  const RunResult refused = RunPendulum(o);
+  EXPECT_EQ(refused.flag, CE_INCONSISTENT_IC);
+  EXPECT_EQ(refused.steps, 0);
+  o.calc_ic = true;
+  for (bool sparse : {false, true}) {
+    o.sparse = sparse;
+    const RunResult r = RunPendulum(o);
+    ASSERT_EQ(r.flag, CE_SUCCESS) << (sparse ? "KLU" : "dense");
+    EXPECT_NEAR(r.ic_dx, 0.01, 1e-15);
+    EXPECT_LE(r.drift, 1e-14);
+  }
 }
 
 TEST(Constraints, ARedundantConstraintGivesAClearSetupError) {

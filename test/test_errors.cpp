@@ -435,6 +435,8 @@ TEST(ReturnFlagName, NamesEveryFlagAndNothingElse) {
       {CE_TOO_MUCH_WORK, "CE_TOO_MUCH_WORK"},
       {CE_BAD_T, "CE_BAD_T"},
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
+      {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
+      {CE_INCONSISTENT_IC, "CE_INCONSISTENT_IC"},
   };
   for (const auto& f : flags) EXPECT_EQ(FlagName(f.first), f.second);
   EXPECT_EQ(FlagName(-12345), "NONE");

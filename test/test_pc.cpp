@@ -551,19 +551,17 @@ TEST(DirectNewtonIteration, GivesSUNNonlinSolNewtonsNumbersBitForBit) {
 }
 
 // ---------------------------------------------------------------------------
-// A velocity dependence nobody declared.
+// A velocity dependence nobody declared: detected by default.
 
-TEST(UndeclaredVelocityDependence, IsReportedOnceWithTheSetterToCall) {
+TEST(UndeclaredVelocityDependence, IsDetectedAndSolvedByTheImplicitStepWithoutAWarning) {
   DampedForced prob;
   Config c;
   c.vel = -1;  // no velocity setter called
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
-  ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_TRUE(ceode_test::Contains(r.warnings[0], "f depends on the velocity"));
-  EXPECT_TRUE(ceode_test::Contains(r.warnings[0], "CEodeSetVelocityDependence(mem, SUNTRUE)"));
-  EXPECT_EQ(r.nfe_coupling, 1);  // one directional difference, a0 as the base
-  EXPECT_EQ(r.npc + r.nnls, 0);  // the explicit step, as asked
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_EQ(r.nfe_coupling, 2);  // one directional difference: f(v0) and f(v0 + sig w)
+  EXPECT_EQ(r.nnls, r.nst);      // the implicit step (CE_IMPLICIT_NEWTON in Config)
 }
 
 TEST(UndeclaredVelocityDependence, IsProbedOnlyOnceAcrossReInitAndStepChanges) {
@@ -571,6 +569,8 @@ TEST(UndeclaredVelocityDependence, IsProbedOnlyOnceAcrossReInitAndStepChanges) {
   Context ctx;
   Vector x = SerialVector(1, ctx, prob.x0);
   Vector v = SerialVector(1, ctx, prob.v0);
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
   Mem mem(CEodeCreate(ctx));
   std::vector<std::string> warnings;
   ASSERT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
@@ -578,27 +578,33 @@ TEST(UndeclaredVelocityDependence, IsProbedOnlyOnceAcrossReInitAndStepChanges) {
   ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), CollectWarnings, &warnings), CE_SUCCESS);
   ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
   ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  // Newton: no coupling estimates, so that the probe's are the only evaluations counted apart
+  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON), CE_SUCCESS);
   sunrealtype t = 0;
   ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
   ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.005)), CE_SUCCESS);
   ASSERT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
   ASSERT_EQ(CEodeReInit(mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
   ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
-  long int npc = 0, nnls = 0, nfe_probe = 0;
+  long int npc = 0, nnls = 0, nfe_probe = 0, nst = 0;
   sunrealtype coupling = 0;
   CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfe_probe, &coupling);
-  EXPECT_EQ(warnings.size(), 1u);
+  CEodeGetNumSteps(mem.get(), &nst);
+  EXPECT_TRUE(warnings.empty());
   EXPECT_EQ(nfe_probe, 0);  // counted since CEodeReInit: no new probe
+  EXPECT_EQ(nnls, nst);     // and the detected dependence still holds
 }
 
-TEST(UndeclaredVelocityDependence, IsNotReportedForAVelocityIndependentForce) {
+TEST(UndeclaredVelocityDependence, LeavesAVelocityIndependentForceOnTheExplicitStep) {
   Harmonic prob;
   Config c;
   c.vel = -1;
   const Outcome r = Integrate(prob, c);
   ASSERT_EQ(r.flag, CE_SUCCESS);
   EXPECT_TRUE(r.warnings.empty());
-  EXPECT_EQ(r.nfe_coupling, 1);
+  EXPECT_EQ(r.nfe_coupling, 2);
+  EXPECT_EQ(r.npc + r.nnls, 0);
 }
 
 TEST(UndeclaredVelocityDependence, IsNotProbedWhenTheUserDeclaredNone) {
@@ -609,14 +615,16 @@ TEST(UndeclaredVelocityDependence, IsNotProbedWhenTheUserDeclaredNone) {
   ASSERT_EQ(r.flag, CE_SUCCESS);
   EXPECT_TRUE(r.warnings.empty());
   EXPECT_EQ(r.nfe_coupling, 0);
+  EXPECT_EQ(r.npc + r.nnls, 0);
 }
 
-// Detection switches the implicit step on: the same numbers as a declared dependence, and the
-// order that the forgotten declaration loses.
+// Detection (the default, and CE_VELOCITY_DETECT) switches the implicit step on: the same numbers
+// as a declared dependence, and the order that a declared independence loses (the explicit step
+// feeds f the previous step's velocity).
 TEST(VelocityDetection, SwitchesOnTheImplicitStepAndKeepsTheSecondOrder) {
   DampedForced prob;
   const std::vector<double> hs = ConvergenceSteps(0.04);
-  std::vector<double> e_detect, e_forgot;
+  std::vector<double> e_default, e_explicit;
   for (double h : hs) {
     Config c;
     c.h = h;
@@ -624,18 +632,51 @@ TEST(VelocityDetection, SwitchesOnTheImplicitStepAndKeepsTheSecondOrder) {
     c.vel = CE_VELOCITY_DETECT;
     const Outcome detect = Integrate(prob, c);
     c.vel = -1;
-    const Outcome forgot = Integrate(prob, c);
-    ASSERT_EQ(detect.flag, CE_SUCCESS);
-    EXPECT_TRUE(detect.warnings.empty());
-    EXPECT_EQ(detect.nnls, detect.nst);
-    EXPECT_EQ(MaxDiff(detect.x, declared.x), 0);
-    e_detect.push_back(detect.err_x);
-    e_forgot.push_back(forgot.err_x);
+    const Outcome dflt = Integrate(prob, c);
+    c.vel = CE_VELOCITY_INDEPENDENT;
+    const Outcome expl = Integrate(prob, c);
+    for (const Outcome* r : {&detect, &dflt}) {
+      ASSERT_EQ(r->flag, CE_SUCCESS);
+      EXPECT_TRUE(r->warnings.empty());
+      EXPECT_EQ(r->nnls, r->nst);
+      EXPECT_EQ(MaxDiff(r->x, declared.x), 0);
+    }
+    e_default.push_back(dflt.err_x);
+    e_explicit.push_back(expl.err_x);
   }
-  const double p_detect = FitOrder(hs, e_detect), p_forgot = FitOrder(hs, e_forgot);
-  std::printf("[ detect   ] order in x: detected %.3f, undeclared %.3f\n", p_detect, p_forgot);
-  EXPECT_NEAR(p_detect, 2, kOrderTol);
-  EXPECT_NEAR(p_forgot, 1, 0.2);
+  const double p_default = FitOrder(hs, e_default), p_explicit = FitOrder(hs, e_explicit);
+  std::printf("[ detect   ] order in x: default %.3f, declared independent %.3f\n", p_default,
+              p_explicit);
+  EXPECT_NEAR(p_default, 2, kOrderTol);
+  EXPECT_NEAR(p_explicit, 1, 0.2);
+}
+
+// The same for a fourth-order set: without a declaration the order is the set's (it was 1 when the
+// default kept the explicit step), and the errors are those of the declared dependence.
+TEST(VelocityDetection, GivesAFourthOrderSetItsOrderWithoutADeclaration) {
+  DampedForced prob;
+  const std::vector<double> hs = ConvergenceSteps(0.08);
+  std::vector<double> e_default, e_explicit;
+  for (double h : hs) {
+    Config c;
+    c.method = "G5_O4";
+    c.h = h;
+    const Outcome declared = Integrate(prob, c);
+    c.vel = -1;
+    const Outcome dflt = Integrate(prob, c);
+    c.vel = CE_VELOCITY_INDEPENDENT;
+    const Outcome expl = Integrate(prob, c);
+    ASSERT_EQ(dflt.flag, CE_SUCCESS);
+    ASSERT_EQ(expl.flag, CE_SUCCESS);
+    EXPECT_EQ(MaxDiff(dflt.x, declared.x), 0);
+    e_default.push_back(dflt.err_x);
+    e_explicit.push_back(expl.err_x);
+    std::printf(
+        "[ detect   ] G5_O4 h = %-7g max error in x: default %.2e, declared independent %.2e\n", h,
+        dflt.err_x, expl.err_x);
+  }
+  EXPECT_NEAR(FitOrder(hs, e_default), 4, kOrderTol);
+  EXPECT_NEAR(FitOrder(hs, e_explicit), 1, 0.2);
 }
 
 TEST(VelocityDetection, LeavesAVelocityIndependentForceOnTheExplicitStep) {
@@ -676,13 +717,13 @@ TEST(VelocityMode, GivesEachModeTheStepItNames) {
   // dependent: every step solved by the nonlinear solver (CE_IMPLICIT_NEWTON), no probe
   EXPECT_EQ(dep.nnls, dep.nst);
   EXPECT_EQ(dep.nfe_coupling, 0);
-  // detect: one probe, then the implicit step on the damped force (the same numbers as declared)
-  // and the explicit step on the harmonic one
-  EXPECT_EQ(detect.nfe_coupling, 1);
+  // detect: one probe (two f), then the implicit step on the damped force (the same numbers as
+  // declared) and the explicit step on the harmonic one
+  EXPECT_EQ(detect.nfe_coupling, 2);
   EXPECT_EQ(detect.nnls, detect.nst);
   EXPECT_EQ(MaxDiff(detect.x, dep.x), 0);
   EXPECT_EQ(detect_harmonic.npc + detect_harmonic.nnls, 0);
-  EXPECT_EQ(detect_harmonic.nfe_coupling, 1);
+  EXPECT_EQ(detect_harmonic.nfe_coupling, 2);
   // CEodeSetVelocityDependence(SUNTRUE / SUNFALSE) is CE_VELOCITY_DEPENDENT / _INDEPENDENT
   EXPECT_EQ(MaxDiff(dep_boolean.x, dep.x), 0);
   EXPECT_EQ(MaxDiff(dep_boolean.v, dep.v), 0);
@@ -726,6 +767,212 @@ TEST(VelocityMode, RefusesAValueOutsideTheEnumAndKeepsTheMemoryUsable) {
   EXPECT_EQ(MaxDiff(after.x, clean.x), 0);
   EXPECT_EQ(MaxDiff(after.v, clean.v), 0);
   EXPECT_EQ(CEodeSetVelocityMode(nullptr, CE_VELOCITY_DETECT), CE_MEM_NULL);
+}
+
+// ---------------------------------------------------------------------------
+// Statistics of prediction-correction and of the velocity dependence.
+
+std::string Stats(void* mem, SUNOutputFormat fmt) {
+  char buf[4096] = {};
+  FILE* f = fmemopen(buf, sizeof(buf) - 1, "w");
+  if (f == nullptr) return "";
+  CEodePrintAllStats(mem, f, fmt);
+  std::fclose(f);
+  return buf;
+}
+
+TEST(PredictionCorrectionStatistics, CountStepsAndCorrectionsInTheGettersAndInPrintAllStats) {
+  DampedForced prob;
+  Config c;
+  c.method = "G5_O4";  // two corrections by default (degree 5)
+  c.mode = CE_IMPLICIT_PC;
+  c.tend = 1;  // 100 steps
+  std::string table, csv;
+  long int npc = -1, ncorr = -1, nni = -1;
+  Context ctx;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMethodByName(mem.get(), c.method.c_str()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), c.h), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), c.mode), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), c.tend, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  ASSERT_EQ(CEodeGetNumPCSteps(mem.get(), &npc), CE_SUCCESS);
+  ASSERT_EQ(CEodeGetNumPCCorrections(mem.get(), &ncorr), CE_SUCCESS);
+  ASSERT_EQ(CEodeGetNumNonlinSolvIters(mem.get(), &nni), CE_SUCCESS);
+  EXPECT_EQ(npc, 100);
+  EXPECT_EQ(ncorr, 200);
+  EXPECT_EQ(nni, 0);  // no nonlinear solver ran
+  table = Stats(mem.get(), SUN_OUTPUTFORMAT_TABLE);
+  csv = Stats(mem.get(), SUN_OUTPUTFORMAT_CSV);
+  EXPECT_TRUE(ceode_test::Contains(table, "PC steps                     = 100\n")) << table;
+  EXPECT_TRUE(ceode_test::Contains(table, "PC corrections               = 200\n")) << table;
+  EXPECT_TRUE(ceode_test::Contains(table, "Velocity dependence          = declared\n")) << table;
+  EXPECT_TRUE(ceode_test::Contains(csv, ",PC steps,100,PC corrections,200,")) << csv;
+  EXPECT_TRUE(ceode_test::Contains(csv, "Velocity dependence,declared,")) << csv;
+  EXPECT_EQ(CEodeGetNumPCSteps(mem.get(), nullptr), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeGetNumPCCorrections(nullptr, &ncorr), CE_MEM_NULL);
+}
+
+TEST(VelocityDependenceStatistics, ShowHowTheDependenceWasDecided) {
+  DampedForced damped;
+  Harmonic harmonic;
+  auto line = [](const ExactProblem& prob, int vel) {
+    Context ctx;
+    Vector x = SerialVector(1, ctx, prob.x0);
+    Vector v = SerialVector(1, ctx, prob.v0);
+    Mem mem(CEodeCreate(ctx));
+    CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get());
+    CEodeSetUserData(mem.get(), const_cast<ExactProblem*>(&prob));
+    CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01));
+    if (vel >= 0) CEodeSetVelocityMode(mem.get(), static_cast<CEodeVelocityMode>(vel));
+    sunrealtype t = 0;
+    if (CEodeEvolve(mem.get(), 0.1, x.get(), v.get(), &t, CE_NORMAL) != CE_SUCCESS)
+      return std::string();
+    const std::string csv = Stats(mem.get(), SUN_OUTPUTFORMAT_CSV);
+    const size_t at = csv.find("Velocity dependence,");
+    return at == std::string::npos ? csv : csv.substr(at, csv.find(',', at + 20) - at);
+  };
+  EXPECT_EQ(line(damped, -1), "Velocity dependence,detected");
+  EXPECT_EQ(line(harmonic, -1), "Velocity dependence,none");
+  EXPECT_EQ(line(damped, CE_VELOCITY_DETECT), "Velocity dependence,detected");
+  EXPECT_EQ(line(damped, CE_VELOCITY_DEPENDENT), "Velocity dependence,declared");
+  EXPECT_EQ(line(damped, CE_VELOCITY_INDEPENDENT), "Velocity dependence,none (declared)");
+}
+
+// A detected dependence is configured as a declared one: an attached Newton solver made for
+// vectors of another length is refused with the validation's message, before any solve.
+TEST(VelocityDetection, RefusesANonlinearSolverOfAnotherLengthAsADeclaredDependenceDoes) {
+  for (int vel :
+       {-1, static_cast<int>(CE_VELOCITY_DETECT), static_cast<int>(CE_VELOCITY_DEPENDENT)}) {
+    SCOPED_TRACE("velocity mode " + std::to_string(vel));
+    DampedForced prob;
+    Context ctx;
+    Vector x = SerialVector(1, ctx, prob.x0);
+    Vector v = SerialVector(1, ctx, prob.v0);
+    Vector x3 = SerialVector(3, ctx, 0);
+    Matrix A(SUNDenseMatrix(1, 1, ctx));
+    LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+    SUNNonlinearSolver nls3 = SUNNonlinSol_Newton(x3.get(), ctx);
+    ASSERT_NE(nls3, nullptr);
+    Mem mem(CEodeCreate(ctx));
+    CEodeSetErrFile(mem.get(), nullptr);
+    // attached before CEodeInit fixes n: only the start can compare the lengths
+    ASSERT_EQ(CEodeSetNonlinearSolver(mem.get(), nls3), CE_SUCCESS);
+    ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+    if (vel >= 0) {
+      ASSERT_EQ(CEodeSetVelocityMode(mem.get(), static_cast<CEodeVelocityMode>(vel)), CE_SUCCESS);
+    }
+    sunrealtype t = 0;
+    EXPECT_EQ(CEodeEvolve(mem.get(), 0.1, x.get(), v.get(), &t, CE_NORMAL), CE_ILL_INPUT);
+    const char* msg = nullptr;
+    CEodeGetLastErrorMessage(mem.get(), &msg);
+    EXPECT_TRUE(ceode_test::Contains(msg, "created for vectors of length 3")) << msg;
+    EXPECT_EQ(NV_Ith_S(x.get(), 0), prob.x0);  // nothing was integrated
+    // the memory stays usable: a solver of the right length lets the run go on
+    SUNNonlinearSolver nls1 = SUNNonlinSol_Newton(x.get(), ctx);
+    ASSERT_EQ(CEodeSetNonlinearSolver(mem.get(), nls1), CE_SUCCESS);
+    EXPECT_EQ(CEodeEvolve(mem.get(), 0.1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    long int nni = 0;
+    CEodeGetNumNonlinSolvIters(mem.get(), &nni);
+    EXPECT_GT(nni, 0);  // the user's Newton solver ran
+    mem.reset();
+    SUNNonlinSolFree(nls3);
+    SUNNonlinSolFree(nls1);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// A position-dependent mass matrix: M(x) = diag(1 + x_0^2 / 10, 2 + sin(x_1) / 10), damped
+// springs, f = -K x - c x' (c small: prediction-correction keeps its contraction).
+
+int MassOfX(sunrealtype, N_Vector x, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+  const sunrealtype* xd = N_VGetArrayPointer(x);
+  SUNDenseMatrix_Column(M, 0)[0] = 1 + xd[0] * xd[0] / 10;
+  SUNDenseMatrix_Column(M, 1)[1] = 2 + std::sin(xd[1]) / 10;
+  return 0;
+}
+
+int DampedSprings(sunrealtype, N_Vector x, N_Vector v, N_Vector f, void*) {
+  const sunrealtype* xd = N_VGetArrayPointer(x);
+  const sunrealtype* vd = N_VGetArrayPointer(v);
+  sunrealtype* fd = N_VGetArrayPointer(f);
+  fd[0] = -4 * xd[0] + 2 * xd[1] - SUN_RCONST(0.05) * vd[0];
+  fd[1] = 2 * xd[0] - 3 * xd[1] - SUN_RCONST(0.05) * vd[1];
+  return 0;
+}
+
+struct MassCount {
+  int flag = CE_SUCCESS;
+  long int nme_start = 0, nme = 0, nst = 0, npc = 0, ncorr = 0, nsetups = 0, nsetups_start = 0;
+};
+
+// The default configuration (velocity dependence detected, CE_IMPLICIT_AUTO): mass evaluations
+// after the start alone (CEodeEvolve to t0) and after `steps` more steps.
+MassCount CountMassEvaluations(const char* method, long int steps) {
+  MassCount r;
+  Context ctx;
+  Vector x = SerialVector(2, ctx, SUN_RCONST(0.5));
+  Vector v = SerialVector(2, ctx, SUN_RCONST(0.1));
+  Matrix M(SUNDenseMatrix(2, 2, ctx));
+  Matrix A(SUNDenseMatrix(2, 2, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  Mem mem(CEodeCreate(ctx));
+  const sunrealtype h = SUN_RCONST(0.01);
+  auto fail = [&r](int flag) {
+    if (flag < 0 && r.flag == CE_SUCCESS) r.flag = flag;
+    return flag < 0;
+  };
+  sunrealtype t = 0;
+  if (fail(CEodeInit(mem.get(), DampedSprings, 0, x.get(), v.get())) ||
+      fail(CEodeSetMethodByName(mem.get(), method)) || fail(CEodeSetFixedStep(mem.get(), h)) ||
+      fail(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0)) ||
+      fail(CEodeSetMassFn(mem.get(), MassOfX, M.get(), SUNFALSE)) ||
+      fail(CEodeSetLinearSolver(mem.get(), LS.get(), A.get())) ||
+      fail(CEodeEvolve(mem.get(), 0, x.get(), v.get(), &t, CE_NORMAL))) {
+    return r;
+  }
+  CEodeGetNumMassEvals(mem.get(), &r.nme_start);
+  CEodeGetNumLinSolvSetups(mem.get(), &r.nsetups_start);
+  for (long int i = 0; i < steps; ++i) {
+    if (fail(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_ONE_STEP))) return r;
+  }
+  CEodeGetNumMassEvals(mem.get(), &r.nme);
+  CEodeGetNumSteps(mem.get(), &r.nst);
+  CEodeGetNumPCSteps(mem.get(), &r.npc);
+  CEodeGetNumPCCorrections(mem.get(), &r.ncorr);
+  CEodeGetNumLinSolvSetups(mem.get(), &r.nsetups);
+  return r;
+}
+
+// The position of a step is known before its solve: M(x) is evaluated and factored once per
+// step, whatever the number of corrections (1 for G3_CD and G4_A34, 2 for G5_O4 and G8_O8).
+TEST(PositionDependentMass, IsEvaluatedAndFactoredOncePerStepWithEveryNumberOfCorrections) {
+  const struct {
+    const char* method;
+    int k;  // the set's default number of corrections
+  } kCases[] = {{"G3_CD", 1}, {"G4_A34", 1}, {"G5_O4", 2}, {"G8_O8", 2}};
+  for (const auto& c : kCases) {
+    const char* method = c.method;
+    const int k = c.k;
+    SCOPED_TRACE(method);
+    const MassCount r = CountMassEvaluations(method, 100);
+    ASSERT_EQ(r.flag, CE_SUCCESS);
+    ASSERT_EQ(r.nst, 100);
+    ASSERT_EQ(r.npc, 100);  // every step by prediction-correction (AUTO kept it)
+    EXPECT_EQ(r.ncorr, 100 * k);
+    EXPECT_EQ(r.nme - r.nme_start, 100);
+    EXPECT_EQ(r.nsetups - r.nsetups_start, 100);
+    std::printf("[ mass     ] %-7s start %ld, 100 steps %ld mass evaluations (%d corrections)\n",
+                method, r.nme_start, r.nme - r.nme_start, k);
+  }
 }
 
 TEST(ImplicitModeSetters, RefuseUnknownValuesWithAClearMessage) {

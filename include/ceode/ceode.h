@@ -74,6 +74,11 @@ extern "C" {
 #define CE_BAD_T (-18)
 #define CE_VECTOROP_ERR (-19)
 #define CE_ERR_FAILURE (-20)
+#define CE_INCONSISTENT_IC (-21)
+
+/* What CEodeCalcIC projects (bitwise or) */
+#define CE_IC_POSITION 1
+#define CE_IC_VELOCITY 2
 
 /* Stability guard modes (CEodeSetStabilityGuard) */
 #define CE_GUARD_OFF 0
@@ -87,9 +92,9 @@ extern "C" {
  *   CE_VELOCITY_DETECT       at every (re)start one directional difference of f in
  *                            x' decides: the implicit step when f depends on x', the
  *                            explicit one otherwise.
- * When no velocity mode is set, the step is explicit and the first start checks
- * once per right-hand side whether f depends on x'; if it does, CEODE warns
- * (CE_WARNING) and keeps the explicit step. */
+ * When no velocity mode is set (default), the first start makes the same check
+ * once per right-hand side function (not again at restarts or CEodeReInit) and
+ * switches the implicit step on when f depends on x'. */
 typedef enum {
   CE_VELOCITY_INDEPENDENT = 0,
   CE_VELOCITY_DEPENDENT = 1,
@@ -214,6 +219,18 @@ SUNDIALS_EXPORT int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac);
 SUNDIALS_EXPORT int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi,
                                         CEodeConstrJacFn G);
 
+/* Consistent initial conditions (IDACalcIC's counterpart). With constraints, the first
+ * CEodeEvolve after CEodeInit/CEodeReInit checks that x0 lies on Phi(x, t0) = 0 and v0 on
+ * G(x0) v = -Phi_t (each constraint's distance |Phi_i| / |G_i| below sqrt(uround) |x0|_max,
+ * its normal velocity below sqrt(uround) times the velocity scale) and returns
+ * CE_INCONSISTENT_IC naming the constraint otherwise. CEodeCalcIC projects the current x (by
+ * Gauss-Newton) and then v onto the constraints with minimum-norm corrections in the metric of
+ * M (the identity without a mass matrix); CEodeGetICCorrection gives how far they moved (max
+ * norm) and CEodeGetConsistentIC the projected values until the integration starts. */
+SUNDIALS_EXPORT int CEodeCalcIC(void* mem, int what);
+SUNDIALS_EXPORT int CEodeGetICCorrection(void* mem, sunrealtype* dx_norm, sunrealtype* dv_norm);
+SUNDIALS_EXPORT int CEodeGetConsistentIC(void* mem, N_Vector x0, N_Vector v0);
+
 /* Stability guard. A check compares h * omega_max with the method's stability limit.
  * omega_max is CEodeSetMaxFrequency's value when one is given, otherwise an estimate
  * at the current state by Lanczos on M^{-1} df/dx (directional differences of f):
@@ -282,6 +299,10 @@ SUNDIALS_EXPORT int CEodeGetNumRhsEvalsJacDQ(void* mem, long int* nfevalsLS);
 SUNDIALS_EXPORT int CEodeGetNumMassEvals(void* mem, long int* nmevals);
 SUNDIALS_EXPORT int CEodeGetNumConstrEvals(void* mem, long int* ncevals);
 SUNDIALS_EXPORT int CEodeGetNumConstrJacEvals(void* mem, long int* ngevals);
+/* Prediction-correction (CE_IMPLICIT_PC, or AUTO's PC steps): the steps it solved and its
+ * evaluation-corrections (one f each; NLS iterations count the nonlinear solver's only) */
+SUNDIALS_EXPORT int CEodeGetNumPCSteps(void* mem, long int* npcsteps);
+SUNDIALS_EXPORT int CEodeGetNumPCCorrections(void* mem, long int* npccorrections);
 SUNDIALS_EXPORT int CEodeGetImplicitStats(void* mem, long int* npcsteps, long int* nnlssteps,
                                           long int* nfecoupling, sunrealtype* coupling);
 
