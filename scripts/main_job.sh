@@ -53,7 +53,7 @@ fi
 step "python: $PYTHON"
 
 step "configure Release in ./build"
-cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_BENCHMARKS=ON \
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON \
   > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
 rm -f "$BUILD.configure.log"
 
@@ -156,7 +156,7 @@ if [ -e "$O3_PREFIX/lib/cmake/sundials/SUNDIALSConfig.cmake" ] ||
     [ -e "$ROOT/../shared/third_party/sundials-6.4.1-src.tar.xz" ]; then
   step "SUNDIALS 6.4.1 -O3 in $O3_PREFIX (scripts/build_sundials.sh)"
   if scripts/build_sundials.sh 6.4.1 "$O3_PREFIX" "-O3" &&
-      cmake -S "$ROOT" -B "$O3_BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_BENCHMARKS=ON \
+      cmake -S "$ROOT" -B "$O3_BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON \
         -DCMAKE_PREFIX_PATH="$O3_PREFIX" > "$BUILD/main_job_o3.log" 2>&1 &&
       cmake --build "$O3_BUILD" -j"$JOBS" --target "${targets[@]}" >> "$BUILD/main_job_o3.log" 2>&1; then
     run_build "$O3_BUILD" _o3

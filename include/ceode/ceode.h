@@ -22,6 +22,7 @@
 #ifndef CEODE_CEODE_H_
 #define CEODE_CEODE_H_
 
+#include <ceode/ceode_config.h> /* CEODE_VERSION, CEODE_VERSION_MAJOR/MINOR/PATCH/LABEL */
 #include <stdio.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -41,9 +42,8 @@ extern "C" {
  * 1. Constants
  * ===========================================================================*/
 
-#define CEODE_VERSION_MAJOR 0
-#define CEODE_VERSION_MINOR 1
-#define CEODE_VERSION_PATCH 0
+/* CEODE_VERSION ("0.1.0") and CEODE_VERSION_MAJOR/MINOR/PATCH/LABEL: ceode_config.h,
+ * configured from the CMake project version; CEodeGetVersion reports the library's. */
 
 /* itask values of CEodeEvolve */
 #define CE_NORMAL 1
@@ -320,6 +320,12 @@ SUNDIALS_EXPORT int CEodeGetLastErrorMessage(void* mem, const char** msg);
 /* =============================================================================
  * 7. Utilities
  * ===========================================================================*/
+
+/* The library's version, as SUNDIALSGetVersion/SUNDIALSGetVersionNumber: the string
+ * ("0.1.0", "-label" appended when there is one) and its numbers; no memory needed.
+ * CE_ILL_INPUT when an output is NULL or len does not hold the string and its '\0'. */
+SUNDIALS_EXPORT int CEodeGetVersion(char* version, int len);
+SUNDIALS_EXPORT int CEodeGetVersionNumber(int* major, int* minor, int* patch, char* label, int len);
 
 /* The named parameter sets; no memory needed */
 SUNDIALS_EXPORT int CEodeGetMethodParams(const char* name, int* degree, sunrealtype* params,

@@ -1,9 +1,35 @@
 /* Integrates x'' = -x over one period with G4_A34 and checks the answer:
- * proves the installed headers, library and CMake package work from C. */
+ * proves the installed headers, library and CMake package (or ceode.pc) work from C.
+ * First it checks that the headers it was compiled with are those of the libraries it
+ * runs with: SUNDIALS 6.4 headers with 7.x libraries would pass SUNContext_Create a
+ * NULL where an MPI-enabled 7.x expects MPI_COMM_NULL, and abort inside MPI. */
 #include <ceode/ceode.h>
 #include <math.h>
 #include <nvector/nvector_serial.h>
 #include <stdio.h>
+#include <string.h>
+#include <sundials/sundials_version.h>
+
+/* 0 when the compiled-in versions of SUNDIALS and CEODE are the loaded libraries'. */
+static int check_versions(void) {
+  int major = -1, minor = -1, patch = -1;
+  char label[64], version[64];
+  if (SUNDIALSGetVersionNumber(&major, &minor, &patch, label, sizeof label) != 0 ||
+      major != SUNDIALS_VERSION_MAJOR || minor != SUNDIALS_VERSION_MINOR) {
+    printf("SUNDIALS headers %d.%d, library %d.%d\n", SUNDIALS_VERSION_MAJOR,
+           SUNDIALS_VERSION_MINOR, major, minor);
+    return 1;
+  }
+  if (CEodeGetVersionNumber(&major, &minor, &patch, label, sizeof label) != CE_SUCCESS ||
+      major != CEODE_VERSION_MAJOR || minor != CEODE_VERSION_MINOR ||
+      patch != CEODE_VERSION_PATCH || strcmp(label, CEODE_VERSION_LABEL) != 0 ||
+      CEodeGetVersion(version, sizeof version) != CE_SUCCESS ||
+      strcmp(version, CEODE_VERSION) != 0) {
+    printf("CEODE headers %s, library %d.%d.%d\n", CEODE_VERSION, major, minor, patch);
+    return 1;
+  }
+  return 0;
+}
 
 static int rhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
   (void)t;
@@ -21,7 +47,8 @@ int main(void) {
   const sunrealtype period = 2.0 * 3.14159265358979323846;
   int flag;
   double err;
-  /* SUNDIALS 7 takes a SUNComm (MPI_Comm on an MPI build: NULL would abort). */
+  if (check_versions() != 0) return 1;
+    /* SUNDIALS 7 takes a SUNComm (MPI_Comm on an MPI build: NULL would abort). */
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
 #else

@@ -1,9 +1,13 @@
-# Driver of the packaging test (cmake -P): install the current build tree into a
-# fresh prefix, then configure, build and run test/consumer against that prefix.
+# Driver of the packaging test (cmake -P): install the current build tree into a fresh prefix,
+# then, against that prefix only: configure, build and run test/consumer with find_package(CEODE);
+# run the installed ceode-stability; move the prefix elsewhere, run the tool again (it must load
+# libceode from beside it, not from the build tree) and build and run the same consumer with
+# `pkg-config --cflags --libs ceode` (the .pc file must follow the move).
 # Inputs: CEODE_BINARY_DIR, CONSUMER_SOURCE_DIR, WORK_DIR, GENERATOR, BUILD_TYPE, C_COMPILER,
 # EXTRA_FLAGS (compile and link flags of the consumer, e.g. sanitizers), SUNDIALS_DIR_BUILT (the
-# SUNDIALS CEODE was built with: the consumer must get that one, even behind a decoy).
-foreach(var CEODE_BINARY_DIR CONSUMER_SOURCE_DIR WORK_DIR)
+# SUNDIALS CEODE was built with: the consumer must get that one, even behind a decoy), LIBDIR and
+# BINDIR (CMAKE_INSTALL_LIBDIR/BINDIR), PKG_CONFIG (the pkg-config program), CEODE_VERSION.
+foreach(var CEODE_BINARY_DIR CONSUMER_SOURCE_DIR WORK_DIR LIBDIR BINDIR PKG_CONFIG CEODE_VERSION)
   if(NOT ${var})
     message(FATAL_ERROR "run_consumer.cmake needs -D${var}=...")
   endif()
@@ -50,7 +54,7 @@ run_step("configure consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR} -B ${bu
          -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${prefix}
          -DSUNDIALS_ROOT=${WORK_DIR}/decoy
          -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCMAKE_FIND_PACKAGE_NO_PACKAGE_REGISTRY=ON
-         -DCMAKE_BUILD_RPATH=${prefix}/lib)
+         -DCMAKE_BUILD_RPATH=${prefix}/${LIBDIR})
 file(READ ${build}/ceode_dir.txt ceode_dir)
 file(REAL_PATH ${prefix} real_prefix)
 file(REAL_PATH ${ceode_dir} real_ceode_dir)
@@ -74,3 +78,62 @@ if(NOT consumer_exe)
   message(FATAL_ERROR "The consumer executable was not built in ${build}")
 endif()
 run_step("run consumer" ${consumer_exe})
+
+# The installed tool, from the prefix and from a moved copy of it (RPATH $ORIGIN/../lib).
+function(run_tool root)
+  set(tool ${root}/${BINDIR}/ceode-stability)
+  execute_process(COMMAND ${tool} --method G5_O4 RESULT_VARIABLE rv OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+  string(FIND "${out}" "Omega_max 1.97065" pos)
+  if(NOT rv EQUAL 0 OR pos EQUAL -1)
+    message(FATAL_ERROR "${tool} --method G5_O4 failed (${rv}):\n${out}${err}")
+  endif()
+  message("${tool} --method G5_O4:\n${out}")
+  find_program(LDD ldd)
+  if(LDD)
+    execute_process(COMMAND ${LDD} ${tool} OUTPUT_VARIABLE libs)
+    set(loaded "")
+    if(libs MATCHES "libceode[^ \t\n]* => ([^ \t\n]+)")
+      get_filename_component(loaded "${CMAKE_MATCH_1}" DIRECTORY)
+      file(REAL_PATH "${loaded}" loaded)
+    endif()
+    file(REAL_PATH ${root}/${LIBDIR} real_libdir)
+    if(NOT loaded STREQUAL real_libdir)
+      message(FATAL_ERROR "${tool} does not load libceode from ${root}/${LIBDIR}:\n${libs}")
+    endif()
+  endif()
+endfunction()
+run_tool(${prefix})
+set(moved ${WORK_DIR}/moved)
+file(RENAME ${prefix} ${moved})
+run_tool(${moved})
+
+# The consumer again, compiled by hand with the flags of the moved prefix's ceode.pc.
+set(ENV{PKG_CONFIG_PATH} ${moved}/${LIBDIR}/pkgconfig)
+execute_process(COMMAND ${PKG_CONFIG} --modversion ceode OUTPUT_VARIABLE pc_version
+                OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rv)
+if(NOT rv EQUAL 0 OR NOT pc_version STREQUAL CEODE_VERSION)
+  message(FATAL_ERROR "pkg-config ceode: version '${pc_version}' (${rv}), expected ${CEODE_VERSION}")
+endif()
+execute_process(COMMAND ${PKG_CONFIG} --cflags --libs ceode OUTPUT_VARIABLE pc_flags
+                OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rv)
+if(NOT rv EQUAL 0)
+  message(FATAL_ERROR "pkg-config --cflags --libs ceode failed (${rv})")
+endif()
+message("pkg-config --cflags --libs ceode: ${pc_flags}")
+separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
+separate_arguments(extra UNIX_COMMAND "${EXTRA_FLAGS}")
+# Every library directory of the flags also as a run path (the prefix, a SUNDIALS elsewhere).
+set(rpaths)
+foreach(flag IN LISTS pc_flags)
+  if(flag MATCHES "^-L(.+)")
+    list(APPEND rpaths "-Wl,-rpath,${CMAKE_MATCH_1}")
+  endif()
+endforeach()
+if(NOT C_COMPILER)
+  set(C_COMPILER cc)
+endif()
+set(pc_exe ${WORK_DIR}/consumer_pkg_config)
+run_step("build consumer with pkg-config" ${C_COMPILER} ${extra} ${CONSUMER_SOURCE_DIR}/main.c
+         -o ${pc_exe} ${pc_flags} -lsundials_nvecserial -lm ${rpaths})
+run_step("run consumer built with pkg-config" ${pc_exe})
