@@ -331,8 +331,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Constraint Jac evals", static_cast<double>(ce->con.nge), true},
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
       {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
-      {"Steps limited by stability",
-       static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
+      {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
@@ -370,6 +369,7 @@ const char* ceode::FlagName(long int flag) {
   } kNames[] = {
       {CE_SUCCESS, "CE_SUCCESS"},
       {CE_TSTOP_RETURN, "CE_TSTOP_RETURN"},
+      {CE_ROOT_RETURN, "CE_ROOT_RETURN"},
       {CE_WARNING, "CE_WARNING"},
       {CE_MEM_NULL, "CE_MEM_NULL"},
       {CE_ILL_INPUT, "CE_ILL_INPUT"},
@@ -391,6 +391,7 @@ const char* ceode::FlagName(long int flag) {
       {CE_BAD_T, "CE_BAD_T"},
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
       {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
+      {CE_RTFUNC_FAIL, "CE_RTFUNC_FAIL"},
   };
   for (const auto& entry : kNames) {
     if (entry.flag == flag) return entry.name;
