@@ -300,6 +300,67 @@ TEST(RootFinding, ReturnsTheStateAtTheRootAndContinues) {
 
 namespace {
 
+// x'' = -x - 2 zeta x' (zeta = 0.1), x(0) = 1, x'(0) = 1/2: x = e^{-zeta t} R cos(wd t - phi) with
+// wd = sqrt(1 - zeta^2), tan phi = (x'(0) + zeta x(0)) / wd, zeros at (phi + pi/2 + k pi) / wd.
+constexpr sunrealtype kZeta = SUN_RCONST(0.1);
+int Damped(sunrealtype, N_Vector x, N_Vector v, N_Vector f, void*) {
+  N_VLinearSum(-1, x, -2 * kZeta, v, f);
+  return 0;
+}
+sunrealtype DampedZero(int k) {
+  const sunrealtype wd = std::sqrt(1 - kZeta * kZeta);
+  return (std::atan((SUN_RCONST(0.5) + kZeta) / wd) + kPi / 2 + k * kPi) / wd;
+}
+
+// Max |t_event - exact| over the damped oscillator's three zeros up to 10, the velocity dependence
+// declared (the implicit path: Newton with a dense solver, or prediction-correction).
+sunrealtype DampedEventError(const char* method, sunrealtype h, sunrealtype tol, int mode) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx, 1), v = SerialVector(1, ctx, SUN_RCONST(0.5));
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), Damped, 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), method), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  EXPECT_EQ(h > 0 ? CEodeSetFixedStep(mem.get(), h) : CEodeSStolerances(mem.get(), tol, tol), 0);
+  EXPECT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetImplicitMode(mem.get(), mode), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
+  const std::vector<Event> ev = Events(mem.get(), 1, x.get(), v.get(), 10, CE_NORMAL);
+  EXPECT_EQ(ev.size(), 3u);
+  sunrealtype err = 0;
+  for (size_t k = 0; k < ev.size(); ++k) {
+    err = std::max(err, std::fabs(ev[k].t - DampedZero(static_cast<int>(k))));
+  }
+  return err;
+}
+
+}  // namespace
+
+// The implicit path (f reads x'): with Newton the event times converge at G5_O4's order 4 (slope
+// >= 3.7 over four halvings, as on the explicit path), and with error control (Newton and
+// prediction-correction) they stay within 4 tol, the explicit path's bound.
+TEST(RootFinding, LocatesEventsOnTheImplicitPath) {
+  std::vector<double> hs, errs;
+  for (int k = 0; k < 4; ++k) {
+    hs.push_back(0.08 / (1 << k));
+    errs.push_back(DampedEventError("G5_O4", hs.back(), 0, CE_IMPLICIT_NEWTON));
+  }
+  const double slope = FitOrder(hs, errs);
+  std::printf("implicit G5_O4 event-time errors %.2e .. %.2e, slope %.2f\n", errs.front(),
+              errs.back(), slope);
+  EXPECT_GE(slope, 3.7);
+  for (int mode : {CE_IMPLICIT_NEWTON, CE_IMPLICIT_PC}) {
+    const sunrealtype err = DampedEventError("G5_O4", 0, 1e-9, mode);
+    std::printf("implicit G5_O4 mode %d tol 1e-9: event-time error %.2e\n", mode, err);
+    EXPECT_LT(err, 4e-9);
+  }
+}
+
+namespace {
+
 // The pendulum of examples/pendulum_dae.c: q = (x, y, theta), M = diag(1, 1, 0), Phi = (x - sin
 // theta, y + cos theta), released at rest from the horizontal (x = 1).
 constexpr sunrealtype kGrav = SUN_RCONST(9.81);
@@ -335,7 +396,7 @@ struct PendData {
 };
 int PendG(sunrealtype t, N_Vector q, N_Vector, sunrealtype* g, void* data) {
   auto* d = static_cast<PendData*>(data);
-  const sunrealtype k = t / d->h;
+  const sunrealtype k = d->h > 0 ? t / d->h : SUN_RCONST(0.5);
   if (std::fabs(k - std::round(k)) < 1e-9) {
     const sunrealtype r = std::hypot(NV_Ith_S(q, 0), NV_Ith_S(q, 1)) - 1;
     d->node_residual = std::max(d->node_residual, std::fabs(r));
@@ -344,8 +405,9 @@ int PendG(sunrealtype t, N_Vector q, N_Vector, sunrealtype* g, void* data) {
   return 0;
 }
 
-// The times the constrained pendulum passes the bottom (x = 0) up to t = 5.
-std::vector<sunrealtype> PendulumDaeEvents(sunrealtype h, PendData* data) {
+// The times the constrained pendulum passes the bottom (x = 0) up to t = 5: fixed step h, or
+// h = 0 and error control at tol.
+std::vector<sunrealtype> PendulumDaeEvents(sunrealtype h, PendData* data, sunrealtype tol = 0) {
   Context ctx;
   Vector x = SerialVector(3, ctx), v = SerialVector(3, ctx, 0), p = SerialVector(2, ctx);
   Vector b = SerialVector(5, ctx);
@@ -359,8 +421,13 @@ std::vector<sunrealtype> PendulumDaeEvents(sunrealtype h, PendData* data) {
   EXPECT_EQ(CEodeInit(mem.get(), PendForce, 0, x.get(), v.get()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetUserData(mem.get(), data), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem.get(), "G5_ONES"), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetZeroStart(mem.get(), SUNTRUE), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetFixedStep(mem.get(), h), CE_SUCCESS);
+  if (h > 0) {
+    EXPECT_EQ(CEodeSetZeroStart(mem.get(), SUNTRUE), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetFixedStep(mem.get(), h), CE_SUCCESS);
+  } else {
+    EXPECT_EQ(CEodeSStolerances(mem.get(), tol, tol), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetInitStep(mem.get(), 1e-3), CE_SUCCESS);  // from rest (wp_common.h's note)
+  }
   EXPECT_EQ(CEodeSetMassFn(mem.get(), PendMass, M.get(), SUNTRUE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetConstraints(mem.get(), p.get(), PendPhi, PendJac), CE_SUCCESS);
@@ -392,6 +459,15 @@ TEST(RootFinding, LocatesEventsOfAConstrainedSystem) {
   EXPECT_LT(c12, 1e-6);
   EXPECT_LT(4 * c23, c12);
   EXPECT_LT(d2.node_residual, 1e-13);
+  // With error control at tol = 1e-8 the passages stay within 10 tol of the fixed-step ones
+  // (whose own error, c23 above, is two orders smaller).
+  PendData da;
+  const std::vector<sunrealtype> ea = PendulumDaeEvents(0, &da, 1e-8);
+  ASSERT_EQ(ea.size(), e3.size());
+  double ca = 0;
+  for (size_t k = 0; k < e3.size(); ++k) ca = std::max(ca, std::fabs(ea[k] - e3[k]));
+  std::printf("DAE with error control (tol 1e-8): passages within %.2e of h = 5e-4\n", ca);
+  EXPECT_LT(ca, 1e-7);
 }
 
 namespace {
