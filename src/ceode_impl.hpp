@@ -428,6 +428,7 @@ void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
 // flag of g, reported.
 int RootCheck(CEodeMemRec* ce, sunrealtype tend, const char* func);
 sunrealtype RootTime(const CEodeMemRec* ce);
+long int RootNumGEvals(const CEodeMemRec* ce);  // 0 without root functions
 // A new state (init, restart): g is evaluated afresh at the next check; with counters, the
 // count of g evaluations is zeroed (CEodeReInit).
 void RootRestart(CEodeMemRec* ce, bool counters);

@@ -332,6 +332,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
       {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
       {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
+      {"Root fn evals", static_cast<double>(ceode::RootNumGEvals(ce)), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());

@@ -210,6 +210,8 @@ void RootFreeVectors(CEodeMemRec* ce) {
 
 sunrealtype RootTime(const CEodeMemRec* ce) { return ce->root->troot; }
 
+long int RootNumGEvals(const CEodeMemRec* ce) { return ce->root == nullptr ? 0 : ce->root->nge; }
+
 int RootCheck(CEodeMemRec* ce, sunrealtype tend, const char* func) {
   CERootMem* rm = ce->root.get();
   sunrealtype a = 0;
@@ -327,7 +329,7 @@ int CEodeGetNumGEvals(void* mem, long int* ngevals) {
   const int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (ngevals == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "ngevals = NULL.");
-  *ngevals = ce->root == nullptr ? 0 : ce->root->nge;
+  *ngevals = ceode::RootNumGEvals(ce);
   return CE_SUCCESS;
 }
 
