@@ -255,7 +255,9 @@ int main(int argc, char** argv) {
   p.x0 = {1 - kepler::kEcc, 0};
   p.v0 = {0, std::sqrt((1 + kepler::kEcc) / (1 - kepler::kEcc))};
 
-  std::vector<double> tols = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  // From 1e-5: at 1e-4 the phase error of 10 orbits is of order 1 and some solvers (CEODE G5_O4,
+  // CVODE Adams) no longer return the 20 events.
+  std::vector<double> tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
   std::vector<long> fixed_n = {2000, 4000, 8000, 16000, 32000, 64000};
   if (args.quick) {
     tols = {1e-7, 1e-9, 1e-11};
