@@ -597,8 +597,8 @@ TEST(RootFinding, CostsNoRhsEvaluations) {
   }
 }
 
-// CEodeReset restarts at a changed state and keeps the counters: after reversing the velocity at
-// the first zero, x follows the reflected oscillation.
+// CEodeReset restarts at a changed state and keeps the counters and the step: after reversing
+// the velocity at the first zero, x follows the reflected oscillation.
 TEST(RootFinding, ResetRestartsFromTheEventState) {
   for (sunrealtype h : {SUN_RCONST(0.01), SUN_RCONST(0.0)}) {
     Context ctx;
@@ -613,12 +613,16 @@ TEST(RootFinding, ResetRestartsFromTheEventState) {
     long int nst0 = 0, nst1 = 0, nge = 0;
     CEodeGetNumSteps(mem.get(), &nst0);
     const sunrealtype t0 = t, v0 = -NV_Ith_S(v.get(), 0);
+    sunrealtype hnext = 0, h0 = 0;
+    CEodeGetCurrentStep(mem.get(), &hnext);
     N_VScale(-1, v.get(), v.get());
     NV_Ith_S(x.get(), 0) = 0;  // the event's state exactly: g = 0 there, inactive at the restart
     ASSERT_EQ(CEodeReset(mem.get(), t0, x.get(), v.get()), CE_SUCCESS);
     // The reflected motion x = v0 sin(t - t0) has its next zero at t0 + pi.
     ASSERT_EQ(CEodeEvolve(mem.get(), 8, x.get(), v.get(), &t, CE_NORMAL), CE_ROOT_RETURN);
     EXPECT_NEAR(t, t0 + kPi, 1e-7);
+    CEodeGetActualInitStep(mem.get(), &h0);
+    EXPECT_EQ(h0, hnext);  // the controller's step (or the fixed step) goes on
     ASSERT_EQ(CEodeEvolve(mem.get(), 8, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
     EXPECT_NEAR(NV_Ith_S(x.get(), 0), v0 * std::sin(8 - t0), 1e-7);
     CEodeGetNumSteps(mem.get(), &nst1);
