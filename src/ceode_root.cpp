@@ -150,6 +150,8 @@ sunrealtype SecantPoint(sunrealtype tlo, sunrealtype thi, sunrealtype glo, sunre
   return tmid;
 }
 
+constexpr int kMaxSecant = 50;
+
 // Illinois regula falsi on [tlo, thi] (roots bracketed there): narrows the bracket of the
 // earliest root to ttol; the root is its right end, where g has its new sign (or is zero).
 int Illinois(CEodeMemRec* ce, CERootMem* rm, sunrealtype thi, const char* func) {
@@ -161,8 +163,12 @@ int Illinois(CEodeMemRec* ce, CERootMem* rm, sunrealtype thi, const char* func) 
   int side = 0;  // 1: the last iteration kept tlo; 2: it kept thi
   bool any = false;
   int imax = Leading(*rm, glo.data(), ghi.data(), &any);
-  while (imax >= 0 && thi - tlo > ttol) {
-    const sunrealtype tmid = SecantPoint(tlo, thi, glo[imax], ghi[imax], alpha, ttol);
+  for (int it = 0; imax >= 0 && thi - tlo > ttol; ++it) {
+    // A g far from linear in t (a jump) can hold the secant near one end; past kMaxSecant
+    // iterations the bracket is halved, which ends in at most 60 more.
+    const sunrealtype tmid = it < kMaxSecant
+                                 ? SecantPoint(tlo, thi, glo[imax], ghi[imax], alpha, ttol)
+                                 : tlo + sunrealtype(0.5) * (thi - tlo);
     const int flag = EvalG(ce, rm, tmid, rm->gmid.data(), func);
     if (flag != CE_SUCCESS) return flag;
     bool left = false;

@@ -200,6 +200,32 @@ TEST(RootFinding, ReportsSeveralRootsOfOneStepInOrder) {
   }
 }
 
+namespace {
+int GJump(sunrealtype t, N_Vector, N_Vector, sunrealtype* g, void*) {
+  g[0] = t < SUN_RCONST(0.37) ? -1 : SUN_RCONST(1e-3);
+  return 0;
+}
+}  // namespace
+
+// A g that jumps (no root, a sign change) is bracketed to the time tolerance all the same, with
+// a bounded number of evaluations (Illinois' weights, then halving: at most 110 per event).
+TEST(RootFinding, BracketsAJumpOfG) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
+  OscSetup s;
+  s.h = SUN_RCONST(0.25);
+  Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
+  ASSERT_EQ(CEodeRootInit(mem.get(), 1, GJump), CE_SUCCESS);
+  const std::vector<Event> ev = Events(mem.get(), 1, x.get(), v.get(), 1, CE_NORMAL);
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_NEAR(ev[0].t, 0.37, 100 * SUN_UNIT_ROUNDOFF * (1 + 0.25));
+  EXPECT_GE(ev[0].t, 0.37);  // the root is the end where g has its new sign
+  long nge = 0;
+  CEodeGetNumGEvals(mem.get(), &nge);
+  std::printf("jump located with %ld g evaluations\n", nge);
+  EXPECT_LT(nge, 4 + 2 + 110);  // one per step (four steps, the start, the end) and the search
+}
+
 // A zero exactly at a step point (0.5 = 4 h) is returned at that time, once.
 TEST(RootFinding, ReturnsARootAtAStepPointOnce) {
   Context ctx;
