@@ -46,6 +46,7 @@ YLABEL = {
     "damped_pendulum": "|theta(10) - ref| [rad]",
     "pendulum_dae": "max |E - E0| over 10 s [J]",
     "kepler": "|q(t_f) - q(0)| after 10 orbits [length units]",
+    "events": "max |t_k - k pi| over the 20 events of 10 Kepler orbits [time units]",
     "pendulum": "|theta(10) - ref| [rad] (extrapolated reference)",
     "fpu_chain": "error at t = 10 against the extrapolated reference",
 }
@@ -61,7 +62,8 @@ def ylabel(scene):
 
 
 # wp_high_order's problems: its ratios are taken at 1e-9 and 1e-11 (results_page.py).
-HIGH_ORDER_LEVELS = {"pendulum": (1e-9, 1e-11), "fpu_chain": (1e-9, 1e-11)}
+HIGH_ORDER_LEVELS = {"pendulum": (1e-9, 1e-11), "fpu_chain": (1e-9, 1e-11),
+                     "events": (1e-6, 1e-8)}
 
 
 def levels(scene):

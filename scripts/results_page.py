@@ -38,6 +38,10 @@ SCENES = [
     ("forced_vibration", "Forced vibration (stability-limited)",
      "x'' + x = sin(0.01 t) over 1000 s, started on its exact particular solution: the answer is "
      "slow, but the free frequency bounds every explicit step. Error: max |x − x_exact|."),
+    ("events", "Event location (Kepler orbit)",
+     "SUNDIALS' Kepler problem (e = 0.6) over 10 orbits with the root function g = q₂ in both "
+     "directions: 20 events at t = kπ, located on each solver's dense output (CEODE, ARKODE ERK, "
+     "CVODE Adams). Error: max |t_k − kπ|; the CSV's drift column holds the g evaluations."),
     ("pendulum_dae", "Pendulum as an index-3 DAE",
      "The same pendulum in centre-of-mass coordinates with a singular mass matrix (I_zz = 0) and "
      "two position constraints; CEODE without index reduction, ARKODE on the index-1 form, IDA. "

@@ -1,5 +1,6 @@
 // Creation, initialisation, time integration and destruction of CEODE memory,
 // and the single error path. The step itself lives in ceode_step.cpp.
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -74,6 +75,7 @@ void FreeSized(CEodeMemRec* ce) {
   ConstrFree(ce);
   GuardFree(ce);
   AdaptFree(ce);
+  RootFreeVectors(ce);
   FreeVectors(ce);
 }
 
@@ -174,22 +176,49 @@ int EvolveTarget(CEodeMemRec* ce, const char* func, sunrealtype tout, int itask,
   return CE_SUCCESS;
 }
 
+int TooMuchWork(CEodeMemRec* ce, const char* func, long int nsteps, sunrealtype target) {
+  return ProcessError(ce, CE_TOO_MUCH_WORK, func,
+                      "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
+                      "the limit with CEodeSetMaxNumSteps or use a larger h.",
+                      nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
+}
+
 // Steps while the target lies beyond the current interval [tcur, tcur + h].
 int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
   long int nsteps = 0;
   while (StepsRemain(ce, target)) {
-    if (nsteps >= ce->mxstep) {
-      return ProcessError(ce, CE_TOO_MUCH_WORK, func,
-                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise "
-                          "the limit with CEodeSetMaxNumSteps or use a larger h.",
-                          nsteps, static_cast<double>(target), static_cast<double>(ce->tcur));
-    }
+    if (nsteps >= ce->mxstep) return TooMuchWork(ce, func, nsteps, target);
     long int taken = 0;
     const int flag = TakeSteps(ce, target, ce->mxstep - nsteps, &taken);
     nsteps += taken;
     if (flag != CE_SUCCESS) return flag;
   }
   return CE_SUCCESS;
+}
+
+// StepTo with root finding: every interval [tcur, tcur + h] (up to target) is checked before
+// the step past it, one step at a time. CE_ROOT_RETURN: a root at RootTime, inside the interval.
+int StepToRoots(CEodeMemRec* ce, const char* func, sunrealtype target) {
+  long int nsteps = 0;
+  for (;;) {
+    int flag = RootCheck(ce, std::min(ce->tcur + ce->h, target), func);
+    if (flag != CE_SUCCESS) return flag;
+    if (!StepsRemain(ce, target)) return CE_SUCCESS;
+    if (nsteps >= ce->mxstep) return TooMuchWork(ce, func, nsteps, target);
+    long int taken = 0;
+    flag = TakeSteps(ce, target, 1, &taken);
+    nsteps += taken;
+    if (flag != CE_SUCCESS) return flag;
+  }
+}
+
+// The state at the root, as its time.
+int ReturnRoot(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
+  const sunrealtype tr = RootTime(ce);
+  Interpolate(ce, tr - ce->tcur, 0, xout);
+  Interpolate(ce, tr - ce->tcur, 1, vout);
+  *tret = ce->tretlast = tr;
+  return CE_ROOT_RETURN;
 }
 
 // What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
@@ -218,6 +247,7 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
   PcReset(ce, counters);
   GuardReset(ce, counters);
   AdaptReset(ce, counters);
+  RootRestart(ce, counters);
   return CE_SUCCESS;
 }
 
@@ -292,6 +322,16 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   return flag == CE_SUCCESS ? ceode::RestartAt(ce, __func__, t0, x0, v0, true) : flag;
 }
 
+int CEodeReset(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag != CE_SUCCESS) return flag;
+  if (!std::isfinite(t0))
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
+  ceode::AdaptKeepStep(ce);  // the controller's next step is the new start's first
+  return ceode::Reset(ce, __func__, t0, x0, v0, ceode::ResetOptions{});
+}
+
 int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
                 int itask) {
   CEodeMemRec* ce = nullptr;
@@ -315,7 +355,9 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     *tret = ce->tcur;
     return flag;
   }
-  flag = ceode::StepTo(ce, __func__, target);
+  flag = ce->root == nullptr ? ceode::StepTo(ce, __func__, target)
+                             : ceode::StepToRoots(ce, __func__, target);
+  if (flag == CE_ROOT_RETURN) return ceode::ReturnRoot(ce, xout, vout, tret);
   if (flag != CE_SUCCESS) {
     // The last good state is returned; the memory stays usable.
     ceode::ReturnCurrentState(ce, xout, vout, tret);

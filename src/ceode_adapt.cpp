@@ -415,6 +415,11 @@ void AdaptReset(CEodeMemRec* ce, bool counters) {
   ce->adapt->netf = ce->adapt->ncapped = 0;
 }
 
+void AdaptKeepStep(CEodeMemRec* ce) {
+  AdaptMem* am = ce->adapt.get();
+  if (am != nullptr && am->on && am->hlast > 0 && ce->h > 0) am->h_restart = ce->h;
+}
+
 void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout) {
   if (ce->adapt != nullptr) ce->adapt->tout_hint = tout;
 }

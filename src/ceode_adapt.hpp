@@ -104,7 +104,9 @@ sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
 sunrealtype AdaptStableStep(const CEodeMemRec* ce);
 void AdaptFree(CEodeMemRec* ce);                         // its vectors (the problem's size changes)
 void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout);  // CEodeEvolve's tout
-void AdaptDisable(CEodeMemRec* ce);                      // CEodeSetFixedStep
+// CEodeReset: the next start begins with the controller's next step (no effect before a step).
+void AdaptKeepStep(CEodeMemRec* ce);
+void AdaptDisable(CEodeMemRec* ce);  // CEodeSetFixedStep
 void AdaptReset(CEodeMemRec* ce, bool counters);
 // The coefficients of an arbitrary set (also for the tests): C_{p+1}, the order, the remap.
 void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,

@@ -443,13 +443,25 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
   int flag = ApproachStopTime(ce, am, troundoff, &tlimit, func);
   if (flag != CE_SUCCESS) return flag;
   const auto at_limit = [&] { return ce->tstop_set && ce->tcur >= tlimit - troundoff; };
+  int root_flag = CE_SUCCESS;  // each accepted step (and what is left of the last) checked first
   flag = StepUntil(
       ce, am, tout, tlimit,
       [&](long int nsteps) {
+        if (ce->root != nullptr) {
+          root_flag = RootCheck(ce, itask == CE_NORMAL ? std::min(tout, ce->tcur) : ce->tcur, func);
+          if (root_flag != CE_SUCCESS) return true;
+        }
         if (at_limit()) return true;
         return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
       },
       func);
+  if (flag == CE_SUCCESS) flag = root_flag;
+  if (flag == CE_ROOT_RETURN) {
+    const sunrealtype tr = RootTime(ce);
+    Output(ce, tr - ce->tcur, xout, vout);
+    *tret = ce->tretlast = tr;
+    return flag;
+  }
   if (flag != CE_SUCCESS) {
     Output(ce, 0, xout, vout);
     *tret = ce->tretlast = ce->tcur;

@@ -81,6 +81,10 @@ struct AdaptMem;  // ceode_adapt.hpp: the error-control module's record
 struct AdaptMemFree {
   void operator()(AdaptMem* am) const;
 };
+struct CERootMem;  // ceode_root.cpp: the root-finding module's record
+struct RootMemFree {
+  void operator()(CERootMem* rm) const;
+};
 
 // The acceleration solve of a step, chosen once per start: explicit (docs/theory.md section
 // 4.1), the nonlinear solver (4.2), prediction-correction (4.3), either by the coupling (AUTO,
@@ -274,6 +278,9 @@ struct CEodeMemRec {
   std::unique_ptr<ceode::StepMem, ceode::StepMemFree> step;
   // The error-control module's record (ceode_adapt.hpp): created by the first tolerances call.
   std::unique_ptr<ceode::AdaptMem, ceode::AdaptMemFree> adapt;
+  // The root-finding module's record (ceode_root.cpp): created by CEodeRootInit with nrtfn > 0,
+  // null otherwise (the run then tests this pointer only).
+  std::unique_ptr<ceode::CERootMem, ceode::RootMemFree> root;
   sunrealtype h = 0;  // 0 until CEodeSetFixedStep; with error control, the next step to take
   ceode::StepCoeffs co;
 
@@ -424,6 +431,18 @@ void FreeVectors(CEodeMemRec* ce);
 
 // ceode_dense.cpp
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
+
+// ceode_root.cpp (called only while ce->root is set, except the two resets)
+// Checks the roots of g over [tlo, tend], tend inside the dense output's interval: CE_SUCCESS
+// (none; checked up to tend), CE_ROOT_RETURN (at RootTime, checked up to there) or the failure
+// flag of g, reported.
+int RootCheck(CEodeMemRec* ce, sunrealtype tend, const char* func);
+sunrealtype RootTime(const CEodeMemRec* ce);
+long int RootNumGEvals(const CEodeMemRec* ce);  // 0 without root functions
+// A new state (init, restart): g is evaluated afresh at the next check; with counters, the
+// count of g evaluations is zeroed (CEodeReInit).
+void RootRestart(CEodeMemRec* ce, bool counters);
+void RootFreeVectors(CEodeMemRec* ce);  // the problem's size changes (a second CEodeInit)
 
 // ceode_ls.cpp
 int MassUpdate(CEodeMemRec* ce, sunrealtype t, N_Vector x, const char* func);

@@ -342,6 +342,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
       {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
       {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
+      {"Root fn evals", static_cast<double>(ceode::RootNumGEvals(ce)), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
@@ -381,6 +382,7 @@ const char* ceode::FlagName(long int flag) {
   } kNames[] = {
       {CE_SUCCESS, "CE_SUCCESS"},
       {CE_TSTOP_RETURN, "CE_TSTOP_RETURN"},
+      {CE_ROOT_RETURN, "CE_ROOT_RETURN"},
       {CE_WARNING, "CE_WARNING"},
       {CE_MEM_NULL, "CE_MEM_NULL"},
       {CE_ILL_INPUT, "CE_ILL_INPUT"},
@@ -403,6 +405,7 @@ const char* ceode::FlagName(long int flag) {
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
       {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
       {CE_INCONSISTENT_IC, "CE_INCONSISTENT_IC"},
+      {CE_RTFUNC_FAIL, "CE_RTFUNC_FAIL"},
   };
   for (const auto& entry : kNames) {
     if (entry.flag == flag) return entry.name;

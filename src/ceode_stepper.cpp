@@ -225,7 +225,12 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
   if (tout - t0 > tol) {
     if ((flag = RestartInner(st, t0, tout, own, func)) != CE_SUCCESS) return flag;
     sunrealtype tret = t0;
-    if ((flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL)) < 0) return flag;
+    // Events of this memory's root functions are not the outer method's: the inner step goes on
+    // through them to tout.
+    do {
+      flag = CEodeEvolve(ce, tout, own.x, st->u, &tret, CE_NORMAL);
+    } while (flag == CE_ROOT_RETURN);
+    if (flag < 0) return flag;
     if (st->adaptive) CEodeGetLastStep(ce, &st->h_last);
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.

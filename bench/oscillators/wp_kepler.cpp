@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "dprkn6.h"
+#include "kepler_model.h"
 #include "wp_common.h"
 #ifdef CEODE_BENCH_PEERS
 #include "peers.h"
@@ -53,40 +54,15 @@
 
 namespace {
 
-constexpr double kEcc = 0.6;
+using kepler::Acc;
+using kepler::Energy;
+using kepler::Exact;
+using kepler::kEcc;
+using kepler::Kepler;
 constexpr int kOrbits = 10;
 const double kTend = 2 * M_PI * kOrbits;
 
-// The user data: counts every f evaluation, whoever asks for it.
-struct Kepler {
-  long evals = 0;
-};
-
 long& Evals(const wp::Problem& p) { return static_cast<Kepler*>(p.user)->evals; }
-
-int Acc(double, const double* x, const double*, double* a, void* user) {
-  ++static_cast<Kepler*>(user)->evals;
-  const double r2 = x[0] * x[0] + x[1] * x[1];
-  const double ir3 = 1 / (r2 * std::sqrt(r2));
-  a[0] = -x[0] * ir3;
-  a[1] = -x[1] * ir3;
-  return 0;
-}
-
-double Energy(const double* x, const double* v) {
-  return 0.5 * (v[0] * v[0] + v[1] * v[1]) - 1 / std::hypot(x[0], x[1]);
-}
-
-// The exact state at time t from the pericentre (Kepler's equation by Newton, mean motion 1).
-void Exact(double t, double* x, double* v) {
-  double E = t;
-  for (int i = 0; i < 60; ++i) E -= (E - kEcc * std::sin(E) - t) / (1 - kEcc * std::cos(E));
-  const double s = std::sqrt(1 - kEcc * kEcc), dE = 1 / (1 - kEcc * std::cos(E));
-  x[0] = std::cos(E) - kEcc;
-  x[1] = s * std::sin(E);
-  v[0] = -std::sin(E) * dE;
-  v[1] = s * std::cos(E) * dE;
-}
 
 // The runners observe after every step; only the instant t_f counts (fixed steps reach it up
 // to the rounding of N additions, adaptive ones exactly).

@@ -52,6 +52,7 @@ extern "C" {
 /* Return flags */
 #define CE_SUCCESS 0
 #define CE_TSTOP_RETURN 1
+#define CE_ROOT_RETURN 2 /* CEodeEvolve stopped at a root of g (CEodeRootInit) */
 #define CE_WARNING 99
 
 #define CE_MEM_NULL (-1)
@@ -75,6 +76,7 @@ extern "C" {
 #define CE_VECTOROP_ERR (-19)
 #define CE_ERR_FAILURE (-20)
 #define CE_INCONSISTENT_IC (-21)
+#define CE_RTFUNC_FAIL (-22) /* the root function failed or returned NaN/Inf */
 
 /* What CEodeCalcIC projects (bitwise or) */
 #define CE_IC_POSITION 1
@@ -130,6 +132,8 @@ typedef void (*CEodeErrHandlerFn)(int error_code, const char* module, const char
                                   char* msg, void* eh_data);
 /* Error weights of the adaptive step, as CVODE's CVEwtFn: ewt_i > 0 for every entry of
  * the position x (CEodeWFtolerances). */
+/* Root (event) functions: g_i(t, x, v), i < nrtfn, into gout (CEodeRootInit); 0: success */
+typedef int (*CERootFn)(sunrealtype t, N_Vector x, N_Vector v, sunrealtype* gout, void* user_data);
 typedef int (*CEodeEwtFn)(N_Vector x, N_Vector ewt, void* user_data);
 /* A first-order right-hand side F(t, y, ydot), unchanged from ARKODE/CVODE, with
  * y = [x; v] and ydot = [v; a] (CEodeInitFirstOrder). */
@@ -265,6 +269,21 @@ SUNDIALS_EXPORT int CEodeEvolveFirstOrder(void* mem, sunrealtype tout, N_Vector 
                                           sunrealtype* tret, int itask);
 /* Dense output: the k-th derivative of the current step's polynomial at t */
 SUNDIALS_EXPORT int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky);
+
+/* Root finding (events), as CVODE's: the nrtfn functions g are checked for a sign change over
+ * every step on the dense output; CEodeEvolve returns CE_ROOT_RETURN at the earliest root.
+ * nrtfn = 0 turns root finding off. dir[i] = +1 (-1): only roots where g_i increases
+ * (decreases); 0: both. rootsfound[i] = +1 / -1: g_i has a root and increases / decreases;
+ * 0: no root. A function zero at the start is inactive until it moves away from zero. */
+SUNDIALS_EXPORT int CEodeRootInit(void* mem, int nrtfn, CERootFn g);
+SUNDIALS_EXPORT int CEodeSetRootDirection(void* mem, int* rootdir);
+SUNDIALS_EXPORT int CEodeSetNoInactiveRootWarn(void* mem);
+SUNDIALS_EXPORT int CEodeGetRootInfo(void* mem, int* rootsfound);
+SUNDIALS_EXPORT int CEodeGetNumGEvals(void* mem, long int* ngevals);
+/* A restart at (t0, x0, v0) for a state change after which the solution stays smooth (an
+ * event that changes a velocity, say): keeps the counters, the options, the step size and,
+ * with error control, the controller's next step; the method's history is started again. */
+SUNDIALS_EXPORT int CEodeReset(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0);
 
 /* =============================================================================
  * 6. Optional outputs
