@@ -193,6 +193,12 @@ int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
 // with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
 int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
               bool counters) {
+  // A non-finite time would reach every output with CE_SUCCESS (tret, dense output, stop time).
+  if (!std::isfinite(t0)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "t0 = %g is not finite: pass a finite initial time.",
+                        static_cast<double>(t0));
+  }
   int flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (N_VGetLength(x0) != ce->n) {
@@ -221,7 +227,11 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
 
 int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
                 N_Vector v0) {
-  if (!std::isfinite(t0)) return ProcessError(ce, CE_ILL_INPUT, func, "t0 is not finite.");
+  if (!std::isfinite(t0)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "t0 = %g is not finite: pass a finite initial time.",
+                        static_cast<double>(t0));
+  }
   int flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (ce->initialized) FreeSized(ce);  // a second Init replaces the problem

@@ -176,7 +176,8 @@ int CheckVelocityDependence(CEodeMemRec* ce, const char* func) {
     return CE_SUCCESS;
   }
   ce->vel_dependent = true;  // the solvers were set up for the explicit path: set them up again
-  flag = AllocSolverWork(ce, func);
+  flag = ValidateConfiguration(ce, func);  // the implicit path's objects (nonlinear solver) too
+  if (flag == CE_SUCCESS) flag = AllocSolverWork(ce, func);
   if (flag == CE_SUCCESS) flag = LsInitialize(ce, func);
   return flag == CE_SUCCESS ? NlsInitialize(ce, func) : flag;
 }

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
@@ -605,6 +606,188 @@ TEST_F(HostileInput, ErrorsBeforeAnyStepSetTretToTheCurrentTimeAndLeaveTheOutput
   EXPECT_TRUE(Contains(Message(), "3 x 3"));
   EXPECT_NEAR(t, 1, 1e-12);
   EXPECT_TRUE(untouched());
+}
+
+// --- 13. Non-finite times, shrinking sizes, and the Jacobian on every implicit path ------------
+
+TEST_F(HostileInput, ReInitRefusesANonFiniteInitialTimeAndKeepsTheCurrentOne) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  sunrealtype t = -1;
+  ASSERT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_SUCCESS);
+  for (const sunrealtype t0 : {SUN_RCONST(NAN), SUN_RCONST(INFINITY), -SUN_RCONST(INFINITY)}) {
+    EXPECT_EQ(CEodeReInit(mem(), t0, x_.get(), v_.get()), CE_ILL_INPUT);
+    EXPECT_TRUE(Contains(Message(), "t0"));
+    sunrealtype tcur = NAN;
+    ASSERT_EQ(CEodeGetCurrentTime(mem(), &tcur), CE_SUCCESS);
+    EXPECT_NEAR(tcur, 0.5, 1e-12);
+  }
+  ExpectCorrectRunAfterReInit();
+}
+
+// Per configuration (velocity dependence, a mass matrix, the stability guard): after CEodeInit
+// shrinks n from 3 to 2, the 3 x 3 objects left attached are refused by Evolve and by the guard's
+// own entry point (CEodeGetStableStep) before any of them is touched, and the right sizes then give
+// the right answer.
+TEST_F(HostileInput, ASecondInitThatShrinksTheProblemUnderALargerSolverIsRefusedCleanly) {
+  for (int config = 0; config < 8; ++config) {
+    SCOPED_TRACE("configuration " + std::to_string(config));
+    const bool vdep = (config & 1) != 0, mass = (config & 2) != 0, guard = (config & 4) != 0;
+    mem_.reset(CEodeCreate(ctx_));
+    CEodeSetErrFile(mem(), nullptr);
+    ASSERT_EQ(Start(3), CE_SUCCESS);
+    if (guard) ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_WARN, 10), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetVelocityDependence(mem(), vdep ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+    Matrix A3(SUNDenseMatrix(3, 3, ctx_)), M3(SUNDenseMatrix(3, 3, ctx_));
+    LinearSolver LS3(SUNLinSol_Dense(x_.get(), A3.get(), ctx_));
+    ASSERT_EQ(CEodeSetLinearSolver(mem(), LS3.get(), A3.get()), CE_SUCCESS);
+    if (mass) ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M3.get(), SUNTRUE), CE_SUCCESS);
+    sunrealtype t = -1;
+    ASSERT_EQ(Evolve(SUN_RCONST(0.1), &t), CE_SUCCESS) << Message();
+    ASSERT_EQ(Start(2), CE_SUCCESS);  // the 3 x 3 objects stay attached
+    if (guard) ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_WARN, 10), CE_SUCCESS);
+    sunrealtype hmax = -1;
+    if (mass) {  // the guard factors its own copy of M (without M it uses no attached object)
+      EXPECT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_ILL_INPUT);
+      EXPECT_TRUE(Contains(Message(), "3 x 3"));
+    } else {
+      EXPECT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_SUCCESS);
+      EXPECT_NEAR(hmax, 0.99 * 2, 0.01) << "G3_CD: Omega_max = 2 over omega_max = 1";
+    }
+    EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+    EXPECT_TRUE(Contains(Message(), "3 x 3"));
+    EXPECT_TRUE(Finite());
+    Matrix A2(SUNDenseMatrix(2, 2, ctx_)), M2(SUNDenseMatrix(2, 2, ctx_));
+    LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
+    ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
+    if (mass) ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+    ExpectCorrectRunAfterReInit();
+    mem_.reset();  // before the solvers it used
+  }
+}
+
+TEST_F(HostileInput, MassAndSolverBothTooLargeLeaveTheMemoryUsableWithTheRightSizes) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  Matrix M3(SUNDenseMatrix(3, 3, ctx_));
+  Matrix A3(SUNDenseMatrix(3, 3, ctx_));
+  Vector y3 = SerialVector(3, ctx_);
+  LinearSolver LS3(SUNLinSol_Dense(y3.get(), A3.get(), ctx_));
+  EXPECT_EQ(CEodeSetMassFn(mem(), IdentityMass, M3.get(), SUNTRUE), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "3 x 3"));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS3.get(), A3.get()), CE_SUCCESS);  // may wait for nc
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "3 x 3"));
+  EXPECT_TRUE(Finite());
+  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
+  Matrix A2(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
+  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+}
+
+// The Jacobian is evaluated by the Newton matrix's setup only. Per implicit mode, with a strong
+// damping (c = 50, h = 1e-2: kappa c well above AUTO's contraction limit 0.2) and a weak one
+// (c = 0.1, so AUTO keeps prediction-correction): a failing Jacobian ends the run with
+// CE_JACFUNC_FAIL whenever CEodeGetNumJacEvals counts a call, and a path that never calls it says
+// so by njevals = 0.
+TEST_F(HostileInput, AFailingVelocityJacobianReachesTheUserOnEveryPathThatCallsIt) {
+  Matrix A(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
+  for (const int mode : {CE_IMPLICIT_NEWTON, CE_IMPLICIT_PC, CE_IMPLICIT_AUTO}) {
+    for (const sunrealtype c : {SUN_RCONST(50.0), SUN_RCONST(0.1)}) {
+      for (int variant = 0; variant < 4; ++variant) {  // fused or not, detection, tolerances
+        SCOPED_TRACE("mode " + std::to_string(mode) + ", c " + std::to_string(c) + ", variant " +
+                     std::to_string(variant));
+        ASSERT_EQ(Start(2, SUN_RCONST(1e-2)), CE_SUCCESS);
+        osc_.c = c;
+        osc_.jac_retval = -1;
+        ASSERT_EQ(variant == 2 ? CEodeSetVelocityMode(mem(), CE_VELOCITY_DETECT)
+                               : CEodeSetVelocityDependence(mem(), SUNTRUE),
+                  CE_SUCCESS);
+        if (variant == 3) ASSERT_EQ(CEodeSStolerances(mem(), 1e-6, 1e-8), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetImplicitMode(mem(), mode), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetVelJacFn(mem(), Oscillator::Jac), CE_SUCCESS);
+        CEodeSetFusedKernel(mem(), variant == 1 ? SUNFALSE : SUNTRUE);
+        sunrealtype t = -1;
+        const int flag = Evolve(1, &t);
+        long int nje = -1;
+        ASSERT_EQ(CEodeGetNumJacEvals(mem(), &nje), CE_SUCCESS);
+        if (nje > 0) {
+          EXPECT_EQ(flag, CE_JACFUNC_FAIL);
+          EXPECT_TRUE(Contains(Message(), "Jacobian"));
+        } else {
+          EXPECT_EQ(flag, CE_SUCCESS) << Message();
+        }
+        EXPECT_EQ(nje > 0, mode == CE_IMPLICIT_NEWTON || (mode == CE_IMPLICIT_AUTO && c > 1));
+        EXPECT_TRUE(Finite());
+        osc_ = Oscillator{};
+        ASSERT_EQ(CEodeSetVelJacFn(mem(), nullptr), CE_SUCCESS);
+        if (variant == 3) ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+        ExpectCorrectRunAfterReInit();
+      }
+    }
+  }
+}
+
+int FailingJac(sunrealtype, N_Vector, N_Vector, N_Vector, SUNMatrix, void*, N_Vector, N_Vector,
+               N_Vector) {
+  return -1;
+}
+
+// The constrained step evaluates df/dv in its saddle-point (or Schur) matrix on every velocity-
+// dependent run: a failing Jacobian ends it there too.
+TEST_F(HostileInput, AFailingVelocityJacobianReachesTheUserOnTheConstrainedPath) {
+  Pendulum pend;
+  x_ = SerialVector(2, ctx_);
+  v_ = SerialVector(2, ctx_);
+  NV_Ith_S(x_.get(), 0) = 1;
+  ASSERT_EQ(CEodeInit(mem(), Pendulum::F, 0, x_.get(), v_.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem(), &pend), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  Vector lam = SerialVector(1, ctx_);
+  ASSERT_EQ(CEodeSetConstraints(mem(), lam.get(), Pendulum::Phi, Pendulum::G), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelJacFn(mem(), FailingJac), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_JACFUNC_FAIL) << Message();
+  EXPECT_TRUE(Contains(Message(), "Jacobian"));
+  EXPECT_TRUE(Finite());
+  ASSERT_EQ(CEodeSetVelJacFn(mem(), nullptr), CE_SUCCESS);
+  ASSERT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_SUCCESS) << Message();
+  const sunrealtype r =
+      NV_Ith_S(x_.get(), 0) * NV_Ith_S(x_.get(), 0) + NV_Ith_S(x_.get(), 1) * NV_Ith_S(x_.get(), 1);
+  EXPECT_NEAR(r, 1, 1e-9);
+}
+
+// Detection turns the implicit step on at the start, after the configuration was checked for the
+// explicit one: the Newton solver it then uses is checked too, never run on vectors of 2.
+TEST_F(HostileInput, ANewtonSolverForAnotherLengthIsRefusedWhenDetectionTurnsTheImplicitStepOn) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  osc_.c = 1;  // f depends on x'
+  Vector y5 = SerialVector(5, ctx_);
+  Matrix A(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
+  NonlinearSolver newton5(SUNNonlinSol_Newton(y5.get(), ctx_));
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton5.get()), CE_ILL_INPUT);  // n is known
+  // Attached for another size before the problem changes to n = 2 under it.
+  ASSERT_EQ(Start(5), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton5.get()), CE_SUCCESS);
+  ASSERT_EQ(Start(2), CE_SUCCESS);
+  osc_.c = 1;
+  ASSERT_EQ(CEodeSetVelocityMode(mem(), CE_VELOCITY_DETECT), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 5"));
+  EXPECT_TRUE(Finite());
+  NonlinearSolver newton2(SUNNonlinSol_Newton(x_.get(), ctx_));
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton2.get()), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+  mem_.reset();  // before the solvers it used
 }
 
 }  // namespace
