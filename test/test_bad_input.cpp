@@ -6,6 +6,7 @@
 #include <ceode/ceode_stability.h>
 #include <gtest/gtest.h>
 #include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
@@ -788,6 +789,47 @@ TEST_F(HostileInput, ANewtonSolverForAnotherLengthIsRefusedWhenDetectionTurnsThe
   ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton2.get()), CE_SUCCESS);
   ExpectCorrectRunAfterReInit();
   mem_.reset();  // before the solvers it used
+}
+
+// A matrix-free Krylov solver runs on the problem's vectors with work vectors of its own length:
+// one made for another length is refused, at the setter and after a CEodeInit that resizes.
+TEST_F(HostileInput, AMatrixFreeSolverForAnotherLengthIsRefusedNotRunOnShorterVectors) {
+  Vector y3 = SerialVector(3, ctx_);
+  LinearSolver gmres3(SUNLinSol_SPGMR(y3.get(), SUN_PREC_NONE, 0, ctx_));
+  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetLinearSolver(mem(), gmres3.get(), nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 3"));
+  ASSERT_EQ(Start(3), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), gmres3.get(), nullptr), CE_SUCCESS);
+  ASSERT_EQ(Start(2), CE_SUCCESS);  // the solver for 3 stays attached
+  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 3"));
+  EXPECT_TRUE(Finite());
+  LinearSolver gmres2(SUNLinSol_SPGMR(x_.get(), SUN_PREC_NONE, 0, ctx_));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), gmres2.get(), nullptr), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+  mem_.reset();  // before the solvers it used
+}
+
+// Finite input whose result overflows is refused, not returned as Inf with success.
+TEST_F(HostileInput, OverflowingResultsOfTheUtilitiesAreRefusedNotReturnedAsInfinity) {
+  Matrix K(SUNDenseMatrix(2, 2, ctx_));
+  SM_ELEMENT_D(K.get(), 0, 0) = 1e300;
+  SM_ELEMENT_D(K.get(), 1, 1) = 1;
+  Vector mass = SerialVector(2, ctx_, 1e-300);
+  sunrealtype omega = -1;
+  EXPECT_EQ(CEodeGetFrequencyBound(mem(), K.get(), mass.get(), &omega), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "overflow"));
+  EXPECT_EQ(omega, -1);
+  N_VConst(1, mass.get());  // the same K with unit masses: omega_max^2 <= 1e300
+  ASSERT_EQ(CEodeGetFrequencyBound(mem(), K.get(), mass.get(), &omega), CE_SUCCESS);
+  EXPECT_DOUBLE_EQ(omega, 1e150);
+  const sunrealtype params[3] = {0.5, 2, 1.7976931348623157e308};
+  sunrealtype cx[6], cv[6];
+  EXPECT_EQ(CEodeMethodErrorCoeffs(4, params, 6, cx, cv), CE_ILL_INPUT);
 }
 
 }  // namespace
