@@ -323,6 +323,10 @@ SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
 
 SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
   return OnSun(s, [&](Stepper* st) {
+    if (!std::isfinite(tstop)) {
+      return ProcessError(st->ce, CE_ILL_INPUT, "CEodeSUNStepperSetStopTime",
+                          "tstop = %g is not finite.", static_cast<double>(tstop));
+    }
     st->tstop = tstop;
     st->tstop_set = true;
     return CE_SUCCESS;
@@ -331,6 +335,10 @@ SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
 
 SUNErrCode SunSetStepDirection(SUNStepper s, sunrealtype stepdir) {
   const auto check = [&](Stepper* st) {
+    if (std::isnan(stepdir)) {
+      return ProcessError(st->ce, CE_ILL_INPUT, "CEodeSUNStepperSetStepDirection",
+                          "Step direction NaN: pass a positive direction.");
+    }
     if (!(stepdir < 0)) return CE_SUCCESS;
     return ProcessError(st->ce, CE_BAD_T, "CEodeSUNStepperSetStepDirection",
                         "Step direction %g: CEODE integrates forward only (a splitting method "
