@@ -346,6 +346,7 @@ class Sequence {
   // ---- operations ---------------------------------------------------------------------------
 
   void Step();
+  void AfterOp();
   void Init();
   void ReInit();
   void FirstOrder();
@@ -438,6 +439,21 @@ void Sequence::Step() {
   const int k = Int(0, static_cast<int>(std::size(ops)) - 1);
   if (ops[k] == &Sequence::Canonical && !Chance(4)) return;  // an occasional check mid-sequence
   (this->*ops[k])();
+  AfterOp();
+}
+
+// After every operation, whatever it was: the memory's time, step and counters are finite.
+void Sequence::AfterOp() {
+  void* m = mem_.get();
+  sunrealtype t = NAN, h = NAN;
+  long nst = -1, nfe = -1;
+  Finite(CEodeGetCurrentTime(m, &t), "the current time after the operation", t);
+  Finite(CEodeGetCurrentStep(m, &h), "the current step after the operation", h);
+  NonNegative(CEodeGetNumSteps(m, &nst), "the step count after the operation", nst);
+  NonNegative(CEodeGetNumRhsEvals(m, &nfe), "the f count after the operation", nfe);
+  const char* msg = nullptr;
+  if (CEodeGetLastErrorMessage(m, &msg) != CE_SUCCESS || msg == nullptr)
+    Violation("no last message string after the operation");
 }
 
 void Sequence::SetOutputs(sunindextype n) {
