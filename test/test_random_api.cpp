@@ -261,6 +261,7 @@ class Sequence {
   void Run(int ops) {
     op_ = -1;
     Canonical();  // from a working setup, so that the calls reach real integrations
+    RichSetup();
     for (op_ = 0; op_ < ops; ++op_) Step();
     op_ = ops;
     Canonical();
@@ -375,6 +376,7 @@ class Sequence {
 #endif
   void Lifecycle();
   void Canonical();
+  void RichSetup();
   void SetOutputs(sunindextype n);
 
   std::uint32_t seed_;
@@ -439,6 +441,7 @@ void Sequence::Step() {
   const int k = Int(0, static_cast<int>(std::size(ops)) - 1);
   if (ops[k] == &Sequence::Canonical && !Chance(4)) return;  // an occasional check mid-sequence
   (this->*ops[k])();
+  if (ops[k] == &Sequence::Canonical) RichSetup();
   AfterOp();
 }
 
@@ -1186,6 +1189,33 @@ void Sequence::Canonical() {
     Violation("canonical run gave x = " + std::to_string(NV_Ith_S(x_.get(), 0)) +
               " at t = " + std::to_string(t) + ", exact " + std::to_string(exact));
   }
+}
+
+// A valid configuration beyond the canonical one for n = 2, so that the sequence's calls also
+// meet the implicit step, the mass matrix, constraints (on the unit circle) and error control.
+void Sequence::RichSetup() {
+  void* m = mem_.get();
+  CEodeSetUserData(m, &data_);
+  data_ = Data{};
+  if (Chance(2)) {
+    data_.c = Pick<sunrealtype>({0.1, 50});
+    CEodeSetVelocityDependence(m, SUNTRUE);
+    CEodeSetImplicitMode(m, Pick<int>({CE_IMPLICIT_NEWTON, CE_IMPLICIT_PC, CE_IMPLICIT_AUTO}));
+    if (Chance(2)) CEodeSetVelJacFn(m, VelJac);
+  }
+  if (Chance(3)) CEodeSetMassFn(m, Mass, obj_.mass_dense[1].get(), Bool());
+  if (Chance(3)) {
+    const sunrealtype r = std::sqrt(SUN_RCONST(0.5));
+    N_VConst(r, x_.get());
+    NV_Ith_S(v_.get(), 0) = SUN_RCONST(0.5);
+    NV_Ith_S(v_.get(), 1) = SUN_RCONST(-0.5);
+    CEodeReInit(m, 0, x_.get(), v_.get());
+    CEodeSetConstraints(m, obj_.templates[0].get(), Phi, ConstrJac);
+    CEodeSetLinearSolver(m, obj_.ls_dense[2].get(), obj_.dense[2].get());
+    CEodeSetSchurComplement(m, Bool());
+    nc_ = 1;
+  }
+  if (Chance(4)) CEodeSStolerances(m, SUN_RCONST(1e-6), SUN_RCONST(1e-8));
 }
 
 TEST(RandomApiSequences, KeepEveryInvariantUnderArgumentFuzzingOfEveryEntryPoint) {
