@@ -135,8 +135,7 @@ int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vecto
   if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
     return ProcessError(ce, CE_ILL_INPUT, func, "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
   }
-  if (!std::isfinite(tout)) return ProcessError(ce, CE_ILL_INPUT, func, "tout is not finite.");
-  return CE_SUCCESS;
+  return ValidateTime(ce, func, "tout", tout);
 }
 
 void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
@@ -193,13 +192,8 @@ int StepTo(CEodeMemRec* ce, const char* func, sunrealtype target) {
 // with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
 int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
               bool counters) {
-  // A non-finite time would reach every output with CE_SUCCESS (tret, dense output, stop time).
-  if (!std::isfinite(t0)) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "t0 = %g is not finite: pass a finite initial time.",
-                        static_cast<double>(t0));
-  }
-  int flag = CheckInitialData(ce, func, x0, v0);
+  int flag = ValidateTime(ce, func, "t0", t0);
+  if (flag == CE_SUCCESS) flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (N_VGetLength(x0) != ce->n) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -227,12 +221,8 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
 
 int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
                 N_Vector v0) {
-  if (!std::isfinite(t0)) {
-    return ProcessError(ce, CE_ILL_INPUT, func,
-                        "t0 = %g is not finite: pass a finite initial time.",
-                        static_cast<double>(t0));
-  }
-  int flag = CheckInitialData(ce, func, x0, v0);
+  int flag = ValidateTime(ce, func, "t0", t0);
+  if (flag == CE_SUCCESS) flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (ce->initialized) FreeSized(ce);  // a second Init replaces the problem
   flag = AllocVectors(ce, x0);

@@ -189,8 +189,7 @@ int CEodeSetStopTime(void* mem, sunrealtype tstop) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (!std::isfinite(tstop))
-    return ProcessError(ce, CE_ILL_INPUT, __func__, "tstop is not finite.");
+  if ((flag = ceode::ValidateTime(ce, __func__, "tstop", tstop)) != CE_SUCCESS) return flag;
   ce->tstop = tstop;
   ce->tstop_set = true;
   return CE_SUCCESS;
@@ -331,8 +330,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Constraint Jac evals", static_cast<double>(ce->con.nge), true},
       {"Max frequency estimate", static_cast<double>(ce->guard.omega_est), false},
       {"Error test fails", static_cast<double>(ce->adapt ? ce->adapt->netf : 0), true},
-      {"Steps limited by stability",
-       static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
+      {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
   };
   if (fmt == SUN_OUTPUTFORMAT_TABLE) {
     std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());

@@ -323,10 +323,8 @@ SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
 
 SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
   return OnSun(s, [&](Stepper* st) {
-    if (!std::isfinite(tstop)) {
-      return ProcessError(st->ce, CE_ILL_INPUT, "CEodeSUNStepperSetStopTime",
-                          "tstop = %g is not finite.", static_cast<double>(tstop));
-    }
+    const int flag = ValidateTime(st->ce, "CEodeSUNStepperSetStopTime", "tstop", tstop);
+    if (flag != CE_SUCCESS) return flag;
     st->tstop = tstop;
     st->tstop_set = true;
     return CE_SUCCESS;

@@ -231,6 +231,13 @@ int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_
   return CE_SUCCESS;
 }
 
+int ValidateTime(CEodeMemRec* ce, const char* func, const char* name, sunrealtype t) {
+  // A non-finite time would reach every output with CE_SUCCESS (tret, dense output, stop time).
+  if (std::isfinite(t)) return CE_SUCCESS;
+  return ProcessError(ce, CE_ILL_INPUT, func, "%s = %g is not finite: pass a finite time.", name,
+                      static_cast<double>(t));
+}
+
 int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
                              sunrealtype abstol) {
   if (!(reltol > 0) || !std::isfinite(reltol) || !(abstol >= 0) || !std::isfinite(abstol)) {
