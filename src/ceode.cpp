@@ -138,6 +138,19 @@ int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vecto
   return ValidateTime(ce, func, "tout", tout);
 }
 
+// The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
+// cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
+// extreme for this h) is caught here, once per call, and never returned with success.
+int CheckReturned(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout, int flag) {
+  if (flag < 0 || (IsFinite(xout) && IsFinite(vout))) return flag;
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The %s at t = %.17g is not finite although every step passed its growth "
+                      "check: h = %g is beyond what %s can represent (its velocity weights "
+                      "overflow); reduce h or choose another set, then call CEodeReInit.",
+                      IsFinite(xout) ? "velocity" : "position", static_cast<double>(ce->tcur),
+                      static_cast<double>(ce->h), ce->method_name.c_str());
+}
+
 void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
   N_VScale(1.0, ce->xcur, xout);
   N_VScale(1.0, ce->D[1], vout);
@@ -302,7 +315,10 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     *tret = ce->tcur;
     return flag;
   }
-  if (ceode::AdaptOn(ce)) return ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
+  if (ceode::AdaptOn(ce)) {
+    flag = ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
+    return ceode::CheckReturned(ce, __func__, xout, vout, flag);
+  }
   sunrealtype target = 0;
   bool hit_tstop = false;
   flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
@@ -322,11 +338,8 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   ceode::Interpolate(ce, target - ce->tcur, 1, vout);
   *tret = target;
   ce->tretlast = target;
-  if (hit_tstop) {
-    ce->tstop_set = false;
-    return CE_TSTOP_RETURN;
-  }
-  return CE_SUCCESS;
+  if (hit_tstop) ce->tstop_set = false;
+  return ceode::CheckReturned(ce, __func__, xout, vout, hit_tstop ? CE_TSTOP_RETURN : CE_SUCCESS);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

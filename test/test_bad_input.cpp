@@ -832,4 +832,31 @@ TEST_F(HostileInput, OverflowingResultsOfTheUtilitiesAreRefusedNotReturnedAsInfi
   EXPECT_EQ(CEodeMethodErrorCoeffs(4, params, 6, cx, cv), CE_ILL_INPUT);
 }
 
+// A set with an extreme velocity weight (beta = -1e300) passes the parameter checks, and its
+// positions stay finite while the velocity overflows: CEodeEvolve returns CE_UNSTABLE then, never
+// success with a non-finite output, and the memory integrates again after a new set and ReInit.
+TEST_F(HostileInput, AVelocityThatOverflowsWithFinitePositionsIsNeverReturnedWithSuccess) {
+  const sunrealtype params[3] = {SUN_RCONST(4.0) / 3, SUN_RCONST(-1e300), 2};
+  int failures = 0;
+  for (const bool adaptive : {false, true}) {
+    SCOPED_TRACE(adaptive ? "tolerances" : "fixed step");
+    ASSERT_EQ(Start(), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethod(mem(), 4, params), CE_SUCCESS);
+    if (adaptive) ASSERT_EQ(CEodeSStolerances(mem(), 1e-6, 1e-8), CE_SUCCESS);
+    sunrealtype t = -1;
+    const int flag = Evolve(SUN_RCONST(0.1), &t);
+    if (flag >= 0) {
+      EXPECT_TRUE(Finite());
+      continue;
+    }
+    ++failures;
+    EXPECT_EQ(flag, CE_UNSTABLE) << Message();
+    EXPECT_FALSE(Message().empty());
+    ASSERT_EQ(CEodeSetMethodByName(mem(), "G3_CD"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+    ExpectCorrectRunAfterReInit();
+  }
+  EXPECT_GT(failures, 0) << "the set must overflow on at least one path";
+}
+
 }  // namespace
