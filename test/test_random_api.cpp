@@ -518,6 +518,7 @@ void Sequence::FirstOrder() {
       sunrealtype tcur = 0, t = NAN;
       CEodeGetCurrentTime(mem_.get(), &tcur);
       const sunrealtype tout = tcur + Real({0, 0.01, 0.3});
+      if (!(std::fabs(tout - tcur) <= 3)) CEodeSetMaxNumSteps(mem_.get(), 3000);  // as Evolve
       flag = Call("CEodeEvolveFirstOrder", m, [&] {
         return CEodeEvolveFirstOrder(m, tout, y, Chance(20) ? nullptr : &t,
                                      Pick<int>({CE_NORMAL, CE_ONE_STEP, 0}));
@@ -838,6 +839,8 @@ void Sequence::Evolve() {
   sunrealtype tcur = 0, t = NAN;
   CEodeGetCurrentTime(mem_.get(), &tcur);
   const sunrealtype tout = tcur + Real({0, 1e-4, 0.01, 0.3, 1, 2, -1});
+  // A far tout under the default limit (5e8 steps, restored by a limit <= 0) would run for hours.
+  if (!(std::fabs(tout - tcur) <= 3)) CEodeSetMaxNumSteps(mem_.get(), 3000);
   N_Vector xo = Chance(10) ? Vec(N()) : x_.get();
   N_Vector vo = Chance(10) ? Vec(N()) : v_.get();
   const int itask = Chance(10) ? IntArg({0, 3}) : (Chance(4) ? CE_ONE_STEP : CE_NORMAL);
@@ -1054,6 +1057,7 @@ void Sequence::FrequencyBound() {
 // freed; and its restart counter.
 void Sequence::Stepper() {
   void* m = MemArg();
+  CEodeSetMaxNumSteps(mem_.get(), 3000);  // the stepper's fuzzed times may lie far ahead
   MRIStepInnerStepper inner = nullptr;
   const int flag = Call("CEodeCreateMRIStepInnerStepper", m, [&] {
     return CEodeCreateMRIStepInnerStepper(m, Chance(20) ? nullptr : &inner);
