@@ -233,6 +233,12 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
+  if (!IsFinite(st->y_own)) {  // a forcing that overflows over the step, as CEodeEvolve's outputs
+    return ProcessError(ce, CE_UNSTABLE, func,
+                        "The inner state at t = %.17g is not finite: the forcing or h overflowed "
+                        "the state; reduce the slow step or rescale the forcing.",
+                        static_cast<double>(st->t_own));
+  }
   N_VScale(1, st->y_own, y);
   return CE_SUCCESS;
 }

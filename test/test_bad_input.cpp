@@ -4,7 +4,9 @@
 // answer afterwards (docs/api.md, "Validation of attached objects"). The suite's sanitizer build
 // runs these under ASan and UBSan, so an out-of-bounds access is a failure too.
 #include <ceode/ceode_stability.h>
+#include <ceode/ceode_stepper.h>
 #include <gtest/gtest.h>
+#include <nvector/nvector_manyvector.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_band.h>
@@ -858,5 +860,31 @@ TEST_F(HostileInput, AVelocityThatOverflowsWithFinitePositionsIsNeverReturnedWit
   }
   EXPECT_GT(failures, 0) << "the set must overflow on at least one path";
 }
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+// The SUNStepper refuses a non-finite forcing, stop time or direction with a message, and its
+// state stays usable: an evolve afterwards returns the finite state.
+TEST_F(HostileInput, TheSunStepperRefusesNonFiniteForcingStopTimeAndDirection) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  SUNStepper st = nullptr;
+  ASSERT_EQ(CEodeCreateSUNStepper(mem(), &st), CE_SUCCESS);
+  Vector xs = SerialVector(2, ctx_, 1), vs = SerialVector(2, ctx_, SUN_RCONST(0.5));
+  N_Vector parts[2] = {xs.get(), vs.get()};
+  Vector y(N_VNew_ManyVector(2, parts, ctx_));
+  Vector f = SerialVector(4, ctx_, NAN);
+  N_Vector forcing[1] = {f.get()};
+  EXPECT_NE(SUNStepper_SetForcing(st, 0, 1, forcing, 1), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "forcing is not finite"));
+  EXPECT_NE(SUNStepper_SetStopTime(st, NAN), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "tstop"));
+  EXPECT_NE(SUNStepper_SetStepDirection(st, NAN), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "NaN"));
+  sunrealtype t = -1;
+  ASSERT_EQ(SUNStepper_Evolve(st, SUN_RCONST(0.1), y.get(), &t), SUN_SUCCESS) << Message();
+  EXPECT_DOUBLE_EQ(t, 0.1);
+  EXPECT_NEAR(NV_Ith_S(xs.get(), 0), std::cos(0.1) + 0.5 * std::sin(0.1), 1e-8);
+  SUNStepper_Destroy(&st);
+}
+#endif
 
 }  // namespace
