@@ -140,8 +140,20 @@ int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vecto
   if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
     return ProcessError(ce, CE_ILL_INPUT, func, "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
   }
-  if (!std::isfinite(tout)) return ProcessError(ce, CE_ILL_INPUT, func, "tout is not finite.");
-  return CE_SUCCESS;
+  return ValidateTime(ce, func, "tout", tout);
+}
+
+// The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
+// cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
+// extreme for this h) is caught here, once per call, and never returned with success.
+int CheckReturned(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout, int flag) {
+  if (flag < 0 || (IsFinite(xout) && IsFinite(vout))) return flag;
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The %s at t = %.17g is not finite although every step passed its growth "
+                      "check: h = %g is beyond what %s can represent (its velocity weights "
+                      "overflow); reduce h or choose another set, then call CEodeReInit.",
+                      IsFinite(xout) ? "velocity" : "position", static_cast<double>(ce->tcur),
+                      static_cast<double>(ce->h), ce->method_name.c_str());
 }
 
 void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
@@ -225,7 +237,8 @@ int ReturnRoot(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret)
 // with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
 int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
               bool counters) {
-  int flag = CheckInitialData(ce, func, x0, v0);
+  int flag = ValidateTime(ce, func, "t0", t0);
+  if (flag == CE_SUCCESS) flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (N_VGetLength(x0) != ce->n) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -255,8 +268,8 @@ int RestartAt(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_
 
 int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0, N_Vector x0,
                 N_Vector v0) {
-  if (!std::isfinite(t0)) return ProcessError(ce, CE_ILL_INPUT, func, "t0 is not finite.");
-  int flag = CheckInitialData(ce, func, x0, v0);
+  int flag = ValidateTime(ce, func, "t0", t0);
+  if (flag == CE_SUCCESS) flag = CheckInitialData(ce, func, x0, v0);
   if (flag != CE_SUCCESS) return flag;
   if (ce->initialized) FreeSized(ce);  // a second Init replaces the problem
   flag = AllocVectors(ce, x0);
@@ -347,7 +360,10 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
     *tret = ce->tcur;
     return flag;
   }
-  if (ceode::AdaptOn(ce)) return ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
+  if (ceode::AdaptOn(ce)) {
+    flag = ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
+    return ceode::CheckReturned(ce, __func__, xout, vout, flag);
+  }
   sunrealtype target = 0;
   bool hit_tstop = false;
   flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
@@ -369,11 +385,8 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   ceode::Interpolate(ce, target - ce->tcur, 1, vout);
   *tret = target;
   ce->tretlast = target;
-  if (hit_tstop) {
-    ce->tstop_set = false;
-    return CE_TSTOP_RETURN;
-  }
-  return CE_SUCCESS;
+  if (hit_tstop) ce->tstop_set = false;
+  return ceode::CheckReturned(ce, __func__, xout, vout, hit_tstop ? CE_TSTOP_RETURN : CE_SUCCESS);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

@@ -169,7 +169,14 @@ int CEodeGetFrequencyBound(void* mem, SUNMatrix K, N_Vector mass, sunrealtype* o
   const sunrealtype lam_plain = n > 0 ? *std::max_element(s.plain.begin(), s.plain.end()) : 0;
   const sunrealtype lam_scaled = n > 0 ? *std::max_element(s.scaled.begin(), s.scaled.end()) : 0;
   // Both are Gershgorin bounds of the same spectrum; the smaller one is kept.
-  *omega_bound = std::sqrt(std::min(lam_plain, lam_scaled));
+  const sunrealtype bound = std::sqrt(std::min(lam_plain, lam_scaled));
+  if (!std::isfinite(bound)) {  // finite entries whose row sums over the masses overflow
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "The row sums of M^{-1} K overflow (largest %g): K's entries over "
+                               "the lumped masses exceed the floating-point range; rescale K.",
+                               static_cast<double>(std::min(lam_plain, lam_scaled)));
+  }
+  *omega_bound = bound;
   return CE_SUCCESS;
 }
 

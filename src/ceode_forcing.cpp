@@ -111,7 +111,14 @@ void FreeForcing(Forcing* fc) {
 int SetForcing(CEodeMemRec* ce, Forcing* fc, sunrealtype tshift, sunrealtype tscale, int n,
                const N_Vector* Fx, const N_Vector* Fv, const char* func) {
   int flag = CE_SUCCESS;
-  if (n > 1 && !(tscale != 0)) {
+  bool finite = n <= 0 || (std::isfinite(tshift) && std::isfinite(tscale));
+  for (int k = 0; k < n && finite; ++k) finite = IsFinite(Fx[k]) && IsFinite(Fv[k]);
+  if (!finite) {  // the forcing enters every acceleration: refused here, not found as NaN later
+    flag = ProcessError(ce, CE_ILL_INPUT, func,
+                        "The forcing is not finite (tshift = %g, tscale = %g, or an entry of a "
+                        "forcing vector is NaN or Inf).",
+                        static_cast<double>(tshift), static_cast<double>(tscale));
+  } else if (n > 1 && !(tscale != 0)) {
     flag = ProcessError(ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
   } else if (n > 0 && !Clone(ce, &fc->vg)) {
     flag = ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");

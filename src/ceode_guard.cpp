@@ -467,7 +467,9 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
     return CE_SUCCESS;
   }
   if (HasConstraints(ce)) return CE_SUCCESS;  // constrained frequencies need the user's value
-  int flag = AllocWork(ce, func);
+  // The mass matrix may be of another size than a CEodeInit made the problem since.
+  int flag = ValidateMassMatrix(ce, func, ce->ls.M);
+  if (flag == CE_SUCCESS) flag = AllocWork(ce, func);
   GuardWork* g = Work(ce);
   bool usable = true;
   if (flag == CE_SUCCESS) flag = GuardMass(ce, g, func, &usable);

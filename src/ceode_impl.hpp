@@ -552,6 +552,8 @@ int MethodOrders(int d, const sunrealtype* p, int* order_x, int* order_v, long d
 int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
                              sunrealtype abstol);
 int ValidateStep(CEodeMemRec* ce, const char* func);  // h against t and the method
+// A time argument (t0, tout, tstop): finite, or CE_ILL_INPUT naming the argument.
+int ValidateTime(CEodeMemRec* ce, const char* func, const char* name, sunrealtype t);
 int ValidateMassMatrix(CEodeMemRec* ce, const char* func, SUNMatrix M);
 int ValidateLinearSolver(CEodeMemRec* ce, const char* func, SUNLinearSolver LS, SUNMatrix A,
                          bool at_start);

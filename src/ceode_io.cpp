@@ -189,8 +189,7 @@ int CEodeSetStopTime(void* mem, sunrealtype tstop) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (!std::isfinite(tstop))
-    return ProcessError(ce, CE_ILL_INPUT, __func__, "tstop is not finite.");
+  if ((flag = ceode::ValidateTime(ce, __func__, "tstop", tstop)) != CE_SUCCESS) return flag;
   ce->tstop = tstop;
   ce->tstop_set = true;
   return CE_SUCCESS;

@@ -246,11 +246,14 @@ int CEodeMethodErrorCoeffs(int degree, const sunrealtype* params, int n, sunreal
   try {
     ceode::Series cx, mx, cv, mv;
     ceode::OrderSeries(degree, params, cx.data(), mx.data(), cv.data(), mv.data());
+    bool finite = true;
     for (int m = 0; m < n; ++m) {
       coef_x[m] = static_cast<sunrealtype>(cx[m]);
       coef_v[m] = static_cast<sunrealtype>(cv[m]);
+      finite = finite && std::isfinite(coef_x[m]) && std::isfinite(coef_v[m]);
     }
-    return CE_SUCCESS;
+    // Parameters near the floating-point range overflow the series (as CEodeMethodErrorConstant).
+    return finite ? CE_SUCCESS : CE_ILL_INPUT;
   } catch (...) {
     return CE_MEM_FAIL;
   }

@@ -238,6 +238,12 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }
+  if (!IsFinite(st->y_own)) {  // a forcing that overflows over the step, as CEodeEvolve's outputs
+    return ProcessError(ce, CE_UNSTABLE, func,
+                        "The inner state at t = %.17g is not finite: the forcing or h overflowed "
+                        "the state; reduce the slow step or rescale the forcing.",
+                        static_cast<double>(st->t_own));
+  }
   N_VScale(1, st->y_own, y);
   return CE_SUCCESS;
 }
@@ -328,6 +334,8 @@ SUNErrCode SunReset(SUNStepper s, sunrealtype tR, N_Vector vR) {
 
 SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
   return OnSun(s, [&](Stepper* st) {
+    const int flag = ValidateTime(st->ce, "CEodeSUNStepperSetStopTime", "tstop", tstop);
+    if (flag != CE_SUCCESS) return flag;
     st->tstop = tstop;
     st->tstop_set = true;
     return CE_SUCCESS;
@@ -336,6 +344,10 @@ SUNErrCode SunSetStopTime(SUNStepper s, sunrealtype tstop) {
 
 SUNErrCode SunSetStepDirection(SUNStepper s, sunrealtype stepdir) {
   const auto check = [&](Stepper* st) {
+    if (std::isnan(stepdir)) {
+      return ProcessError(st->ce, CE_ILL_INPUT, "CEodeSUNStepperSetStepDirection",
+                          "Step direction NaN: pass a positive direction.");
+    }
     if (!(stepdir < 0)) return CE_SUCCESS;
     return ProcessError(st->ce, CE_BAD_T, "CEodeSUNStepperSetStepDirection",
                         "Step direction %g: CEODE integrates forward only (a splitting method "

@@ -6,6 +6,11 @@
 // with a message naming it; it is never used, so a wrong size cannot reach SUNDIALS' kernels.
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_pcg.h>
+#include <sunlinsol/sunlinsol_spbcgs.h>
+#include <sunlinsol/sunlinsol_spfgmr.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunlinsol/sunlinsol_sptfqmr.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
@@ -155,6 +160,44 @@ sunindextype NlsVectorLength(SUNNonlinearSolver NLS) {
   return -1;
 }
 
+// Length of the work vectors inside SUNDIALS' own Krylov solvers, which a matrix-free solve runs
+// on the problem's vectors; -1 for any other solver, whose memory CEODE cannot inspect.
+sunindextype KrylovVectorLength(SUNLinearSolver LS) {
+  if (LS->content == nullptr) return -1;
+  N_Vector w = nullptr;
+  switch (SUNLinSolGetID(LS)) {
+    case SUNLINEARSOLVER_SPGMR:
+      w = static_cast<SUNLinearSolverContent_SPGMR>(LS->content)->vtemp;
+      break;
+    case SUNLINEARSOLVER_SPFGMR:
+      w = static_cast<SUNLinearSolverContent_SPFGMR>(LS->content)->vtemp;
+      break;
+    case SUNLINEARSOLVER_SPBCGS:
+      w = static_cast<SUNLinearSolverContent_SPBCGS>(LS->content)->vtemp;
+      break;
+    case SUNLINEARSOLVER_SPTFQMR:
+      w = static_cast<SUNLinearSolverContent_SPTFQMR>(LS->content)->vtemp1;
+      break;
+    case SUNLINEARSOLVER_PCG:
+      w = static_cast<SUNLinearSolverContent_PCG>(LS->content)->r;
+      break;
+    default:
+      break;
+  }
+  return w != nullptr ? N_VGetLength(w) : -1;
+}
+
+// A matrix-free solver works on vectors of length n (constraints refuse it at the start).
+int CheckKrylovLength(CEodeMemRec* ce, const char* func, SUNLinearSolver LS) {
+  const sunindextype len = KrylovVectorLength(LS);
+  if (!ce->initialized || len < 0 || len == ce->n) return CE_SUCCESS;
+  return ProcessError(ce, CE_ILL_INPUT, func,
+                      "The matrix-free linear solver was created for vectors of length %ld but the "
+                      "problem has n = %ld: create it from a vector of the length of x0 (e.g. "
+                      "SUNLinSol_SPGMR(x0, SUN_PREC_NONE, 0, ctx)).",
+                      static_cast<long>(len), static_cast<long>(ce->n));
+}
+
 }  // namespace
 
 int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_t len) {
@@ -186,6 +229,13 @@ int ValidateMethodParams(int degree, const sunrealtype* params, char* why, size_
     return CE_ILL_INPUT;
   }
   return CE_SUCCESS;
+}
+
+int ValidateTime(CEodeMemRec* ce, const char* func, const char* name, sunrealtype t) {
+  // A non-finite time would reach every output with CE_SUCCESS (tret, dense output, stop time).
+  if (std::isfinite(t)) return CE_SUCCESS;
+  return ProcessError(ce, CE_ILL_INPUT, func, "%s = %g is not finite: pass a finite time.", name,
+                      static_cast<double>(t));
 }
 
 int ValidateNonlinTolerances(CEodeMemRec* ce, const char* func, sunrealtype reltol,
@@ -267,6 +317,7 @@ int ValidateMassAgainstSolver(CEodeMemRec* ce, const char* func) {
 
 int ValidateLinearSolver(CEodeMemRec* ce, const char* func, SUNLinearSolver LS, SUNMatrix A,
                          bool at_start) {
+  if (LS != nullptr && A == nullptr) return CheckKrylovLength(ce, func, LS);
   if (LS == nullptr || A == nullptr) return CE_SUCCESS;
   sunindextype rows = 0, cols = 0;
   if (!MatrixShape(A, &rows, &cols)) return CE_SUCCESS;  // custom matrix: its solver's business

@@ -4,8 +4,11 @@
 // answer afterwards (docs/api.md, "Validation of attached objects"). The suite's sanitizer build
 // runs these under ASan and UBSan, so an out-of-bounds access is a failure too.
 #include <ceode/ceode_stability.h>
+#include <ceode/ceode_stepper.h>
 #include <gtest/gtest.h>
+#include <nvector/nvector_manyvector.h>
 #include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
@@ -15,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
@@ -606,5 +610,281 @@ TEST_F(HostileInput, ErrorsBeforeAnyStepSetTretToTheCurrentTimeAndLeaveTheOutput
   EXPECT_NEAR(t, 1, 1e-12);
   EXPECT_TRUE(untouched());
 }
+
+// --- 13. Non-finite times, shrinking sizes, and the Jacobian on every implicit path ------------
+
+TEST_F(HostileInput, ReInitRefusesANonFiniteInitialTimeAndKeepsTheCurrentOne) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  sunrealtype t = -1;
+  ASSERT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_SUCCESS);
+  for (const sunrealtype t0 : {SUN_RCONST(NAN), SUN_RCONST(INFINITY), -SUN_RCONST(INFINITY)}) {
+    EXPECT_EQ(CEodeReInit(mem(), t0, x_.get(), v_.get()), CE_ILL_INPUT);
+    EXPECT_TRUE(Contains(Message(), "t0"));
+    sunrealtype tcur = NAN;
+    ASSERT_EQ(CEodeGetCurrentTime(mem(), &tcur), CE_SUCCESS);
+    EXPECT_NEAR(tcur, 0.5, 1e-12);
+  }
+  ExpectCorrectRunAfterReInit();
+}
+
+// Per configuration (velocity dependence, a mass matrix, the stability guard): after CEodeInit
+// shrinks n from 3 to 2, the 3 x 3 objects left attached are refused by Evolve and by the guard's
+// own entry point (CEodeGetStableStep) before any of them is touched, and the right sizes then give
+// the right answer.
+TEST_F(HostileInput, ASecondInitThatShrinksTheProblemUnderALargerSolverIsRefusedCleanly) {
+  for (int config = 0; config < 8; ++config) {
+    SCOPED_TRACE("configuration " + std::to_string(config));
+    const bool vdep = (config & 1) != 0, mass = (config & 2) != 0, guard = (config & 4) != 0;
+    mem_.reset(CEodeCreate(ctx_));
+    CEodeSetErrFile(mem(), nullptr);
+    ASSERT_EQ(Start(3), CE_SUCCESS);
+    if (guard) ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_WARN, 10), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetVelocityDependence(mem(), vdep ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+    Matrix A3(SUNDenseMatrix(3, 3, ctx_)), M3(SUNDenseMatrix(3, 3, ctx_));
+    LinearSolver LS3(SUNLinSol_Dense(x_.get(), A3.get(), ctx_));
+    ASSERT_EQ(CEodeSetLinearSolver(mem(), LS3.get(), A3.get()), CE_SUCCESS);
+    if (mass) ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M3.get(), SUNTRUE), CE_SUCCESS);
+    sunrealtype t = -1;
+    ASSERT_EQ(Evolve(SUN_RCONST(0.1), &t), CE_SUCCESS) << Message();
+    ASSERT_EQ(Start(2), CE_SUCCESS);  // the 3 x 3 objects stay attached
+    if (guard) ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_WARN, 10), CE_SUCCESS);
+    sunrealtype hmax = -1;
+    if (mass) {  // the guard factors its own copy of M (without M it uses no attached object)
+      EXPECT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_ILL_INPUT);
+      EXPECT_TRUE(Contains(Message(), "3 x 3"));
+    } else {
+      EXPECT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_SUCCESS);
+      EXPECT_NEAR(hmax, 0.99 * 2, 0.01) << "G3_CD: Omega_max = 2 over omega_max = 1";
+    }
+    EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+    EXPECT_TRUE(Contains(Message(), "3 x 3"));
+    EXPECT_TRUE(Finite());
+    Matrix A2(SUNDenseMatrix(2, 2, ctx_)), M2(SUNDenseMatrix(2, 2, ctx_));
+    LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
+    ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
+    if (mass) ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+    ExpectCorrectRunAfterReInit();
+    mem_.reset();  // before the solvers it used
+  }
+}
+
+TEST_F(HostileInput, MassAndSolverBothTooLargeLeaveTheMemoryUsableWithTheRightSizes) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  Matrix M3(SUNDenseMatrix(3, 3, ctx_));
+  Matrix A3(SUNDenseMatrix(3, 3, ctx_));
+  Vector y3 = SerialVector(3, ctx_);
+  LinearSolver LS3(SUNLinSol_Dense(y3.get(), A3.get(), ctx_));
+  EXPECT_EQ(CEodeSetMassFn(mem(), IdentityMass, M3.get(), SUNTRUE), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "3 x 3"));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS3.get(), A3.get()), CE_SUCCESS);  // may wait for nc
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "3 x 3"));
+  EXPECT_TRUE(Finite());
+  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
+  Matrix A2(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
+  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+}
+
+// The Jacobian is evaluated by the Newton matrix's setup only. Per implicit mode, with a strong
+// damping (c = 50, h = 1e-2: kappa c well above AUTO's contraction limit 0.2) and a weak one
+// (c = 0.1, so AUTO keeps prediction-correction): a failing Jacobian ends the run with
+// CE_JACFUNC_FAIL whenever CEodeGetNumJacEvals counts a call, and a path that never calls it says
+// so by njevals = 0.
+TEST_F(HostileInput, AFailingVelocityJacobianReachesTheUserOnEveryPathThatCallsIt) {
+  Matrix A(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
+  for (const int mode : {CE_IMPLICIT_NEWTON, CE_IMPLICIT_PC, CE_IMPLICIT_AUTO}) {
+    for (const sunrealtype c : {SUN_RCONST(50.0), SUN_RCONST(0.1)}) {
+      for (int variant = 0; variant < 4; ++variant) {  // fused or not, detection, tolerances
+        SCOPED_TRACE("mode " + std::to_string(mode) + ", c " + std::to_string(c) + ", variant " +
+                     std::to_string(variant));
+        ASSERT_EQ(Start(2, SUN_RCONST(1e-2)), CE_SUCCESS);
+        osc_.c = c;
+        osc_.jac_retval = -1;
+        ASSERT_EQ(variant == 2 ? CEodeSetVelocityMode(mem(), CE_VELOCITY_DETECT)
+                               : CEodeSetVelocityDependence(mem(), SUNTRUE),
+                  CE_SUCCESS);
+        if (variant == 3) ASSERT_EQ(CEodeSStolerances(mem(), 1e-6, 1e-8), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetImplicitMode(mem(), mode), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
+        ASSERT_EQ(CEodeSetVelJacFn(mem(), Oscillator::Jac), CE_SUCCESS);
+        CEodeSetFusedKernel(mem(), variant == 1 ? SUNFALSE : SUNTRUE);
+        sunrealtype t = -1;
+        const int flag = Evolve(1, &t);
+        long int nje = -1;
+        ASSERT_EQ(CEodeGetNumJacEvals(mem(), &nje), CE_SUCCESS);
+        if (nje > 0) {
+          EXPECT_EQ(flag, CE_JACFUNC_FAIL);
+          EXPECT_TRUE(Contains(Message(), "Jacobian"));
+        } else {
+          EXPECT_EQ(flag, CE_SUCCESS) << Message();
+        }
+        EXPECT_EQ(nje > 0, mode == CE_IMPLICIT_NEWTON || (mode == CE_IMPLICIT_AUTO && c > 1));
+        EXPECT_TRUE(Finite());
+        osc_ = Oscillator{};
+        ASSERT_EQ(CEodeSetVelJacFn(mem(), nullptr), CE_SUCCESS);
+        if (variant == 3) ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+        ExpectCorrectRunAfterReInit();
+      }
+    }
+  }
+}
+
+int FailingJac(sunrealtype, N_Vector, N_Vector, N_Vector, SUNMatrix, void*, N_Vector, N_Vector,
+               N_Vector) {
+  return -1;
+}
+
+// The constrained step evaluates df/dv in its saddle-point (or Schur) matrix on every velocity-
+// dependent run: a failing Jacobian ends it there too.
+TEST_F(HostileInput, AFailingVelocityJacobianReachesTheUserOnTheConstrainedPath) {
+  Pendulum pend;
+  x_ = SerialVector(2, ctx_);
+  v_ = SerialVector(2, ctx_);
+  NV_Ith_S(x_.get(), 0) = 1;
+  ASSERT_EQ(CEodeInit(mem(), Pendulum::F, 0, x_.get(), v_.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem(), &pend), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem(), CE_GUARD_OFF, 0), CE_SUCCESS);
+  Vector lam = SerialVector(1, ctx_);
+  ASSERT_EQ(CEodeSetConstraints(mem(), lam.get(), Pendulum::Phi, Pendulum::G), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelJacFn(mem(), FailingJac), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_JACFUNC_FAIL) << Message();
+  EXPECT_TRUE(Contains(Message(), "Jacobian"));
+  EXPECT_TRUE(Finite());
+  ASSERT_EQ(CEodeSetVelJacFn(mem(), nullptr), CE_SUCCESS);
+  ASSERT_EQ(Evolve(SUN_RCONST(0.5), &t), CE_SUCCESS) << Message();
+  const sunrealtype r =
+      NV_Ith_S(x_.get(), 0) * NV_Ith_S(x_.get(), 0) + NV_Ith_S(x_.get(), 1) * NV_Ith_S(x_.get(), 1);
+  EXPECT_NEAR(r, 1, 1e-9);
+}
+
+// Detection turns the implicit step on at the start, after the configuration was checked for the
+// explicit one: the Newton solver it then uses is checked too, never run on vectors of 2.
+TEST_F(HostileInput, ANewtonSolverForAnotherLengthIsRefusedWhenDetectionTurnsTheImplicitStepOn) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  osc_.c = 1;  // f depends on x'
+  Vector y5 = SerialVector(5, ctx_);
+  Matrix A(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
+  NonlinearSolver newton5(SUNNonlinSol_Newton(y5.get(), ctx_));
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton5.get()), CE_ILL_INPUT);  // n is known
+  // Attached for another size before the problem changes to n = 2 under it.
+  ASSERT_EQ(Start(5), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton5.get()), CE_SUCCESS);
+  ASSERT_EQ(Start(2), CE_SUCCESS);
+  osc_.c = 1;
+  ASSERT_EQ(CEodeSetVelocityMode(mem(), CE_VELOCITY_DETECT), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 5"));
+  EXPECT_TRUE(Finite());
+  NonlinearSolver newton2(SUNNonlinSol_Newton(x_.get(), ctx_));
+  ASSERT_EQ(CEodeSetNonlinearSolver(mem(), newton2.get()), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+  mem_.reset();  // before the solvers it used
+}
+
+// A matrix-free Krylov solver runs on the problem's vectors with work vectors of its own length:
+// one made for another length is refused, at the setter and after a CEodeInit that resizes.
+TEST_F(HostileInput, AMatrixFreeSolverForAnotherLengthIsRefusedNotRunOnShorterVectors) {
+  Vector y3 = SerialVector(3, ctx_);
+  LinearSolver gmres3(SUNLinSol_SPGMR(y3.get(), SUN_PREC_NONE, 0, ctx_));
+  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetLinearSolver(mem(), gmres3.get(), nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 3"));
+  ASSERT_EQ(Start(3), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), gmres3.get(), nullptr), CE_SUCCESS);
+  ASSERT_EQ(Start(2), CE_SUCCESS);  // the solver for 3 stays attached
+  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "length 3"));
+  EXPECT_TRUE(Finite());
+  LinearSolver gmres2(SUNLinSol_SPGMR(x_.get(), SUN_PREC_NONE, 0, ctx_));
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), gmres2.get(), nullptr), CE_SUCCESS);
+  ExpectCorrectRunAfterReInit();
+  mem_.reset();  // before the solvers it used
+}
+
+// Finite input whose result overflows is refused, not returned as Inf with success.
+TEST_F(HostileInput, OverflowingResultsOfTheUtilitiesAreRefusedNotReturnedAsInfinity) {
+  Matrix K(SUNDenseMatrix(2, 2, ctx_));
+  SM_ELEMENT_D(K.get(), 0, 0) = 1e300;
+  SM_ELEMENT_D(K.get(), 1, 1) = 1;
+  Vector mass = SerialVector(2, ctx_, 1e-300);
+  sunrealtype omega = -1;
+  EXPECT_EQ(CEodeGetFrequencyBound(mem(), K.get(), mass.get(), &omega), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(Message(), "overflow"));
+  EXPECT_EQ(omega, -1);
+  N_VConst(1, mass.get());  // the same K with unit masses: omega_max^2 <= 1e300
+  ASSERT_EQ(CEodeGetFrequencyBound(mem(), K.get(), mass.get(), &omega), CE_SUCCESS);
+  EXPECT_DOUBLE_EQ(omega, 1e150);
+  const sunrealtype params[3] = {0.5, 2, 1.7976931348623157e308};
+  sunrealtype cx[6], cv[6];
+  EXPECT_EQ(CEodeMethodErrorCoeffs(4, params, 6, cx, cv), CE_ILL_INPUT);
+}
+
+// A set with an extreme velocity weight (beta = -1e300) passes the parameter checks, and its
+// positions stay finite while the velocity overflows: CEodeEvolve returns CE_UNSTABLE then, never
+// success with a non-finite output, and the memory integrates again after a new set and ReInit.
+TEST_F(HostileInput, AVelocityThatOverflowsWithFinitePositionsIsNeverReturnedWithSuccess) {
+  const sunrealtype params[3] = {SUN_RCONST(4.0) / 3, SUN_RCONST(-1e300), 2};
+  int failures = 0;
+  for (const bool adaptive : {false, true}) {
+    SCOPED_TRACE(adaptive ? "tolerances" : "fixed step");
+    ASSERT_EQ(Start(), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethod(mem(), 4, params), CE_SUCCESS);
+    if (adaptive) ASSERT_EQ(CEodeSStolerances(mem(), 1e-6, 1e-8), CE_SUCCESS);
+    sunrealtype t = -1;
+    const int flag = Evolve(SUN_RCONST(0.1), &t);
+    if (flag >= 0) {
+      EXPECT_TRUE(Finite());
+      continue;
+    }
+    ++failures;
+    EXPECT_EQ(flag, CE_UNSTABLE) << Message();
+    EXPECT_FALSE(Message().empty());
+    ASSERT_EQ(CEodeSetMethodByName(mem(), "G3_CD"), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-3)), CE_SUCCESS);
+    ExpectCorrectRunAfterReInit();
+  }
+  EXPECT_GT(failures, 0) << "the set must overflow on at least one path";
+}
+
+#ifdef CEODE_HAVE_SUNSTEPPER
+// The SUNStepper refuses a non-finite forcing, stop time or direction with a message, and its
+// state stays usable: an evolve afterwards returns the finite state.
+TEST_F(HostileInput, TheSunStepperRefusesNonFiniteForcingStopTimeAndDirection) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  SUNStepper st = nullptr;
+  ASSERT_EQ(CEodeCreateSUNStepper(mem(), &st), CE_SUCCESS);
+  Vector xs = SerialVector(2, ctx_, 1), vs = SerialVector(2, ctx_, SUN_RCONST(0.5));
+  N_Vector parts[2] = {xs.get(), vs.get()};
+  Vector y(N_VNew_ManyVector(2, parts, ctx_));
+  Vector f = SerialVector(4, ctx_, NAN);
+  N_Vector forcing[1] = {f.get()};
+  EXPECT_NE(SUNStepper_SetForcing(st, 0, 1, forcing, 1), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "forcing is not finite"));
+  EXPECT_NE(SUNStepper_SetStopTime(st, NAN), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "tstop"));
+  EXPECT_NE(SUNStepper_SetStepDirection(st, NAN), SUN_SUCCESS);
+  EXPECT_TRUE(Contains(Message(), "NaN"));
+  sunrealtype t = -1;
+  ASSERT_EQ(SUNStepper_Evolve(st, SUN_RCONST(0.1), y.get(), &t), SUN_SUCCESS) << Message();
+  EXPECT_DOUBLE_EQ(t, 0.1);
+  EXPECT_NEAR(NV_Ith_S(xs.get(), 0), std::cos(0.1) + 0.5 * std::sin(0.1), 1e-8);
+  SUNStepper_Destroy(&st);
+}
+#endif
 
 }  // namespace
