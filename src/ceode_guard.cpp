@@ -721,10 +721,19 @@ int CEodeGetStableStep(void* mem, sunrealtype safety, sunrealtype* hmax) {
                                "The stability limit of %s could not be computed.",
                                ce->method_name.c_str());
   }
+  const sunrealtype w = ce->guard.omega_est;
+  if (!std::isfinite(w)) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "The frequency estimate is %g: f or the mass matrix gives no "
+                               "finite Rayleigh quotient at the current state.",
+                               static_cast<double>(w));
+  }
   if (lim < 0) {
     *hmax = 0;  // unstable for every step
   } else {
-    *hmax = ce->guard.omega_est > 0 ? safety * lim / ce->guard.omega_est : SUN_BIG_REAL;
+    // A frequency so small that the quotient overflows bounds the step no more than none does.
+    const sunrealtype h = w > 0 ? safety * lim / w : SUN_BIG_REAL;
+    *hmax = std::isfinite(h) ? h : SUN_BIG_REAL;
   }
   return CE_SUCCESS;
 }

@@ -127,8 +127,12 @@ int PowerStep(CEodeMemRec* ce, N_Vector w, N_Vector u, sunrealtype* r, const cha
 }
 
 // A new coupling estimate, made at step nst.
+// A coupling or contraction that is not finite is unbounded: the mode decisions (<= a limit)
+// are those of NaN, and the statistics stay finite.
+sunrealtype Bounded(sunrealtype figure) { return std::isfinite(figure) ? figure : SUN_BIG_REAL; }
+
 void SetCoupling(CEodeMemRec* ce, sunrealtype coupling) {
-  ce->pc.coupling = coupling;
+  ce->pc.coupling = Bounded(coupling);
   ce->pc.theta_last = false;
   ce->pc.nst_check = ce->nst;
 }
@@ -368,7 +372,7 @@ int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_V
   if (!check) return SolvePC(ce, t, tnext, x, a, func);
   sunrealtype theta = 0;
   const int flag = CorrectPC(ce, t, x, a, PCCorrections(ce), &theta, func);
-  ce->pc.theta = theta;
+  ce->pc.theta = Bounded(theta);
   ce->pc.theta_last = true;
   ce->pc.nst_check = ce->nst;
   if (flag == CE_SUCCESS && theta <= kPcContractionLimit) {

@@ -888,3 +888,18 @@ TEST_F(HostileInput, TheSunStepperRefusesNonFiniteForcingStopTimeAndDirection) {
 #endif
 
 }  // namespace
+
+namespace {
+
+// A stable step from a frequency so small that the quotient overflows is unbounded, never Inf.
+TEST_F(HostileInput, ADenormalFrequencyGivesTheLargestStableStepNotInfinity) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMaxFrequency(mem(), SUN_RCONST(5e-324)), CE_SUCCESS);
+  sunrealtype hmax = 0;
+  ASSERT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_SUCCESS);
+  EXPECT_TRUE(std::isfinite(hmax));
+  EXPECT_EQ(hmax, SUN_BIG_REAL);
+  ExpectCorrectRunAfterReInit();
+}
+
+}  // namespace

@@ -27,14 +27,20 @@
 #include <sunadaptcontroller/sunadaptcontroller_soderlind.h>
 #endif
 
+#include <cctype>
 #include <cfloat>
 #include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
 #include <functional>
 #include <random>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -361,6 +367,7 @@ class Sequence {
   void NonlinearSolverOp();
   void Callbacks();
   void Constraints();
+  void InitialConditions();
   void Guard();
   void ErrorOutput();
   void Evolve();
@@ -368,6 +375,7 @@ class Sequence {
   void Solution();
   void Counters();
   void Utilities();
+  void Version();
   void Stability();
   void FrequencyBound();
   void Stepper();
@@ -767,6 +775,37 @@ void Sequence::Constraints() {
   const int flag =
       Call("CEodeSetConstraints", m, [&] { return CEodeSetConstraints(m, tmpl, phi, G); });
   if (flag == CE_SUCCESS && m != nullptr) nc_ = tmpl != nullptr ? N_VGetLength(tmpl) : 0;
+  if (Chance(2)) InitialConditions();
+}
+
+// The consistent start: the projection, how far it moved x0 and v0, and the projected values.
+void Sequence::InitialConditions() {
+  void* m = MemArg();
+  switch (Int(0, 2)) {
+    case 0:
+      Call("CEodeCalcIC", m, [&] {
+        return CEodeCalcIC(
+            m, IntArg({CE_IC_POSITION, CE_IC_VELOCITY, CE_IC_POSITION | CE_IC_VELOCITY}));
+      });
+      break;
+    case 1: {
+      sunrealtype dx = NAN, dv = NAN;
+      const int flag = Call("CEodeGetICCorrection", m, [&] {
+        return CEodeGetICCorrection(m, Chance(20) ? nullptr : &dx, Chance(20) ? nullptr : &dv);
+      });
+      Finite(flag, "the position correction", dx);
+      Finite(flag, "the velocity correction", dv);
+      break;
+    }
+    default: {
+      N_Vector x0 = Vec(N()), v0 = Vec(N());
+      const int flag =
+          Call("CEodeGetConsistentIC", m, [&] { return CEodeGetConsistentIC(m, x0, v0); });
+      Finite(flag, "the consistent x0", x0);
+      Finite(flag, "the consistent v0", v0);
+      break;
+    }
+  }
 }
 
 void Sequence::Guard() {
@@ -929,7 +968,10 @@ void Sequence::Counters() {
       {"CEodeGetNumConstrJacEvals", CEodeGetNumConstrJacEvals},
       {"CEodeGetNumErrTestFails", CEodeGetNumErrTestFails},
       {"CEodeGetNumStableStepLimited", CEodeGetNumStableStepLimited},
-      {"CEodeGetNumInnerRestarts", CEodeGetNumInnerRestarts}};
+      {"CEodeGetNumInnerRestarts", CEodeGetNumInnerRestarts},
+      {"CEodeGetNumPCSteps", CEodeGetNumPCSteps},
+      {"CEodeGetNumPCCorrections", CEodeGetNumPCCorrections},
+      {"CEodeGetNumGEvals", CEodeGetNumGEvals}};
   void* m = MemArg();
   for (const auto& [name, get] : getters) {
     long value = -1;
@@ -949,7 +991,7 @@ void Sequence::Counters() {
 
 void Sequence::Utilities() {
   void* m = MemArg();
-  switch (Int(0, 3)) {
+  switch (Int(0, 4)) {
     case 0: {
       sunrealtype p[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
       int degree = -1;
@@ -969,6 +1011,9 @@ void Sequence::Utilities() {
       std::free(name);
       break;
     }
+    case 4:
+      Version();
+      break;
     case 2:
       Call("CEodePrintAllStats", m, [&] {
         return CEodePrintAllStats(
@@ -985,6 +1030,24 @@ void Sequence::Utilities() {
       break;
     }
   }
+}
+
+// The version queries take no memory: a short or absent buffer is refused, never overrun.
+void Sequence::Version() {
+  char buf[32];
+  const int len = IntArg({0, 4, 8, 32});
+  char* out = Chance(10) ? nullptr : buf;
+  const int cap = std::min(len, static_cast<int>(sizeof buf));
+  if (Chance(2)) {
+    const int flag = CEodeGetVersion(out, cap);
+    if (flag == 0 && (out == nullptr || std::memchr(buf, 0, cap) == nullptr))
+      Violation("CEodeGetVersion succeeded without a terminated string");
+    return;
+  }
+  int major = -1, minor = -1, patch = -1;
+  const int flag = CEodeGetVersionNumber(Chance(20) ? nullptr : &major, &minor, &patch, out, cap);
+  if (flag == 0 && (major < 0 || minor < 0 || patch < 0))
+    Violation("CEodeGetVersionNumber succeeded with a negative number");
 }
 
 // The stability analysis (no memory: failures print to stderr, outputs must be finite).
@@ -1248,3 +1311,45 @@ TEST(RandomApiSequences, KeepEveryInvariantUnderArgumentFuzzingOfEveryEntryPoint
 }
 
 }  // namespace
+
+namespace {
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Whether text names the function (a call or a function pointer), not only a longer name.
+bool Names(const std::string& text, const std::string& name) {
+  for (size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
+    const size_t end = at + name.size();
+    if (end == text.size() ||
+        !(std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '_'))
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+// Every function the public headers export is called by a randomised API test (this one or the
+// root functions' own): a new entry point cannot miss the fuzzing.
+TEST(RandomApiSequences, CallEveryFunctionThePublicHeadersExport) {
+  const std::string root = CEODE_SOURCE_DIR;
+  const std::string tests = ReadText(root + "/test/test_random_api.cpp") +
+                            ReadText(root + "/test/test_random_api_roots.cpp");
+  const std::regex exported(R"(SUNDIALS_EXPORT[^;(]*\b(CEode\w+)\s*\()");
+  std::set<std::string> names;
+  for (const char* header : {"ceode.h", "ceode_stability.h", "ceode_stepper.h"}) {
+    const std::string text = ReadText(root + "/include/ceode/" + header);
+    ASSERT_FALSE(text.empty()) << header;
+    for (std::sregex_iterator it(text.begin(), text.end(), exported), end; it != end; ++it)
+      names.insert((*it)[1].str());
+  }
+  EXPECT_GT(names.size(), 80u);  // the headers were read and parsed
+  for (const std::string& name : names) {
+    EXPECT_TRUE(Names(tests, name)) << name << " is exported but no randomised API test calls it";
+  }
+}
