@@ -115,7 +115,9 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   }
   const sunrealtype h = ce->h;
   sunrealtype scale = am->cerr * IntPow(h, p + 1) * am->pfac;
-  if (jmax == p - 2 && jmax >= 1) {
+  if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
+    CopyVector(ce->Dnew[2], est);
+  } else if (jmax == p - 2 && jmax >= 1) {
     CopyVector(am->dd[1 - am->cur][jmax], est);
     scale /= h;
   } else if (jmax < p - 1) {

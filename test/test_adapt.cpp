@@ -511,3 +511,42 @@ TEST(ErrorControl, FixedStepAfterTolerancesGivesTheFixedRunsBits) {
 }
 
 }  // namespace
+
+namespace {
+
+int TwoSprings(sunrealtype, N_Vector x, N_Vector, N_Vector a, void*) {
+  NV_Ith_S(a, 0) = -NV_Ith_S(x, 0);
+  NV_Ith_S(a, 1) = -4 * NV_Ith_S(x, 1);
+  return 0;
+}
+
+}  // namespace
+
+// A user's set of first order (degree 3 with parameters 1/4, 1/4: order 1 in x and x') has no
+// divided difference to take: its local error estimate is C_2 h^2 times the new node's
+// acceleration, so every component's estimate over its acceleration is one and the same number.
+TEST(ErrorControl, AFirstOrderSetEstimatesItsErrorFromTheAcceleration) {
+  Context ctx;
+  Vector x = SerialVector(2, ctx, 1);
+  Vector v = SerialVector(2, ctx, 0);
+  Vector est = SerialVector(2, ctx, 0);
+  Vector a = SerialVector(2, ctx, 0);
+  Mem mem(CEodeCreate(ctx));
+  const sunrealtype params[2] = {SUN_RCONST(0.25), SUN_RCONST(0.25)};
+  int ox = 0, ov = 0;
+  ASSERT_EQ(CEodeMethodOrder(3, params, &ox, &ov), 0);
+  ASSERT_EQ(ox, 1);
+  ASSERT_EQ(CEodeInit(mem.get(), TwoSprings, 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNFALSE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMethod(mem.get(), 3, params), CE_SUCCESS);
+  ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-4, 1e-4), CE_SUCCESS);
+  sunrealtype t = 0;
+  for (int k = 0; k < 3; ++k)
+    ASSERT_GE(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_ONE_STEP), 0);
+  ASSERT_EQ(CEodeGetEstLocalErrors(mem.get(), est.get()), CE_SUCCESS);
+  ASSERT_EQ(TwoSprings(t, x.get(), v.get(), a.get(), nullptr), 0);
+  const sunrealtype r0 = NV_Ith_S(est.get(), 0) / NV_Ith_S(a.get(), 0);
+  const sunrealtype r1 = NV_Ith_S(est.get(), 1) / NV_Ith_S(a.get(), 1);
+  EXPECT_TRUE(std::isfinite(r0) && r0 != 0) << r0;
+  EXPECT_NEAR(r1, r0, 1e-12 * std::fabs(r0));
+}
