@@ -252,6 +252,18 @@ int RootCheck(CEodeMemRec* ce, sunrealtype tend, const char* func) {
 using ceode::CERootMem;
 using ceode::ProcessError;
 
+namespace {
+
+// The access guard of the functions that need root functions attached.
+int AccessRoots(void* mem, const char* func, CEodeMemRec** ce) {
+  const int flag = ceode::Access(mem, func, ce);
+  if (flag != CE_SUCCESS || (*ce)->root != nullptr) return flag;
+  return ProcessError(*ce, CE_ILL_INPUT, func,
+                      "No root functions: call CEodeRootInit with nrtfn > 0 first.");
+}
+
+}  // namespace
+
 extern "C" {
 
 int CEodeRootInit(void* mem, int nrtfn, CERootFn g) {
@@ -292,12 +304,8 @@ int CEodeRootInit(void* mem, int nrtfn, CERootFn g) {
 
 int CEodeSetRootDirection(void* mem, int* rootdir) {
   CEodeMemRec* ce = nullptr;
-  const int flag = ceode::Access(mem, __func__, &ce);
+  const int flag = AccessRoots(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->root == nullptr) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "No root functions: call CEodeRootInit with nrtfn > 0 first.");
-  }
   if (rootdir == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "rootdir = NULL.");
   for (int i = 0; i < ce->root->nrtfn; ++i) {
     ce->root->dir[i] = rootdir[i] > 0 ? 1 : (rootdir[i] < 0 ? -1 : 0);
@@ -307,24 +315,16 @@ int CEodeSetRootDirection(void* mem, int* rootdir) {
 
 int CEodeSetNoInactiveRootWarn(void* mem) {
   CEodeMemRec* ce = nullptr;
-  const int flag = ceode::Access(mem, __func__, &ce);
+  const int flag = AccessRoots(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->root == nullptr) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "No root functions: call CEodeRootInit with nrtfn > 0 first.");
-  }
   ce->root->warn_inactive = false;
   return CE_SUCCESS;
 }
 
 int CEodeGetRootInfo(void* mem, int* rootsfound) {
   CEodeMemRec* ce = nullptr;
-  const int flag = ceode::Access(mem, __func__, &ce);
+  const int flag = AccessRoots(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->root == nullptr) {
-    return ProcessError(ce, CE_ILL_INPUT, __func__,
-                        "No root functions: call CEodeRootInit with nrtfn > 0 first.");
-  }
   if (rootsfound == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "rootsfound = NULL.");
   std::copy(ce->root->info.begin(), ce->root->info.end(), rootsfound);
   return CE_SUCCESS;
