@@ -13,7 +13,7 @@
 namespace ceode {
 
 struct CERootMem {
-  CERootFn g = nullptr;
+  CEodeRootFn g = nullptr;
   int nrtfn = 0;
   std::vector<int> dir;   // +1 / -1: only increasing / decreasing roots; 0: both
   std::vector<int> info;  // CEodeGetRootInfo: +1 / -1 at the last root return, else 0
@@ -266,7 +266,7 @@ int AccessRoots(void* mem, const char* func, CEodeMemRec** ce) {
 
 extern "C" {
 
-int CEodeRootInit(void* mem, int nrtfn, CERootFn g) {
+int CEodeRootInit(void* mem, int nrtfn, CEodeRootFn g) {
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;

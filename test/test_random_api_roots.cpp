@@ -64,7 +64,7 @@ class RootSequence {
   }
 
   // CEodeRootInit, the count kept when the memory takes it.
-  void RootInit(int n, CERootFn g) {
+  void RootInit(int n, CEodeRootFn g) {
     if (CEodeRootInit(mem_.get(), n, g) == CE_SUCCESS) nrtfn_ = n;
   }
 

@@ -132,9 +132,10 @@ typedef void (*CEodeErrHandlerFn)(int error_code, const char* module, const char
                                   char* msg, void* eh_data);
 /* Error weights of the adaptive step, as CVODE's CVEwtFn: ewt_i > 0 for every entry of
  * the position x (CEodeWFtolerances). */
-/* Root (event) functions: g_i(t, x, v), i < nrtfn, into gout (CEodeRootInit); 0: success */
-typedef int (*CERootFn)(sunrealtype t, N_Vector x, N_Vector v, sunrealtype* gout, void* user_data);
 typedef int (*CEodeEwtFn)(N_Vector x, N_Vector ewt, void* user_data);
+/* Root (event) functions: g_i(t, x, v), i < nrtfn, into gout (CEodeRootInit); 0: success */
+typedef int (*CEodeRootFn)(sunrealtype t, N_Vector x, N_Vector v, sunrealtype* gout,
+                           void* user_data);
 /* A first-order right-hand side F(t, y, ydot), unchanged from ARKODE/CVODE, with
  * y = [x; v] and ydot = [v; a] (CEodeInitFirstOrder). */
 typedef int (*CEodeFirstOrderRhsFn)(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data);
@@ -275,7 +276,7 @@ SUNDIALS_EXPORT int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky);
  * nrtfn = 0 turns root finding off. dir[i] = +1 (-1): only roots where g_i increases
  * (decreases); 0: both. rootsfound[i] = +1 / -1: g_i has a root and increases / decreases;
  * 0: no root. A function zero at the start is inactive until it moves away from zero. */
-SUNDIALS_EXPORT int CEodeRootInit(void* mem, int nrtfn, CERootFn g);
+SUNDIALS_EXPORT int CEodeRootInit(void* mem, int nrtfn, CEodeRootFn g);
 SUNDIALS_EXPORT int CEodeSetRootDirection(void* mem, int* rootdir);
 SUNDIALS_EXPORT int CEodeSetNoInactiveRootWarn(void* mem);
 SUNDIALS_EXPORT int CEodeGetRootInfo(void* mem, int* rootsfound);
