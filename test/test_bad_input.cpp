@@ -151,6 +151,16 @@ class HostileInput : public ::testing::Test {
     for (sunindextype i = 0; i < N_VGetLength(x_.get()); ++i)
       EXPECT_NEAR(NV_Ith_S(x_.get(), i), exact, 1e-5);
   }
+  // The repair of a wrong-size mass matrix or solver for n = 2: a 2 x 2 identity mass matrix and
+  // a dense solver of that size, then the correct run.
+  void ExpectCorrectRunWithRightSizedMassAndSolver() {
+    Matrix M2(SUNDenseMatrix(2, 2, ctx_));
+    Matrix A2(SUNDenseMatrix(2, 2, ctx_));
+    LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
+    ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
+    ExpectCorrectRunAfterReInit();
+  }
 
   Context ctx_;
   Mem mem_;
@@ -271,12 +281,7 @@ TEST_F(HostileInput, MassAndSolverMatricesBothTooLargeAreRefusedBeforeAnySolve) 
   EXPECT_TRUE(Finite());
   // After Init the setter itself refuses it.
   EXPECT_EQ(CEodeSetMassFn(mem(), IdentityMass, M3.get(), SUNTRUE), CE_ILL_INPUT);
-  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
-  Matrix A2(SUNDenseMatrix(2, 2, ctx_));
-  LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
-  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
-  ExpectCorrectRunAfterReInit();
+  ExpectCorrectRunWithRightSizedMassAndSolver();
 }
 
 // --- 2. Mass matrix of the wrong size with constraints -----------------------------------------
@@ -682,12 +687,7 @@ TEST_F(HostileInput, MassAndSolverBothTooLargeLeaveTheMemoryUsableWithTheRightSi
   EXPECT_EQ(Evolve(1, &t), CE_ILL_INPUT);
   EXPECT_TRUE(Contains(Message(), "3 x 3"));
   EXPECT_TRUE(Finite());
-  Matrix M2(SUNDenseMatrix(2, 2, ctx_));
-  Matrix A2(SUNDenseMatrix(2, 2, ctx_));
-  LinearSolver LS2(SUNLinSol_Dense(x_.get(), A2.get(), ctx_));
-  ASSERT_EQ(CEodeSetMassFn(mem(), IdentityMass, M2.get(), SUNTRUE), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS2.get(), A2.get()), CE_SUCCESS);
-  ExpectCorrectRunAfterReInit();
+  ExpectCorrectRunWithRightSizedMassAndSolver();
 }
 
 // The Jacobian is evaluated by the Newton matrix's setup only. Per implicit mode, with a strong
