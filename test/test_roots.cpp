@@ -56,6 +56,20 @@ Mem MakeOscillator(SUNContext ctx, const OscSetup& s, N_Vector x, N_Vector v) {
   return mem;
 }
 
+// The oscillator as set up, owning its context, vectors and memory; g (nrtfn root functions)
+// is attached when given.
+struct OscRun {
+  explicit OscRun(const OscSetup& s, int nrtfn = 0, CEodeRootFn g = nullptr)
+      : x(SerialVector(1, ctx)),
+        v(SerialVector(1, ctx)),
+        mem(MakeOscillator(ctx, s, x.get(), v.get())) {
+    if (g != nullptr) EXPECT_EQ(CEodeRootInit(mem.get(), nrtfn, g), CE_SUCCESS);
+  }
+  Context ctx;
+  Vector x, v;
+  Mem mem;
+};
+
 // Every event of g up to tend, evolving to tend (CE_NORMAL) or step by step (CE_ONE_STEP).
 std::vector<Event> Events(void* mem, int nrtfn, N_Vector x, N_Vector v, sunrealtype tend,
                           int itask) {
@@ -76,12 +90,11 @@ std::vector<Event> Events(void* mem, int nrtfn, N_Vector x, N_Vector v, sunrealt
 }
 
 std::vector<Event> OscillatorEvents(const OscSetup& s, sunrealtype tend, const int* dir = nullptr) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
-  Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-  EXPECT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
-  if (dir != nullptr) EXPECT_EQ(CEodeSetRootDirection(mem.get(), const_cast<int*>(dir)), 0);
-  return Events(mem.get(), 1, x.get(), v.get(), tend, s.itask);
+  OscRun run(s, 1, GX);
+  void* mem = run.mem.get();
+  N_Vector x = run.x.get(), v = run.v.get();
+  if (dir != nullptr) EXPECT_EQ(CEodeSetRootDirection(mem, const_cast<int*>(dir)), 0);
+  return Events(mem, 1, x, v, tend, s.itask);
 }
 
 // Max |t_event - exact| over the oscillator's zeros up to 10 (all three must be found).
@@ -184,13 +197,12 @@ int GAtNode(sunrealtype t, N_Vector, N_Vector, sunrealtype* g, void*) {
 // with their directions) first, then g1's at 0.35; the time tolerance is 100 ulp of |t| + |h|.
 TEST(RootFinding, ReportsSeveralRootsOfOneStepInOrder) {
   for (int itask : {CE_NORMAL, CE_ONE_STEP}) {
-    Context ctx;
-    Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
     OscSetup s;
     s.h = SUN_RCONST(0.25);
-    Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-    ASSERT_EQ(CEodeRootInit(mem.get(), 3, GLinear), CE_SUCCESS);
-    const std::vector<Event> ev = Events(mem.get(), 3, x.get(), v.get(), 1, itask);
+    OscRun run(s, 3, GLinear);
+    void* mem = run.mem.get();
+    N_Vector x = run.x.get(), v = run.v.get();
+    const std::vector<Event> ev = Events(mem, 3, x, v, 1, itask);
     ASSERT_EQ(ev.size(), 2u);
     const double ttol = 100 * SUN_UNIT_ROUNDOFF * (1 + 0.25);
     EXPECT_NEAR(ev[0].t, 0.3, ttol);
@@ -210,31 +222,29 @@ int GJump(sunrealtype t, N_Vector, N_Vector, sunrealtype* g, void*) {
 // A g that jumps (no root, a sign change) is bracketed to the time tolerance all the same, with
 // a bounded number of evaluations (Illinois' weights, then halving: at most 110 per event).
 TEST(RootFinding, BracketsAJumpOfG) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
   OscSetup s;
   s.h = SUN_RCONST(0.25);
-  Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-  ASSERT_EQ(CEodeRootInit(mem.get(), 1, GJump), CE_SUCCESS);
-  const std::vector<Event> ev = Events(mem.get(), 1, x.get(), v.get(), 1, CE_NORMAL);
+  OscRun run(s, 1, GJump);
+  void* mem = run.mem.get();
+  N_Vector x = run.x.get(), v = run.v.get();
+  const std::vector<Event> ev = Events(mem, 1, x, v, 1, CE_NORMAL);
   ASSERT_EQ(ev.size(), 1u);
   EXPECT_NEAR(ev[0].t, 0.37, 100 * SUN_UNIT_ROUNDOFF * (1 + 0.25));
   EXPECT_GE(ev[0].t, 0.37);  // the root is the end where g has its new sign
   long nge = 0;
-  CEodeGetNumGEvals(mem.get(), &nge);
+  CEodeGetNumGEvals(mem, &nge);
   std::printf("jump located with %ld g evaluations\n", nge);
   EXPECT_LT(nge, 4 + 2 + 110);  // one per step (four steps, the start, the end) and the search
 }
 
 // A zero exactly at a step point (0.5 = 4 h) is returned at that time, once.
 TEST(RootFinding, ReturnsARootAtAStepPointOnce) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
   OscSetup s;
   s.h = SUN_RCONST(0.125);
-  Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-  ASSERT_EQ(CEodeRootInit(mem.get(), 1, GAtNode), CE_SUCCESS);
-  const std::vector<Event> ev = Events(mem.get(), 1, x.get(), v.get(), 2, CE_NORMAL);
+  OscRun run(s, 1, GAtNode);
+  void* mem = run.mem.get();
+  N_Vector x = run.x.get(), v = run.v.get();
+  const std::vector<Event> ev = Events(mem, 1, x, v, 2, CE_NORMAL);
   ASSERT_EQ(ev.size(), 1u);
   EXPECT_EQ(ev[0].t, 0.5);
   EXPECT_EQ(ev[0].info[0], 1);
@@ -260,19 +270,19 @@ void CountWarnings(int code, const char*, const char*, char*, void* data) {
 TEST(RootFinding, KeepsAZeroAtTheStartInactive) {
   for (bool silence : {false, true}) {
     for (sunrealtype h : {SUN_RCONST(0.01), SUN_RCONST(0.0)}) {
-      Context ctx;
-      Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
       OscSetup s;
       s.h = h;
       s.tol = 1e-9;
       s.x0 = 0;
       s.v0 = 1;
-      Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
+      OscRun run(s);
+      void* mem = run.mem.get();
+      N_Vector x = run.x.get(), v = run.v.get();
       Warnings w;
-      ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), CountWarnings, &w), CE_SUCCESS);
-      ASSERT_EQ(CEodeRootInit(mem.get(), 2, GXAndZero), CE_SUCCESS);
-      if (silence) ASSERT_EQ(CEodeSetNoInactiveRootWarn(mem.get()), CE_SUCCESS);
-      const std::vector<Event> ev = Events(mem.get(), 2, x.get(), v.get(), 7, CE_NORMAL);
+      ASSERT_EQ(CEodeSetErrHandlerFn(mem, CountWarnings, &w), CE_SUCCESS);
+      ASSERT_EQ(CEodeRootInit(mem, 2, GXAndZero), CE_SUCCESS);
+      if (silence) ASSERT_EQ(CEodeSetNoInactiveRootWarn(mem), CE_SUCCESS);
+      const std::vector<Event> ev = Events(mem, 2, x, v, 7, CE_NORMAL);
       ASSERT_EQ(ev.size(), 2u);
       EXPECT_NEAR(ev[0].t, kPi, 1e-6);
       EXPECT_EQ(ev[0].info, (std::vector<int>{-1, 0}));
@@ -304,23 +314,22 @@ TEST(RootFinding, OneStepReturnsTheSameEventsAsNormal) {
 // goes on from there: a later CE_NORMAL output equals the run without roots.
 TEST(RootFinding, ReturnsTheStateAtTheRootAndContinues) {
   for (sunrealtype h : {SUN_RCONST(0.01), SUN_RCONST(0.0)}) {
-    Context ctx;
-    Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
     OscSetup s;
     s.h = h;
     s.tol = 1e-10;
-    Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-    ASSERT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
+    OscRun run(s, 1, GX);
+    void* mem = run.mem.get();
+    N_Vector x = run.x.get(), v = run.v.get();
     sunrealtype t = 0;
-    ASSERT_EQ(CEodeEvolve(mem.get(), 5, x.get(), v.get(), &t, CE_NORMAL), CE_ROOT_RETURN);
+    ASSERT_EQ(CEodeEvolve(mem, 5, x, v, &t, CE_NORMAL), CE_ROOT_RETURN);
     EXPECT_NEAR(t, OscillatorZero(0), 1e-8);
-    EXPECT_LT(std::fabs(NV_Ith_S(x.get(), 0)), 1e-12);  // g = x is zero there to ttol
-    EXPECT_NEAR(NV_Ith_S(v.get(), 0), -std::sqrt(SUN_RCONST(1.25)), 1e-8);
-    ASSERT_EQ(CEodeEvolve(mem.get(), 7, x.get(), v.get(), &t, CE_NORMAL), CE_ROOT_RETURN);
+    EXPECT_LT(std::fabs(NV_Ith_S(x, 0)), 1e-12);  // g = x is zero there to ttol
+    EXPECT_NEAR(NV_Ith_S(v, 0), -std::sqrt(SUN_RCONST(1.25)), 1e-8);
+    ASSERT_EQ(CEodeEvolve(mem, 7, x, v, &t, CE_NORMAL), CE_ROOT_RETURN);
     EXPECT_NEAR(t, OscillatorZero(1), 1e-8);
-    ASSERT_EQ(CEodeEvolve(mem.get(), 7, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    ASSERT_EQ(CEodeEvolve(mem, 7, x, v, &t, CE_NORMAL), CE_SUCCESS);
     EXPECT_EQ(t, 7);
-    EXPECT_NEAR(NV_Ith_S(x.get(), 0), std::cos(7) + 0.5 * std::sin(7), 1e-7);
+    EXPECT_NEAR(NV_Ith_S(x, 0), std::cos(7) + 0.5 * std::sin(7), 1e-7);
   }
 }
 
@@ -515,23 +524,23 @@ std::string LastMessage(void* mem) {
 }  // namespace
 
 TEST(RootFinding, RefusesBadInputWithAFlagAndAMessage) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
-  Mem mem = MakeOscillator(ctx, OscSetup{}, x.get(), v.get());
-  ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), Silent, nullptr), CE_SUCCESS);
-  EXPECT_EQ(CEodeRootInit(mem.get(), -1, GX), CE_ILL_INPUT);
-  EXPECT_TRUE(Contains(LastMessage(mem.get()), "nrtfn = -1"));
-  EXPECT_EQ(CEodeRootInit(mem.get(), 2, nullptr), CE_ILL_INPUT);
-  EXPECT_TRUE(Contains(LastMessage(mem.get()), "g = NULL"));
-  EXPECT_EQ(CEodeSetRootDirection(mem.get(), nullptr), CE_ILL_INPUT);  // no roots yet
+  OscRun run(OscSetup{});
+  void* mem = run.mem.get();
+  N_Vector x = run.x.get(), v = run.v.get();
+  ASSERT_EQ(CEodeSetErrHandlerFn(mem, Silent, nullptr), CE_SUCCESS);
+  EXPECT_EQ(CEodeRootInit(mem, -1, GX), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(LastMessage(mem), "nrtfn = -1"));
+  EXPECT_EQ(CEodeRootInit(mem, 2, nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(LastMessage(mem), "g = NULL"));
+  EXPECT_EQ(CEodeSetRootDirection(mem, nullptr), CE_ILL_INPUT);  // no roots yet
   int info[2];
-  EXPECT_EQ(CEodeGetRootInfo(mem.get(), info), CE_ILL_INPUT);
-  ASSERT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetRootDirection(mem.get(), nullptr), CE_ILL_INPUT);
-  EXPECT_TRUE(Contains(LastMessage(mem.get()), "rootdir = NULL"));
-  EXPECT_EQ(CEodeGetRootInfo(mem.get(), nullptr), CE_ILL_INPUT);
-  EXPECT_TRUE(Contains(LastMessage(mem.get()), "rootsfound = NULL"));
-  EXPECT_EQ(CEodeGetNumGEvals(mem.get(), nullptr), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeGetRootInfo(mem, info), CE_ILL_INPUT);
+  ASSERT_EQ(CEodeRootInit(mem, 1, GX), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetRootDirection(mem, nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(LastMessage(mem), "rootdir = NULL"));
+  EXPECT_EQ(CEodeGetRootInfo(mem, nullptr), CE_ILL_INPUT);
+  EXPECT_TRUE(Contains(LastMessage(mem), "rootsfound = NULL"));
+  EXPECT_EQ(CEodeGetNumGEvals(mem, nullptr), CE_ILL_INPUT);
   EXPECT_EQ(CEodeRootInit(nullptr, 1, GX), CE_MEM_NULL);
   EXPECT_EQ(FlagName(CE_ROOT_RETURN), "CE_ROOT_RETURN");
   EXPECT_EQ(FlagName(CE_RTFUNC_FAIL), "CE_RTFUNC_FAIL");
@@ -541,20 +550,20 @@ TEST(RootFinding, RefusesBadInputWithAFlagAndAMessage) {
 // and a finite state; with root finding turned off the same memory integrates on.
 TEST(RootFinding, ReportsAFailingRootFunctionAndStaysUsable) {
   for (int which : {0, 1}) {
-    Context ctx;
-    Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
-    Mem mem = MakeOscillator(ctx, OscSetup{}, x.get(), v.get());
-    ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), Silent, nullptr), CE_SUCCESS);
-    ASSERT_EQ(CEodeRootInit(mem.get(), which == 0 ? 1 : 2, which == 0 ? GFails : GNaN), 0);
+    OscRun run(OscSetup{});
+    void* mem = run.mem.get();
+    N_Vector x = run.x.get(), v = run.v.get();
+    ASSERT_EQ(CEodeSetErrHandlerFn(mem, Silent, nullptr), CE_SUCCESS);
+    ASSERT_EQ(CEodeRootInit(mem, which == 0 ? 1 : 2, which == 0 ? GFails : GNaN), 0);
     sunrealtype t = 0;
-    EXPECT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_RTFUNC_FAIL);
-    EXPECT_TRUE(Contains(LastMessage(mem.get()), which == 0 ? "returned 7" : "g[1] = nan"));
-    EXPECT_TRUE(std::isfinite(NV_Ith_S(x.get(), 0)) && std::isfinite(NV_Ith_S(v.get(), 0)));
+    EXPECT_EQ(CEodeEvolve(mem, 2, x, v, &t, CE_NORMAL), CE_RTFUNC_FAIL);
+    EXPECT_TRUE(Contains(LastMessage(mem), which == 0 ? "returned 7" : "g[1] = nan"));
+    EXPECT_TRUE(std::isfinite(NV_Ith_S(x, 0)) && std::isfinite(NV_Ith_S(v, 0)));
     EXPECT_LE(t, 0.5 + 0.01);
-    ASSERT_EQ(CEodeRootInit(mem.get(), 0, nullptr), CE_SUCCESS);
-    EXPECT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    ASSERT_EQ(CEodeRootInit(mem, 0, nullptr), CE_SUCCESS);
+    EXPECT_EQ(CEodeEvolve(mem, 2, x, v, &t, CE_NORMAL), CE_SUCCESS);
     EXPECT_EQ(t, 2);
-    EXPECT_NEAR(NV_Ith_S(x.get(), 0), std::cos(2) + 0.5 * std::sin(2), 1e-7);
+    EXPECT_NEAR(NV_Ith_S(x, 0), std::cos(2) + 0.5 * std::sin(2), 1e-7);
   }
 }
 
@@ -569,26 +578,25 @@ struct Trace {
 // The oscillator to 10 with outputs every 0.37; roots: 0 none, 1 RootInit(0), 2 RootInit(1) then
 // RootInit(0), 3 g = x on (events skipped over: the outputs are those of tout).
 Trace OutputTrace(sunrealtype h, int roots) {
-  Context ctx;
-  Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
   OscSetup s;
   s.h = h;
   s.tol = 1e-8;
-  Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-  if (roots == 1) EXPECT_EQ(CEodeRootInit(mem.get(), 0, nullptr), CE_SUCCESS);
-  if (roots >= 2) EXPECT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
-  if (roots == 2) EXPECT_EQ(CEodeRootInit(mem.get(), 0, nullptr), CE_SUCCESS);
+  OscRun run(s);
+  void* mem = run.mem.get();
+  N_Vector x = run.x.get(), v = run.v.get();
+  if (roots == 1) EXPECT_EQ(CEodeRootInit(mem, 0, nullptr), CE_SUCCESS);
+  if (roots >= 2) EXPECT_EQ(CEodeRootInit(mem, 1, GX), CE_SUCCESS);
+  if (roots == 2) EXPECT_EQ(CEodeRootInit(mem, 0, nullptr), CE_SUCCESS);
   Trace tr;
   sunrealtype t = 0;
   for (int k = 1; k * SUN_RCONST(0.37) <= 10; ++k) {
     int flag = CE_ROOT_RETURN;
-    while (flag == CE_ROOT_RETURN)
-      flag = CEodeEvolve(mem.get(), k * 0.37, x.get(), v.get(), &t, CE_NORMAL);
+    while (flag == CE_ROOT_RETURN) flag = CEodeEvolve(mem, k * 0.37, x, v, &t, CE_NORMAL);
     EXPECT_EQ(flag, CE_SUCCESS);
-    tr.values.insert(tr.values.end(), {t, NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)});
+    tr.values.insert(tr.values.end(), {t, NV_Ith_S(x, 0), NV_Ith_S(v, 0)});
   }
-  CEodeGetNumRhsEvals(mem.get(), &tr.nfe);
-  CEodeGetNumSteps(mem.get(), &tr.nst);
+  CEodeGetNumRhsEvals(mem, &tr.nfe);
+  CEodeGetNumSteps(mem, &tr.nst);
   return tr;
 }
 
@@ -627,32 +635,31 @@ TEST(RootFinding, CostsNoRhsEvaluations) {
 // the velocity at the first zero, x follows the reflected oscillation.
 TEST(RootFinding, ResetRestartsFromTheEventState) {
   for (sunrealtype h : {SUN_RCONST(0.01), SUN_RCONST(0.0)}) {
-    Context ctx;
-    Vector x = SerialVector(1, ctx), v = SerialVector(1, ctx);
     OscSetup s;
     s.h = h;
     s.tol = 1e-10;
-    Mem mem = MakeOscillator(ctx, s, x.get(), v.get());
-    ASSERT_EQ(CEodeRootInit(mem.get(), 1, GX), CE_SUCCESS);
+    OscRun run(s, 1, GX);
+    void* mem = run.mem.get();
+    N_Vector x = run.x.get(), v = run.v.get();
     sunrealtype t = 0;
-    ASSERT_EQ(CEodeEvolve(mem.get(), 8, x.get(), v.get(), &t, CE_NORMAL), CE_ROOT_RETURN);
+    ASSERT_EQ(CEodeEvolve(mem, 8, x, v, &t, CE_NORMAL), CE_ROOT_RETURN);
     long int nst0 = 0, nst1 = 0, nge = 0;
-    CEodeGetNumSteps(mem.get(), &nst0);
-    const sunrealtype t0 = t, v0 = -NV_Ith_S(v.get(), 0);
+    CEodeGetNumSteps(mem, &nst0);
+    const sunrealtype t0 = t, v0 = -NV_Ith_S(v, 0);
     sunrealtype hnext = 0, h0 = 0;
-    CEodeGetCurrentStep(mem.get(), &hnext);
-    N_VScale(-1, v.get(), v.get());
-    NV_Ith_S(x.get(), 0) = 0;  // the event's state exactly: g = 0 there, inactive at the restart
-    ASSERT_EQ(CEodeReset(mem.get(), t0, x.get(), v.get()), CE_SUCCESS);
+    CEodeGetCurrentStep(mem, &hnext);
+    N_VScale(-1, v, v);
+    NV_Ith_S(x, 0) = 0;  // the event's state exactly: g = 0 there, inactive at the restart
+    ASSERT_EQ(CEodeReset(mem, t0, x, v), CE_SUCCESS);
     // The reflected motion x = v0 sin(t - t0) has its next zero at t0 + pi.
-    ASSERT_EQ(CEodeEvolve(mem.get(), 8, x.get(), v.get(), &t, CE_NORMAL), CE_ROOT_RETURN);
+    ASSERT_EQ(CEodeEvolve(mem, 8, x, v, &t, CE_NORMAL), CE_ROOT_RETURN);
     EXPECT_NEAR(t, t0 + kPi, 1e-7);
-    CEodeGetActualInitStep(mem.get(), &h0);
+    CEodeGetActualInitStep(mem, &h0);
     EXPECT_EQ(h0, hnext);  // the controller's step (or the fixed step) goes on
-    ASSERT_EQ(CEodeEvolve(mem.get(), 8, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
-    EXPECT_NEAR(NV_Ith_S(x.get(), 0), v0 * std::sin(8 - t0), 1e-7);
-    CEodeGetNumSteps(mem.get(), &nst1);
-    CEodeGetNumGEvals(mem.get(), &nge);
+    ASSERT_EQ(CEodeEvolve(mem, 8, x, v, &t, CE_NORMAL), CE_SUCCESS);
+    EXPECT_NEAR(NV_Ith_S(x, 0), v0 * std::sin(8 - t0), 1e-7);
+    CEodeGetNumSteps(mem, &nst1);
+    CEodeGetNumGEvals(mem, &nge);
     EXPECT_GT(nst1, nst0);
     EXPECT_GT(nge, nst1);  // one g a step at least, counted across the reset
   }
