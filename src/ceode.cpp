@@ -337,12 +337,11 @@ int CEodeReInit(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
 
 int CEodeReset(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
   CEodeMemRec* ce = nullptr;
-  const int flag = ceode::Access(mem, __func__, &ce, true);
-  if (flag != CE_SUCCESS) return flag;
-  if (!std::isfinite(t0))
-    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__, "t0 is not finite.");
-  ceode::AdaptKeepStep(ce);  // the controller's next step is the new start's first
-  return ceode::Reset(ce, __func__, t0, x0, v0, ceode::ResetOptions{});
+  int flag = ceode::Access(mem, __func__, &ce, true);
+  if (flag == CE_SUCCESS) flag = ceode::Reset(ce, __func__, t0, x0, v0, ceode::ResetOptions{});
+  // After the checks, so that a refused reset leaves the controller as it was.
+  if (flag == CE_SUCCESS) ceode::AdaptKeepStep(ce);  // its next step is the new start's first
+  return flag;
 }
 
 int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
