@@ -664,3 +664,37 @@ TEST(RootFinding, ResetRestartsFromTheEventState) {
     EXPECT_GT(nge, nst1);  // one g a step at least, counted across the reset
   }
 }
+
+// A reset refused for its arguments (a NaN time, a state of the wrong length) leaves the memory
+// as it was: a later CEodeReInit starts exactly as one without the refused calls.
+TEST(RootFinding, ARefusedResetChangesNothing) {
+  for (sunrealtype h : {SUN_RCONST(0.01), SUN_RCONST(0.0)}) {
+    std::vector<sunrealtype> end[2];
+    for (int refuse : {0, 1}) {
+      OscSetup s;
+      s.h = h;
+      s.tol = 1e-8;
+      OscRun run(s, 1, GX);
+      void* mem = run.mem.get();
+      N_Vector x = run.x.get(), v = run.v.get();
+      ASSERT_EQ(CEodeSetErrHandlerFn(mem, Silent, nullptr), CE_SUCCESS);
+      sunrealtype t = 0;
+      ASSERT_EQ(CEodeEvolve(mem, 1, x, v, &t, CE_NORMAL), CE_SUCCESS);
+      if (refuse == 1) {
+        Vector wrong = SerialVector(2, run.ctx);
+        EXPECT_EQ(CEodeReset(mem, NAN, x, v), CE_ILL_INPUT);
+        EXPECT_EQ(CEodeReset(mem, t, wrong.get(), wrong.get()), CE_ILL_INPUT);
+      }
+      NV_Ith_S(x, 0) = 1;
+      NV_Ith_S(v, 0) = SUN_RCONST(0.5);
+      ASSERT_EQ(CEodeReInit(mem, 0, x, v), CE_SUCCESS);
+      ASSERT_EQ(CEodeEvolve(mem, 3, x, v, &t, CE_NORMAL), CE_ROOT_RETURN);
+      long nst = 0;
+      sunrealtype h0 = 0;
+      CEodeGetNumSteps(mem, &nst);
+      CEodeGetActualInitStep(mem, &h0);
+      end[refuse] = {t, NV_Ith_S(x, 0), NV_Ith_S(v, 0), static_cast<sunrealtype>(nst), h0};
+    }
+    EXPECT_EQ(end[1], end[0]);
+  }
+}
