@@ -177,6 +177,15 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
   }
 }
 
+void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[kGammaTerms]) {
+  long double g[kMaxDegree][kTerms] = {};
+  HistoryGammas(d, params, g);
+  for (int k = 0; k < kMaxDegree; ++k) {
+    for (int l = 0; l < kGammaTerms; ++l)
+      gamma[k][l] = k < d ? static_cast<sunrealtype>(g[k][l]) : 0;
+  }
+}
+
 bool AdaptEnabled(const CEodeMemRec* ce) { return ce->adapt->on; }
 
 sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
@@ -255,21 +264,31 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   return h;
 }
 
-}  // namespace
-
-int AdaptStart(CEodeMemRec* ce, const char* func) {
+// The method's error, remap and refresh coefficients (at each start: the method may have changed).
+int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
   try {
     AdaptCoefficients(ce->degree, ce->params, &am.order, &am.cerr, am.remap, &am.nremap);
+    AdaptHistorySeries(ce->degree, ce->params, am.gamma);
   } catch (...) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   am.pfac = Factorial(am.order - 1);
+  am.refresh = ce->degree >= 6 && !HasConstraints(ce);
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+int AdaptStart(CEodeMemRec* ce, const char* func) {
+  AdaptMem& am = *ce->adapt;
+  int flag = MethodCoefficients(ce, func);
+  if (flag != CE_SUCCESS) return flag;
   sunrealtype tol = am.tol_kind == 2 ? 1 : am.rtol;
   if (am.tol_kind == 0 && tol == 0) tol = am.atol;
   if (am.tol_kind == 1 && tol == 0) tol = N_VMaxNorm(am.atol_vec);
   am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.order);
-  int flag = AllocAdaptVectors(ce, func);
+  flag = AllocAdaptVectors(ce, func);
   const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL &&
                       (am.tol_kind != 1 || N_VGetVectorID(am.atol_vec) == SUNDIALS_NVEC_SERIAL);
   am.kernels = {serial, ce->n};

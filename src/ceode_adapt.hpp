@@ -1,6 +1,7 @@
 // The error-control module's record (CEodeMemRec::adapt), written only by ceode_adapt.cpp (the
-// options, the method's error and remap coefficients, the controller) and ceode_adapt_step.cpp
-// (the adaptive step); the others read it (docs/theory.md section 12).
+// options, the method's error and remap coefficients, the controller), ceode_adapt_step.cpp (the
+// adaptive step) and ceode_adapt_refresh.cpp (the history refresh); the others read it
+// (docs/theory.md section 12).
 #ifndef CEODE_SRC_CEODE_ADAPT_HPP_
 #define CEODE_SRC_CEODE_ADAPT_HPP_
 
@@ -17,6 +18,9 @@ struct RemapTerm {
   int j;
   sunrealtype gamma;
 };
+
+// Terms of the consistent history's series D_k = sum_l gamma_kl h^l y^(k+l) that the refresh uses.
+constexpr int kGammaTerms = kMaxDegree + 1;
 
 struct AdaptMem {
   // Options
@@ -45,6 +49,10 @@ struct AdaptMem {
   sunrealtype err_scale = 1;
   int nremap = 0;
   RemapTerm remap[kMaxDegree * kMaxDegree] = {};
+  // The history is refreshed instead of remapped when the step changes (degree 6 and more, no
+  // constraints: the constrained solve's position weights follow the remap, 12.6).
+  bool refresh = false;
+  sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
 
   // The run
   AdaptKernels kernels;  // the backend of its vector work, chosen at the start
@@ -52,7 +60,7 @@ struct AdaptMem {
   N_Vector ele = nullptr;  // the last accepted step's local error estimate
   N_Vector est = nullptr;  // the estimate of the step under test
   N_Vector yd = nullptr;   // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
-  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
+  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 1
   int cur = 0;                             // dd[cur] belongs to the node
   sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
   int ndata = 0;          // accelerations and start derivatives behind the divided differences
@@ -111,6 +119,14 @@ void AdaptReset(CEodeMemRec* ce, bool counters);
 // The coefficients of an arbitrary set (also for the tests): C_{p+1}, the order, the remap.
 void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,
                        RemapTerm* remap, int* nremap);
+// The consistent history's series coefficients gamma[k][l], k < d, l < kGammaTerms.
+void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[kGammaTerms]);
+
+// ceode_adapt_refresh.cpp
+// The node's history for a next step of h, rebuilt from the interpolant of the last p
+// accelerations (docs/theory.md 12.5); false (nothing changed) while fewer are known or the
+// refresh is off, when the remap applies instead.
+bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h);
 
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past

@@ -28,7 +28,7 @@ sunrealtype IntPow(sunrealtype x, int j) {
 // The node's history for a next step of h instead of am.hmap: the h-dependent part of the
 // consistent history follows the step (docs/theory.md 12.2).
 void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
-  if (h == am->hmap) return;
+  if (h == am->hmap || RefreshHistory(ce, am, h)) return;
   const int d = ce->degree;
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
@@ -107,7 +107,7 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   for (int j = 1; j <= jmax; ++j) {
     N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
     N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-    N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
+    N_Vector out = am->dd[1 - am->cur][j];  // the top one too: the refresh reads it
     const sunrealtype r = 1 / (t - am->tnode[j - 1]);
     const sunrealtype c[2] = {r, -r};
     N_Vector X[2] = {prev_new, prev_old};
@@ -115,16 +115,17 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   }
   const sunrealtype h = ce->h;
   sunrealtype scale = am->cerr * IntPow(h, p + 1) * am->pfac;
+  N_Vector top = am->dd[1 - am->cur][p - 1];
   if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
-    CopyVector(ce->Dnew[2], est);
+    top = ce->Dnew[2];
   } else if (jmax == p - 2 && jmax >= 1) {
-    CopyVector(am->dd[1 - am->cur][jmax], est);
+    top = am->dd[1 - am->cur][jmax];
     scale /= h;
   } else if (jmax < p - 1) {
     N_VConst(0, est);
     return 0;
   }
-  am->kernels.Scale(scale, est);
+  am->kernels.Lin(1, &scale, &top, est);
   return am->kernels.WrmsNorm(est, am->ewt) * am->err_scale;
 }
 

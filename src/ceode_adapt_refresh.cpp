@@ -1,0 +1,95 @@
+// The history refresh of the adaptive step (docs/theory.md section 12.5): when the step changes,
+// the history beyond the acceleration is rebuilt from the interpolant of the last p
+// accelerations as the consistent history of a fixed-step run with the new step, so that a
+// rough step sequence cannot pump the parasitic modes of the derivative relations.
+#include <algorithm>
+#include <cmath>
+
+#include "ceode_adapt.hpp"
+#include "ceode_step.hpp"
+
+namespace ceode {
+
+namespace {
+
+// Coefficients of the Newton basis w_j(s) = prod_{i<j} (s - delta_i), delta_i = t_{n-i} - t_n,
+// in powers of s = t - t_n: w[j][i] is the coefficient of s^i (j, i < p).
+void NewtonBasis(const AdaptMem& am, int p, sunrealtype (*w)[kMaxDegree]) {
+  for (int j = 0; j < p; ++j) std::fill(w[j], w[j] + kMaxDegree, SUN_RCONST(0.0));
+  w[0][0] = 1;
+  for (int j = 1; j < p; ++j) {
+    const sunrealtype delta = am.tnode[j - 1] - am.tnode[0];
+    for (int i = j; i >= 0; --i) {
+      w[j][i] = (i > 0 ? w[j - 1][i - 1] : 0) - delta * w[j - 1][i];
+    }
+  }
+}
+
+// The m-th derivative of w_j at s.
+sunrealtype BasisDerivative(const sunrealtype (*w)[kMaxDegree], int p, int j, int m,
+                            sunrealtype s) {
+  sunrealtype r = 0;
+  for (int i = p - 1; i >= m; --i) {  // Horner in s over i!/(i-m)! w_i
+    sunrealtype f = 1;
+    for (int q = i - m + 1; q <= i; ++q) f *= q;
+    r = r * s + f * w[j][i];
+  }
+  return r;
+}
+
+// Weights over the divided differences of the consistent D_k at t_n + s for the step h:
+// sum_l gamma_kl h^l y^(k+l)(t_n + s), y^(m) = the interpolant's (m-2)-th derivative.
+void ConsistentWeights(const AdaptMem& am, const sunrealtype (*w)[kMaxDegree], int k, sunrealtype h,
+                       sunrealtype s, sunrealtype* c) {
+  const int p = am.order;
+  for (int j = 0; j < p; ++j) c[j] = 0;
+  sunrealtype hl = 1;
+  for (int l = 0; k + l - 2 <= p - 1 && l < kGammaTerms; ++l, hl *= h) {
+    const sunrealtype g = am.gamma[k][l] * hl;
+    if (g == 0) continue;
+    for (int j = 0; j < p; ++j) c[j] += g * BasisDerivative(w, p, j, k + l - 2, s);
+  }
+}
+
+}  // namespace
+
+bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+  const int d = ce->degree;
+  const int p = am->order;
+  if (!am->refresh || am->ndata < p || p < 2) return false;  // the table is not full yet
+  sunrealtype w[kMaxDegree][kMaxDegree];
+  NewtonBasis(*am, p, w);
+  N_Vector X[kMaxDegree + 1];
+  X[0] = ce->D[2];  // a(t_n), the table's first entry
+  for (int j = 1; j < p; ++j) X[j] = am->dd[am->cur][j];
+  sunrealtype c[kMaxDegree + 1];
+  // D_1 keeps its value (the velocity is no parasitic component); its h-dependent part moves
+  // from hmap to h as in the remap, with the interpolant's derivatives.
+  for (int j = 0; j < p; ++j) c[j + 1] = 0;
+  for (int i = 0; i < am->nremap; ++i) {
+    const RemapTerm& r = am->remap[i];
+    if (r.k != 1 || r.j - 1 > p - 1) continue;
+    const sunrealtype g = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
+    for (int j = 0; j < p; ++j) c[j + 1] += g * BasisDerivative(w, p, j, r.j - 1, 0);
+  }
+  c[0] = 1;
+  N_Vector Y[kMaxDegree + 1];
+  Y[0] = ce->D[1];
+  std::copy(X, X + p, Y + 1);
+  am->kernels.Lin(p + 1, c, Y, ce->D[1]);
+  // The top derivative one step of h back, for the position's blend: yd = (z_n - z(t_n - h)) / h.
+  sunrealtype cz[kMaxDegree];
+  ConsistentWeights(*am, w, d - 1, h, -h, cz);
+  for (int k = 3; k < d; ++k) {
+    ConsistentWeights(*am, w, k, h, 0, c);
+    am->kernels.Lin(p, c, X, ce->D[k]);
+    if (k == d - 1) {
+      for (int j = 0; j < p; ++j) cz[j] = (c[j] - cz[j]) / h;
+    }
+  }
+  am->kernels.Lin(p, cz, X, am->yd);
+  am->hmap = am->hprev = h;
+  return true;
+}
+
+}  // namespace ceode
