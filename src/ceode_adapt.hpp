@@ -60,7 +60,7 @@ struct AdaptMem {
   N_Vector ele = nullptr;  // the last accepted step's local error estimate
   N_Vector est = nullptr;  // the estimate of the step under test
   N_Vector yd = nullptr;   // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
-  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 1
+  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
   int cur = 0;                             // dd[cur] belongs to the node
   sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
   int ndata = 0;          // accelerations and start derivatives behind the divided differences

@@ -57,11 +57,16 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
   const int p = am->order;
   if (!am->refresh || am->ndata < p || p < 2) return false;  // the table is not full yet
-  sunrealtype w[kMaxDegree][kMaxDegree];
-  NewtonBasis(*am, p, w);
+  // The top difference is the accepted estimate ele = cerr hlast^(p+1) (p-1)! a[t_n .. t_{n-p+1}].
+  const sunrealtype scale = am->cerr * std::pow(am->hlast, p + 1) * am->pfac;
+  if (scale == 0 || !std::isfinite(scale)) return false;
   N_Vector X[kMaxDegree + 1];
   X[0] = ce->D[2];  // a(t_n), the table's first entry
-  for (int j = 1; j < p; ++j) X[j] = am->dd[am->cur][j];
+  for (int j = 1; j < p - 1; ++j) X[j] = am->dd[am->cur][j];
+  X[p - 1] = am->ele;
+  sunrealtype w[kMaxDegree][kMaxDegree];
+  NewtonBasis(*am, p, w);
+  for (sunrealtype& wi : w[p - 1]) wi /= scale;
   sunrealtype c[kMaxDegree + 1];
   // D_1 keeps its value (the velocity is no parasitic component); its h-dependent part moves
   // from hmap to h as in the remap, with the interpolant's derivatives.

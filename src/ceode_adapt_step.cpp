@@ -107,7 +107,7 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   for (int j = 1; j <= jmax; ++j) {
     N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
     N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-    N_Vector out = am->dd[1 - am->cur][j];  // the top one too: the refresh reads it
+    N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
     const sunrealtype r = 1 / (t - am->tnode[j - 1]);
     const sunrealtype c[2] = {r, -r};
     N_Vector X[2] = {prev_new, prev_old};
@@ -115,17 +115,16 @@ sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector
   }
   const sunrealtype h = ce->h;
   sunrealtype scale = am->cerr * IntPow(h, p + 1) * am->pfac;
-  N_Vector top = am->dd[1 - am->cur][p - 1];
   if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
-    top = ce->Dnew[2];
+    CopyVector(ce->Dnew[2], est);
   } else if (jmax == p - 2 && jmax >= 1) {
-    top = am->dd[1 - am->cur][jmax];
+    CopyVector(am->dd[1 - am->cur][jmax], est);
     scale /= h;
   } else if (jmax < p - 1) {
     N_VConst(0, est);
     return 0;
   }
-  am->kernels.Lin(1, &scale, &top, est);
+  am->kernels.Scale(scale, est);
   return am->kernels.WrmsNorm(est, am->ewt) * am->err_scale;
 }
 
