@@ -249,10 +249,13 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   const sunrealtype nx = N_VWrmsNorm(ce->xcur, am.ewt);
   const sunrealtype nv = N_VWrmsNorm(ce->D[1], am.ewt);
   const sunrealtype na = N_VWrmsNorm(ce->D[2], am.ewt);
+  // A zero norm says nothing about the time scale (a start at the origin or at rest), so only the
+  // ratios of nonzero norms count; with neither x nor v, the time a reaches the tolerance's scale.
   sunrealtype tau = SUN_BIG_REAL;
-  if (nv > 0) tau = std::min(tau, nx / nv);
-  if (na > 0) tau = std::min(tau, std::sqrt(nx / na));
-  if (na > 0 && nv > 0) tau = std::min(tau, nv / na);
+  if (nx > 0 && nv > 0) tau = std::min(tau, nx / nv);
+  if (nx > 0 && na > 0) tau = std::min(tau, std::sqrt(nx / na));
+  if (nv > 0 && na > 0) tau = std::min(tau, nv / na);
+  if (tau == SUN_BIG_REAL && na > 0) tau = std::sqrt(2 / na);
   const int p = am.order;
   sunrealtype h = 0.1 * span;
   if (tau > 0 && tau < SUN_BIG_REAL) {

@@ -68,20 +68,14 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   NewtonBasis(*am, p, w);
   for (sunrealtype& wi : w[p - 1]) wi /= scale;
   sunrealtype c[kMaxDegree + 1];
-  // D_1 keeps its value (the velocity is no parasitic component); its h-dependent part moves
-  // from hmap to h as in the remap, with the interpolant's derivatives.
-  for (int j = 0; j < p; ++j) c[j + 1] = 0;
+  // D_1 keeps its value (the velocity is no parasitic component) and moves its h-dependent part
+  // from hmap to h with the remap's own terms, from the history before it is rebuilt.
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    if (r.k != 1 || r.j - 1 > p - 1) continue;
+    if (r.k != 1) continue;
     const sunrealtype g = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
-    for (int j = 0; j < p; ++j) c[j + 1] += g * BasisDerivative(w, p, j, r.j - 1, 0);
+    am->kernels.Axpy(g, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
-  c[0] = 1;
-  N_Vector Y[kMaxDegree + 1];
-  Y[0] = ce->D[1];
-  std::copy(X, X + p, Y + 1);
-  am->kernels.Lin(p + 1, c, Y, ce->D[1]);
   // The top derivative one step of h back, for the position's blend: yd = (z_n - z(t_n - h)) / h.
   sunrealtype cz[kMaxDegree];
   ConsistentWeights(*am, w, d - 1, h, -h, cz);
