@@ -153,6 +153,11 @@ SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
 // backend must not run that plan.
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
 
+// An accumulated combination with compensation on the (local) data of its vectors, the
+// increment summed error-free as the serial backend sums it (the same numbers); false, with
+// nothing written, when some vector does not expose its data.
+bool CompensatedSumOnData(const Combo& cb, const Compensation& cs);
+
 // ---- A plan with its backend fixed when it is prepared ----
 
 // The serial backend when allowed (every vector NVECTOR_SERIAL, the fused kernel on) and the
