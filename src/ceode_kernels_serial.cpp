@@ -356,16 +356,17 @@ constexpr std::array<
 void StreamFence() {}
 #endif
 
-// Plans with compensation, entry by entry: the plain sums as every other kernel, the
-// accumulated ones error-free (StoreCompensatedExact). The uncompensated kernels stay as they are.
+// Plans with compensation, entry by entry: the position's and the velocity's increments
+// error-free (StoreCompensatedExact), the other sums as every other kernel. The uncompensated
+// kernels stay as they are.
 sunrealtype UpdateCompensated(const FusedPlan& fp, sunindextype n) {
   for (sunindextype i = 0; i < n; ++i) {
     for (int k = 0; k < fp.n; ++k) {
       const FusedTerms& tk = fp.terms[k];
-      if (tk.old == nullptr) {
-        tk.out[i] = SumAtForm(tk, i);
-      } else {
+      if (tk.exact) {
         StoreCompensatedExact(tk, i);
+      } else {
+        StoreSum(tk, i, SumAtForm(tk, i));
       }
     }
   }
@@ -574,6 +575,7 @@ bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
   for (int j = 0; j < m; ++j) {
     if (N_VGetArrayPointer(all[j]) == nullptr) return false;
   }
+  tk.exact = true;
   tk.m = cb.m + 1;
   for (int j = 0; j < cb.m; ++j) {
     tk.c[j] = cb.c[j];
@@ -619,6 +621,7 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     tk.form = FormOf(tk.m, tk.c);
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
+    tk.exact = tk.old != nullptr && ExactIncrement(cb.level);
     for (int j = 0; j < tk.m - (tk.in_place ? 1 : 0); ++j) distinct = distinct && tk.X[j] != tk.out;
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
