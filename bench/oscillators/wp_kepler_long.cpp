@@ -9,8 +9,9 @@
 // tout = 1000 N h, a step's time (the dense output is not involved; --sources measures it),
 // stability guard off. The peer: a symplectic integrator with compensated sums, as ARKODE's
 // SPRKStep offers from SUNDIALS 6.6 on (absent from 6.4): the eighth-order triple-jump
-// composition of leapfrog (Yoshida 1990; 27 kick-drift stages, coefficients from closed
-// forms), its whole-step increments added with Kahan summation, and without.
+// composition of leapfrog (Yoshida 1990; 27 kick-drift stages, 27 f per step, coefficients
+// from closed forms), its whole-step increments added with Kahan summation, and without; 500 ...
+// 8000 steps per orbit.
 // Columns: error = |x(t_f) - x_exact(t_f)|, drift = |H(t_f) - H(0)|, seconds of one run.
 // Summary: each curve's best step and best error (its floor).
 //
@@ -298,6 +299,7 @@ void PrintSources(SUNContext ctx, int orbits) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress of a long run, line by line
   std::string csv;
   bool quick = false, split = true;
   for (int i = 1; i < argc; ++i) {
