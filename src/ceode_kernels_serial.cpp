@@ -155,12 +155,6 @@ inline void StoreSum(const FusedTerms& tk, sunindextype i, sunrealtype y) {
   }
 }
 
-// Entry i of an accumulated sum with compensation (docs/theory.md section 10): the increment
-// sum_j c_j x_j (the carried compensation one of its terms, coefficient -1) is formed
-// error-free, as s + e with s the rounded sum and e its rounding error (Ogita, Rump and Oishi's
-// Dot2: each product's error exactly, each addition's by TwoSum), and e joins the new
-// compensation beside the rounding of old + s. A rounded increment would lose about one unit
-// of its last place every step, which on long runs is the round-off that remains (theory.md).
 // The rounding error of the product p = a b, exactly: one fused multiply-add where the target
 // has it (and the compiler may contract, so Dekker's form would not be safe), otherwise
 // Dekker's product of the two halves of a and b (no FMA instruction to contract into). Both
@@ -176,6 +170,12 @@ inline sunrealtype ProductError(sunrealtype a, sunrealtype b, sunrealtype p) {
 #endif
 }
 
+// Entry i of an accumulated sum with compensation (docs/theory.md section 10): the increment
+// sum_j c_j x_j (the carried compensation one of its terms, coefficient -1) is formed
+// error-free, as s + e with s the rounded sum and e its rounding error (Ogita, Rump and Oishi's
+// Dot2: each product's error exactly, each addition's by TwoSum), and e joins the new
+// compensation beside the rounding of old + s. A rounded increment would lose about one unit
+// of its last place every step, which on long runs is the round-off that remains (theory.md).
 inline void StoreCompensatedExact(const FusedTerms& tk, sunindextype i) {
   sunrealtype s = tk.c[0] * tk.X[0][i];
   sunrealtype e = ProductError(tk.c[0], tk.X[0][i], s);
@@ -563,6 +563,18 @@ int ShapeOf(const FusedPlan& fp) {
 
 }  // namespace
 
+namespace {
+
+// Vector types whose N_VGetArrayPointer is the (local) data in host memory, current.
+bool HostData(N_Vector v) {
+  const N_Vector_ID id = N_VGetVectorID(v);
+  return (id == SUNDIALS_NVEC_SERIAL || id == SUNDIALS_NVEC_PARALLEL ||
+          id == SUNDIALS_NVEC_OPENMP || id == SUNDIALS_NVEC_PTHREADS) &&
+         N_VGetArrayPointer(v) != nullptr;
+}
+
+}  // namespace
+
 bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
   N_Vector all[kMaxDegree + 5];
   int m = 0;
@@ -573,7 +585,7 @@ bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
   all[m++] = cb.out;
   FusedTerms tk;
   for (int j = 0; j < m; ++j) {
-    if (N_VGetArrayPointer(all[j]) == nullptr) return false;
+    if (!HostData(all[j])) return false;
   }
   tk.exact = true;
   tk.m = cb.m + 1;
