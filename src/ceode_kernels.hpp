@@ -43,6 +43,7 @@ struct FusedTerms {
   int m;
   int form;       // the arithmetic of the sum, fixed when the plan is built (kernels_serial)
   bool in_place;  // out is also the accumulated term X[m - 1] (an in-place plan)
+  bool exact;     // compensated, its increment summed error-free (ExactIncrement)
   sunrealtype c[kMaxDegree + 3];
   sunrealtype* X[kMaxDegree + 3];
   sunrealtype* old;
@@ -152,6 +153,15 @@ SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
 // compensation (an in-place plan's, read entry by entry before it is written): the serial
 // backend must not run that plan.
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp);
+
+// The accumulated quantities whose compensated increments are summed error-free: the position
+// and the velocity, which f reads (docs/theory.md section 10). The higher derivatives' rounded
+// increments do not measurably reach the solution; they keep plain Kahan summation.
+inline bool ExactIncrement(int level) { return level <= 1; }
+// An accumulated combination with compensation on the (local) data of its vectors, the
+// increment summed error-free as the serial backend sums it (the same numbers); false, with
+// nothing written, when some vector does not expose its data.
+bool CompensatedSumOnData(const Combo& cb, const Compensation& cs);
 
 // ---- A plan with its backend fixed when it is prepared ----
 

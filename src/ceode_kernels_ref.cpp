@@ -39,6 +39,9 @@ void RunCombo(const Combo& cb, const Compensation& cs) {
     Combine(m, c, X, cb.out);
     return;
   }
+  if (ExactIncrement(cb.level) && CompensatedSumOnData(cb, cs)) return;
+  // The higher derivatives, and vectors without host data: the rounded increment, compensated
+  // when it is added.
   N_Vector y = cs.tmp;
   c[m] = -1;
   X[m++] = cs.comp[cb.level];

@@ -155,6 +155,43 @@ inline void StoreSum(const FusedTerms& tk, sunindextype i, sunrealtype y) {
   }
 }
 
+// The rounding error of the product p = a b, exactly: one fused multiply-add where the target
+// has it (and the compiler may contract, so Dekker's form would not be safe), otherwise
+// Dekker's product of the two halves of a and b (no FMA instruction to contract into). Both
+// give the exact error, so the results do not depend on the target.
+inline sunrealtype ProductError(sunrealtype a, sunrealtype b, sunrealtype p) {
+#if defined(__FMA__) || defined(FP_FAST_FMA) || !defined(SUNDIALS_DOUBLE_PRECISION)
+  return std::fma(a, b, -p);
+#else
+  constexpr sunrealtype kSplit = 134217729.0;  // 2^27 + 1
+  const sunrealtype ta = kSplit * a, ah = ta - (ta - a), al = a - ah;
+  const sunrealtype tb = kSplit * b, bh = tb - (tb - b), bl = b - bh;
+  return ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+#endif
+}
+
+// Entry i of an accumulated sum with compensation (docs/theory.md section 10): the increment
+// sum_j c_j x_j (the carried compensation one of its terms, coefficient -1) is formed
+// error-free, as s + e with s the rounded sum and e its rounding error (Ogita, Rump and Oishi's
+// Dot2: each product's error exactly, each addition's by TwoSum), and e joins the new
+// compensation beside the rounding of old + s. A rounded increment would lose about one unit
+// of its last place every step, which on long runs is the round-off that remains (theory.md).
+inline void StoreCompensatedExact(const FusedTerms& tk, sunindextype i) {
+  sunrealtype s = tk.c[0] * tk.X[0][i];
+  sunrealtype e = ProductError(tk.c[0], tk.X[0][i], s);
+  for (int j = 1; j < tk.m; ++j) {
+    const sunrealtype p = tk.c[j] * tk.X[j][i];
+    const sunrealtype t = s + p;
+    const sunrealtype bb = t - s;
+    e += ProductError(tk.c[j], tk.X[j][i], p) + ((s - (t - bb)) + (p - bb));
+    s = t;
+  }
+  const sunrealtype o = tk.old[i];
+  const sunrealtype nw = o + s;
+  tk.out[i] = nw;
+  tk.compnew[i] = ((nw - o) - s) - e;
+}
+
 // Small systems: entry by entry, every sum of the plan on it, no loop set-up per sum.
 inline sunrealtype UpdateSmall(const FusedPlan& fp, sunindextype n) {
   const sunrealtype* xout = fp.terms[fp.n - 1].out;  // the position comes last
@@ -319,6 +356,25 @@ constexpr std::array<
 void StreamFence() {}
 #endif
 
+// Plans with compensation, entry by entry: the position's and the velocity's increments
+// error-free (StoreCompensatedExact), the other sums as every other kernel. The uncompensated
+// kernels stay as they are.
+sunrealtype UpdateCompensated(const FusedPlan& fp, sunindextype n) {
+  for (sunindextype i = 0; i < n; ++i) {
+    for (int k = 0; k < fp.n; ++k) {
+      const FusedTerms& tk = fp.terms[k];
+      if (tk.exact) {
+        StoreCompensatedExact(tk, i);
+      } else {
+        StoreSum(tk, i, SumAtForm(tk, i));
+      }
+    }
+  }
+  sunrealtype s[4] = {0, 0, 0, 0};
+  AddAbs(fp.terms[fp.n - 1].out, n, s);
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
 // From this size on the vectors of a step no longer fit in a (32 MiB) last-level cache.
 constexpr sunindextype kStreamSystem = sunindextype{1} << 19;
 
@@ -478,6 +534,7 @@ sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(
 }  // namespace
 
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
+  if (fp.compensated) return &UpdateCompensated;
   if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
   if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1];
   if (n == 1) return &UpdateOne;
@@ -505,6 +562,48 @@ int ShapeOf(const FusedPlan& fp) {
 }
 
 }  // namespace
+
+namespace {
+
+// Vector types whose N_VGetArrayPointer is the (local) data in host memory, current.
+bool HostData(N_Vector v) {
+  const N_Vector_ID id = N_VGetVectorID(v);
+  return (id == SUNDIALS_NVEC_SERIAL || id == SUNDIALS_NVEC_PARALLEL ||
+          id == SUNDIALS_NVEC_OPENMP || id == SUNDIALS_NVEC_PTHREADS) &&
+         N_VGetArrayPointer(v) != nullptr;
+}
+
+}  // namespace
+
+bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
+  N_Vector all[kMaxDegree + 5];
+  int m = 0;
+  for (int j = 0; j < cb.m; ++j) all[m++] = cb.X[j];
+  all[m++] = cs.comp[cb.level];
+  all[m++] = cb.old;
+  all[m++] = cs.compnew[cb.level];
+  all[m++] = cb.out;
+  FusedTerms tk;
+  for (int j = 0; j < m; ++j) {
+    if (!HostData(all[j])) return false;
+  }
+  tk.exact = true;
+  tk.m = cb.m + 1;
+  for (int j = 0; j < cb.m; ++j) {
+    tk.c[j] = cb.c[j];
+    tk.X[j] = N_VGetArrayPointer(cb.X[j]);
+  }
+  tk.c[cb.m] = -1;
+  tk.X[cb.m] = N_VGetArrayPointer(cs.comp[cb.level]);
+  tk.old = N_VGetArrayPointer(cb.old);
+  tk.compnew = N_VGetArrayPointer(cs.compnew[cb.level]);
+  tk.out = N_VGetArrayPointer(cb.out);
+  N_Vector v = cb.out;
+  const sunindextype n =
+      v->ops->nvgetlocallength != nullptr ? v->ops->nvgetlocallength(v) : N_VGetLength(v);
+  for (sunindextype i = 0; i < n; ++i) StoreCompensatedExact(tk, i);
+  return true;
+}
 
 // Each combination with its accumulated term (or, compensated, minus its compensation)
 // appended, exactly as RunCombo hands it to Combine.
@@ -534,6 +633,7 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     tk.form = FormOf(tk.m, tk.c);
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
+    tk.exact = tk.old != nullptr && ExactIncrement(cb.level);
     for (int j = 0; j < tk.m - (tk.in_place ? 1 : 0); ++j) distinct = distinct && tk.X[j] != tk.out;
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
