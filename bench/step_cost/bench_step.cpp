@@ -60,6 +60,10 @@ struct Method {
 const Method kMethods[] = {
     {"G3_CD", 3, {1.0, 0.5}},
     {"G4_A34", 4, {0.75, 1.0 / 3.0, 0.5}},
+    {"G6_O5",
+     6,
+     {7.8581049690442608, 3.2003060015391878, 2.306472520152492, 1.445972372099134,
+      0.78920709629572905}},
     {"G8_O8",
      8,
      {399.99982239054896, 278.28678067794129, 134.15990720943549, 51.039413540261052,
@@ -205,6 +209,8 @@ HandFn HandStepFn(int degree, bool fused) {
       return fused ? HandStepFused<3> : HandStepFpass<3>;
     case 4:
       return fused ? HandStepFused<4> : HandStepFpass<4>;
+    case 6:
+      return fused ? HandStepFused<6> : HandStepFpass<6>;
     default:
       return fused ? HandStepFused<8> : HandStepFpass<8>;
   }
