@@ -183,6 +183,14 @@ sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
   return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
 }
 
+int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func) {
+  if (dmin > 0) return CE_SUCCESS;
+  return ProcessError(ce, CE_ILL_INPUT, func,
+                      "An error weight is not defined at t = %.17g: some x_i = 0 where its "
+                      "abstol is 0. Give abstol > 0 for every entry.",
+                      static_cast<double>(ce->tcur));
+}
+
 int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
   AdaptMem& am = *ce->adapt;
   if (am.tol_kind == 2) {
@@ -194,13 +202,7 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
   } else {
     const sunrealtype dmin =
         am.kernels.Weights(x, am.rtol, am.atol, am.tol_kind == 1 ? am.atol_vec : nullptr, am.ewt);
-    if (!(dmin > 0)) {
-      return ProcessError(ce, CE_ILL_INPUT, func,
-                          "An error weight is not defined at t = %.17g: some x_i = 0 where its "
-                          "abstol is 0. Give abstol > 0 for every entry.",
-                          static_cast<double>(ce->tcur));
-    }
-    return CE_SUCCESS;
+    return AdaptWeightsDefined(ce, dmin, func);
   }
   if (!(N_VMin(am.ewt) > 0) || !IsFinite(am.ewt)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -220,8 +222,9 @@ bool CloneOnce(N_Vector* v, N_Vector tmpl) {
 
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
-  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ele, ce->xcur) &&
-            CloneOnce(&am.est, ce->xcur) && CloneOnce(&am.yd, ce->xcur);
+  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
+            CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
+            CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
     for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j)
@@ -278,6 +281,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.first = true;
   am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
   am.plan_key[0] = am.plan_key[1] = nullptr;
+  am.est_h = am.pos_h = 0;  // the method or the start's coefficients may be new
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (am.sun_controller != nullptr) {
     SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));
@@ -396,7 +400,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 void AdaptFree(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) return;
   AdaptMem& am = *ce->adapt;
-  N_Vector* vs[] = {&am.ewt, &am.ele, &am.est, &am.yd, &am.atol_vec};
+  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ele, &am.est, &am.yd, &am.yd_next, &am.atol_vec};
   for (N_Vector* v : vs) {
     if (*v != nullptr) N_VDestroy(*v);
     *v = nullptr;

@@ -47,11 +47,13 @@ struct AdaptMem {
   RemapTerm remap[kMaxDegree * kMaxDegree] = {};
 
   // The run
-  AdaptKernels kernels;  // the backend of its vector work, chosen at the start
-  N_Vector ewt = nullptr;
-  N_Vector ele = nullptr;  // the last accepted step's local error estimate
-  N_Vector est = nullptr;  // the estimate of the step under test
-  N_Vector yd = nullptr;   // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  AdaptKernels kernels;         // the backend of its vector work, chosen at the start
+  N_Vector ewt = nullptr;       // the node's weights: the test of the step from it
+  N_Vector ewt_next = nullptr;  // those of the step's end, formed with its estimate
+  N_Vector ele = nullptr;       // the last accepted step's local error estimate
+  N_Vector est = nullptr;       // the estimate of the step under test
+  N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  N_Vector yd_next = nullptr;   // the same at the step's end
   N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
   int cur = 0;                             // dd[cur] belongs to the node
   sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
@@ -80,6 +82,17 @@ struct AdaptMem {
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
 
+  // The fused passes' descriptions (ceode_adapt_step.cpp), kept so that a step fills only what
+  // changed: the estimate's scale for est_h, the position's weights for (pos_h, pos_hprev,
+  // pos_hmap).
+  AdaptAfterF after;
+  AdaptPosition pos;
+  sunrealtype est_h = 0;
+  sunrealtype est_scale = 0;
+  sunrealtype pos_h = 0;
+  sunrealtype pos_hprev = -1;
+  sunrealtype pos_hmap = 0;
+
   // Counters
   long int netf = 0;
   long int ncapped = 0;
@@ -93,6 +106,9 @@ int AdaptStart(CEodeMemRec* ce, const char* func);
 void AdaptStartHistory(CEodeMemRec* ce);
 // The error weights from x (the tolerances or the user's function).
 int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func);
+// CE_SUCCESS when dmin, the smallest denominator of weights from the tolerances, is positive;
+// otherwise the error that names the cause.
+int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func);
 // The step after hbase (starting at tfrom) from the error norm err of the last accepted step (0:
 // none estimated): the controller's ratio applied to hbase, then hmax, the stable step and the
 // stop time limit_t.

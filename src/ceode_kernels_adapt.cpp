@@ -4,6 +4,9 @@
 // included).
 #include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "ceode_kernels.hpp"
 
@@ -91,6 +94,345 @@ sunrealtype AdaptKernels::Weights(N_Vector x, sunrealtype rtol, sunrealtype atol
   if (!(dmin > 0)) return dmin;
   for (sunindextype i = 0; i < n; ++i) wd[i] = 1 / wd[i];
   return dmin;
+}
+
+}  // namespace ceode
+
+// ---- The fused passes of the adaptive step -------------------------------------------------
+
+namespace ceode {
+
+namespace {
+
+// Entry-wise arithmetic on one double or, with SSE2, on a pair: the same IEEE operations per
+// entry either way, so a pair loop with a scalar tail gives the scalar loop's values.
+inline sunrealtype Load(const sunrealtype* p, sunrealtype /*tag*/) { return *p; }
+inline void Store(sunrealtype* p, sunrealtype v) { *p = v; }
+inline sunrealtype Abs(sunrealtype v) { return std::fabs(v); }
+inline sunrealtype Smaller(sunrealtype a, sunrealtype b) { return b < a ? b : a; }
+// s += each entry of v in the order of the entries (the reference's sums are sequential).
+inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
+inline sunrealtype Least(sunrealtype v) { return v; }
+
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+constexpr bool kPairs = true;
+using Pair =
+    double __attribute__((vector_size(16)));  // __m128d without may_alias: a template argument
+inline Pair Load(const sunrealtype* p, Pair /*tag*/) { return _mm_loadu_pd(p); }
+inline void Store(sunrealtype* p, Pair v) { _mm_storeu_pd(p, v); }
+inline Pair Abs(Pair v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
+inline Pair Smaller(Pair a, Pair b) { return _mm_min_pd(a, b); }
+inline void AddInOrder(sunrealtype* s, Pair v) {
+  *s += _mm_cvtsd_f64(v);
+  *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
+}
+inline sunrealtype Least(Pair v) {
+  return std::min(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+}
+inline Pair Splat(sunrealtype c, Pair /*tag*/) { return _mm_set1_pd(c); }
+#else
+constexpr bool kPairs = false;
+using Pair = sunrealtype;
+#endif
+inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
+
+// The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
+template <int D, int ND>
+struct AfterFArrays {
+  const sunrealtype* Do[D];  // the node's history, 1 .. D - 1
+  sunrealtype* Dn[D];        // the new node's (Dn[2] = a)
+  const sunrealtype* ddo[ND + 1];
+  sunrealtype* ddn[ND + 1];  // ddn[ND]: the estimate
+  const sunrealtype* ewt;
+  sunrealtype* yd;
+  const sunrealtype* x;
+  const sunrealtype* atolv;
+  sunrealtype* ewt_next;
+  explicit AfterFArrays(const AdaptAfterF& w) {
+    for (int k = 1; k < D; ++k) {
+      Do[k] = NV_DATA_S(w.D[k]);
+      Dn[k] = NV_DATA_S(w.Dn[k]);
+    }
+    for (int j = 1; j < ND; ++j) {
+      ddo[j] = NV_DATA_S(w.dold[j]);
+      ddn[j] = NV_DATA_S(w.dout[j - 1]);
+    }
+    ddn[ND] = NV_DATA_S(w.est);
+    ewt = NV_DATA_S(w.ewt);
+    yd = NV_DATA_S(w.yd);
+    x = NV_DATA_S(w.x);
+    atolv = w.atolv != nullptr ? NV_DATA_S(w.atolv) : nullptr;
+    ewt_next = w.weights != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt_next) : nullptr;
+  }
+};
+
+// The coefficients of an AdaptAfterF as values of type V (splatted once for the pair loop).
+template <int D, int ND, typename V>
+struct AfterFCoeffs {
+  V c[D][D + 1];  // sum s (the plan's order), term j
+  V r[ND];
+  V scale, yc, rtol, atol;
+  AfterFCoeffs(const AdaptAfterF& w, V tag) {
+    const UpdatePlan& plan = w.kp->plan;
+    for (int s = 0; s < plan.n; ++s) {
+      for (int j = 0; j < plan.combos[s].m; ++j) c[s][j] = Splat(plan.combos[s].c[j], tag);
+    }
+    for (int j = 0; j < ND; ++j) r[j] = Splat(w.r[j], tag);
+    scale = Splat(w.scale, tag);
+    yc = Splat(w.yc, tag);
+    rtol = Splat(w.rtol, tag);
+    atol = Splat(w.atol, tag);
+  }
+};
+
+// One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
+// from the plan's sums) with ND differences; C yields the coefficients (V values).
+template <int D, int ND, int WK, typename V, typename C>
+inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i, sunrealtype* ssq,
+                        V* dmin) {
+  const V tag{};
+  const V a = Load(p.Dn[2] + i, tag);
+  V old[D];
+  for (int k = 1; k < D; ++k) old[k] = Load(p.Do[k] + i, tag);
+  // 1. z (D > 3), then D_1, D_3 .. D_{D-2}: BuildUpdatePlan's terms in its order, the
+  // accumulated value last (its weight 1 exactly: added, not multiplied).
+  V z = a;
+  int s = 0;
+  if constexpr (D > 3) {
+    z = co.c(0, 0) * a;
+    for (int j = 2; j < D; ++j) z += co.c(0, j - 1) * old[j];
+    Store(p.Dn[D - 1] + i, z);
+    s = 1;
+  }
+  for (int k = 1; k <= D - 2; ++k) {
+    if (k == 2) continue;
+    V acc = co.c(s, 0) * old[k + 1];
+    for (int j = k + 2; j < D; ++j) acc += co.c(s, j - k - 1) * old[j];
+    acc += co.c(s, D - k - 1) * z;
+    acc += old[k];
+    Store(p.Dn[k] + i, acc);
+    ++s;
+  }
+  // 2., 3. the differences, the last one scaled into the estimate
+  V prev_new = a;
+  V prev_old = old[2];
+  for (int j = 1; j <= ND; ++j) {
+    V e = co.r(j - 1) * (prev_new - prev_old);
+    if (j == ND) {
+      e = co.scale() * e;
+      Store(p.ddn[ND] + i, e);
+      // 4. the weighted square
+      const V q = e * Load(p.ewt + i, tag);
+      AddInOrder(ssq, q * q);
+    } else {
+      Store(p.ddn[j] + i, e);
+      prev_old = Load(p.ddo[j] + i, tag);
+      prev_new = e;
+    }
+  }
+  // 5. the top derivative's rate
+  Store(p.yd + i, co.yc() * (z - old[D - 1]));
+  // 6. the new weights
+  if constexpr (WK != AdaptAfterF::kWeightsNone) {
+    const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
+    const V den = co.rtol() * Abs(Load(p.x + i, tag)) + at;
+    *dmin = Smaller(*dmin, den);
+    Store(p.ewt_next + i, Splat(1, tag) / den);
+  }
+}
+
+// Coefficient access for the entry: splatted values (pairs) or the plan's own (the tail, n = 1).
+template <int D, int ND, typename V>
+struct SplatCo {
+  const AfterFCoeffs<D, ND, V>& k;
+  V c(int s, int j) const { return k.c[s][j]; }
+  V r(int j) const { return k.r[j]; }
+  V scale() const { return k.scale; }
+  V yc() const { return k.yc; }
+  V rtol() const { return k.rtol; }
+  V atol() const { return k.atol; }
+};
+struct PlanCo {
+  const AdaptAfterF& w;
+  sunrealtype c(int s, int j) const { return w.kp->plan.combos[s].c[j]; }
+  sunrealtype r(int j) const { return w.r[j]; }
+  sunrealtype scale() const { return w.scale; }
+  sunrealtype yc() const { return w.yc; }
+  sunrealtype rtol() const { return w.rtol; }
+  sunrealtype atol() const { return w.atol; }
+};
+
+template <int D, int ND, int WK>
+sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin) {
+  const AfterFArrays<D, ND> p(w);
+  sunrealtype ssq = 0;
+  sunrealtype dmin_s = SUN_BIG_REAL;
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if (n >= 2) {
+      const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
+      const SplatCo<D, ND, Pair> co{k};
+      Pair dmin_p = Splat(SUN_BIG_REAL, Pair{});
+      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK>(p, co, i, &ssq, &dmin_p);
+      dmin_s = Least(dmin_p);
+    }
+  }
+  const PlanCo co{w};
+  for (; i < n; ++i) AfterFEntry<D, ND, WK>(p, co, i, &ssq, &dmin_s);
+  *dmin = WK == AdaptAfterF::kWeightsNone ? 1 : dmin_s;
+  return std::sqrt(ssq / static_cast<sunrealtype>(n));
+}
+
+using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*);
+
+// The named sets' shapes: (degree, differences = order - 1).
+template <int D, int ND>
+AfterFFn AfterFOf(int weights) {
+  switch (weights) {
+    case AdaptAfterF::kWeightsScalar:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar>;
+    case AdaptAfterF::kWeightsVector:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector>;
+    default:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsNone>;
+  }
+}
+
+AfterFFn FusedAfterF(const AdaptAfterF& w) {
+  if (w.est_kind != AdaptAfterF::kEstLast || !w.kp->serial) return nullptr;
+  const int d = w.d;
+  // The full shape: every sum of the plan with all its terms (no weight was zero).
+  const UpdatePlan& plan = w.kp->plan;
+  if (plan.n != (d > 3 ? d - 2 : 1)) return nullptr;
+  int s = 0;
+  if (d > 3 && plan.combos[s++].m != d - 1) return nullptr;
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k != 2 && plan.combos[s++].m != d - k) return nullptr;
+  }
+  const int key = 10 * d + w.ndiff;
+  switch (key) {
+    case 31:
+      return AfterFOf<3, 1>(w.weights);
+    case 42:
+      return AfterFOf<4, 2>(w.weights);
+    case 53:
+      return AfterFOf<5, 3>(w.weights);
+    case 64:
+      return AfterFOf<6, 4>(w.weights);
+    case 76:
+      return AfterFOf<7, 6>(w.weights);
+    case 87:
+      return AfterFOf<8, 7>(w.weights);
+    default:
+      return nullptr;
+  }
+}
+
+}  // namespace
+
+sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
+  if (serial) {
+    if (AfterFFn fn = FusedAfterF(w)) return fn(w, n, dmin);
+  }
+  RunPlan(*w.kp, n);
+  for (int j = 0; j < w.ndiff; ++j) {
+    const sunrealtype c[2] = {w.r[j], -w.r[j]};
+    N_Vector X[2] = {w.dnew[j], w.dold[j]};
+    Lin(2, c, X, w.dout[j]);
+  }
+  sunrealtype norm = 0;
+  if (w.est_kind == AdaptAfterF::kEstNone) {
+    N_VConst(0, w.est);
+  } else {
+    if (w.est_kind == AdaptAfterF::kEstCopy) CopyVector(w.est_src, w.est);
+    Scale(w.scale, w.est);
+    norm = WrmsNorm(w.est, w.ewt);
+  }
+  const sunrealtype c[2] = {w.yc, -w.yc};
+  N_Vector X[2] = {w.Dn[w.d - 1], w.D[w.d - 1]};
+  Lin(2, c, X, w.yd);
+  *dmin = 1;
+  if (w.weights != AdaptAfterF::kWeightsNone) {
+    *dmin = Weights(w.x, w.rtol, w.atol,
+                    w.weights == AdaptAfterF::kWeightsVector ? w.atolv : nullptr, w.ewt_next);
+  }
+  return norm;
+}
+
+namespace {
+
+// The position of M terms with the remap before it, entry by entry (pairs, then the tail).
+template <int M, typename V>
+inline void PositionEntry(const AdaptPosition& w, sunrealtype* const* rD,
+                          const sunrealtype* const* rY, const sunrealtype* const* X,
+                          sunrealtype* out, const V* c, const V* rc, sunindextype i,
+                          sunrealtype* l1) {
+  const V tag{};
+  for (int r = 0; r < w.nremap; ++r) {
+    Store(rD[r] + i, Load(rD[r] + i, tag) + rc[r] * Load(rY[r] + i, tag));
+  }
+  V acc = c[0] * Load(X[0] + i, tag);
+  for (int j = 1; j < M; ++j) acc += c[j] * Load(X[j] + i, tag);
+  Store(out + i, acc);
+  AddInOrder(l1, Abs(acc));
+}
+
+template <int M>
+sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
+  constexpr int kR = kMaxDegree * kMaxDegree;
+  sunrealtype* rD[kR];
+  const sunrealtype* rY[kR];
+  const sunrealtype* X[M];
+  for (int r = 0; r < w.nremap; ++r) {
+    rD[r] = NV_DATA_S(w.rD[r]);
+    rY[r] = NV_DATA_S(w.rY[r]);
+  }
+  for (int j = 0; j < M; ++j) X[j] = NV_DATA_S(w.X[j]);
+  sunrealtype* out = NV_DATA_S(w.out);
+  sunrealtype l1 = 0;
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if (n >= 2) {
+      Pair c[M];
+      Pair rc[kR];
+      for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
+      for (int r = 0; r < w.nremap; ++r) rc[r] = Splat(w.rc[r], Pair{});
+      for (; i + 2 <= n; i += 2) PositionEntry<M>(w, rD, rY, X, out, c, rc, i, &l1);
+    }
+  }
+  for (; i < n; ++i) PositionEntry<M>(w, rD, rY, X, out, w.c, w.rc, i, &l1);
+  return l1;
+}
+
+}  // namespace
+
+sunrealtype AdaptKernels::Position(const AdaptPosition& w) const {
+  if (serial) {
+    static_assert(kMaxDegree == 8, "Position lists every term count");
+    switch (w.m) {
+      case 3:
+        return PositionFused<3>(w, n);
+      case 4:
+        return PositionFused<4>(w, n);
+      case 5:
+        return PositionFused<5>(w, n);
+      case 6:
+        return PositionFused<6>(w, n);
+      case 7:
+        return PositionFused<7>(w, n);
+      case 8:
+        return PositionFused<8>(w, n);
+      case 9:
+        return PositionFused<9>(w, n);
+      case 10:
+        return PositionFused<10>(w, n);
+      default:
+        break;
+    }
+  }
+  for (int r = 0; r < w.nremap; ++r) Axpy(w.rc[r], w.rY[r], w.rD[r]);
+  Lin(w.m, w.c, const_cast<N_Vector*>(w.X), w.out);
+  return L1Norm(w.out);
 }
 
 }  // namespace ceode

@@ -4,8 +4,8 @@
 //
 // Problem: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n, x(0) = 1, v(0) = 0, h = 1e-3
 // (far inside every stability limit). Methods G3_CD and G4_A34 at n = 1, 10^4, 3*10^4, 10^5,
-// 3*10^5, 10^6 and G8_O8 at n = 1 (the high-order pendulum is n = 1). Variants (one benchmark iteration
-// = K steps; the time shown is per iteration, the ratios table is per step):
+// 3*10^5, 10^6 and G8_O8 at n = 1 (the high-order pendulum is n = 1). Variants (one benchmark
+// iteration = K steps; the time shown is per iteration, the ratios table is per step):
 //   ceode       CEodeEvolve(tout K steps ahead, CE_NORMAL): no output copy per step;
 //   ceode_1step CEodeEvolve(CE_ONE_STEP) K times: two output copies per step (the API's);
 //   hand_fpass  the hand loop calling f as its own pass over the vectors (as CEODE does);
