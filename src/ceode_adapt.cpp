@@ -505,6 +505,7 @@ int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol) {
   if (am.atol_vec == nullptr) am.atol_vec = N_VClone(ce->xcur);
   if (am.atol_vec == nullptr) return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
   N_VScale(1, abstol, am.atol_vec);
+  am.atol_min = N_VMin(abstol);
   am.rtol = reltol;
   return EnableTolerances(ce, 1);
 }

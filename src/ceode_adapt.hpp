@@ -25,6 +25,7 @@ struct AdaptMem {
   sunrealtype rtol = 0;
   sunrealtype atol = 0;
   N_Vector atol_vec = nullptr;  // CEodeSVtolerances' copy
+  sunrealtype atol_min = 0;     // its smallest entry
   CEodeEwtFn efun = nullptr;
   sunrealtype hin = 0;  // 0: chosen by the start
   sunrealtype hmin = 0;

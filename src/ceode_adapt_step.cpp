@@ -161,6 +161,7 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype* dm
   w.weights = am->tol_kind == 0
                   ? AdaptAfterF::kWeightsScalar
                   : (am->tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone);
+  w.positive = am->tol_kind == 0 ? am->atol > 0 : am->atol_min > 0;
   w.x = ce->xnext;
   w.rtol = am->rtol;
   w.atol = am->atol;

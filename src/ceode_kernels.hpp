@@ -230,6 +230,7 @@ struct AdaptAfterF {
   sunrealtype yc = 0;
   N_Vector yd = nullptr;
   int weights = kWeightsNone;
+  bool positive = false;  // atol > 0 in every entry: the denominators are positive for finite x
   N_Vector x = nullptr;
   sunrealtype rtol = 0;
   sunrealtype atol = 0;
@@ -239,7 +240,7 @@ struct AdaptAfterF {
 
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
 // rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,
-// Lin's arithmetic, X possibly among the remapped vectors).
+// Lin's arithmetic, X possibly among the remapped vectors; c[0] = 1, the weight of x(t_n)).
 struct AdaptPosition {
   int nremap = 0;
   sunrealtype rc[kMaxDegree * kMaxDegree] = {};

@@ -109,10 +109,8 @@ namespace {
 inline sunrealtype Load(const sunrealtype* p, sunrealtype /*tag*/) { return *p; }
 inline void Store(sunrealtype* p, sunrealtype v) { *p = v; }
 inline sunrealtype Abs(sunrealtype v) { return std::fabs(v); }
-inline sunrealtype Smaller(sunrealtype a, sunrealtype b) { return b < a ? b : a; }
 // s += each entry of v in the order of the entries (the reference's sums are sequential).
 inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
-inline sunrealtype Least(sunrealtype v) { return v; }
 
 #if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
 constexpr bool kPairs = true;
@@ -121,13 +119,9 @@ using Pair =
 inline Pair Load(const sunrealtype* p, Pair /*tag*/) { return _mm_loadu_pd(p); }
 inline void Store(sunrealtype* p, Pair v) { _mm_storeu_pd(p, v); }
 inline Pair Abs(Pair v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
-inline Pair Smaller(Pair a, Pair b) { return _mm_min_pd(a, b); }
 inline void AddInOrder(sunrealtype* s, Pair v) {
   *s += _mm_cvtsd_f64(v);
   *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
-}
-inline sunrealtype Least(Pair v) {
-  return std::min(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
 }
 inline Pair Splat(sunrealtype c, Pair /*tag*/) { return _mm_set1_pd(c); }
 #else
@@ -188,8 +182,8 @@ struct AfterFCoeffs {
 // One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
 // from the plan's sums) with ND differences; C yields the coefficients (V values).
 template <int D, int ND, int WK, typename V, typename C>
-inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i, sunrealtype* ssq,
-                        V* dmin) {
+inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i,
+                        sunrealtype* ssq) {
   const V tag{};
   const V a = Load(p.Dn[2] + i, tag);
   V old[D];
@@ -236,7 +230,6 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
   if constexpr (WK != AdaptAfterF::kWeightsNone) {
     const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
     const V den = co.rtol() * Abs(Load(p.x + i, tag)) + at;
-    *dmin = Smaller(*dmin, den);
     Store(p.ewt_next + i, Splat(1, tag) / den);
   }
 }
@@ -262,24 +255,23 @@ struct PlanCo {
   sunrealtype atol() const { return w.atol; }
 };
 
+// The weights' denominators are positive (FusedAfterF): no smallest one to find.
 template <int D, int ND, int WK>
 sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin) {
   const AfterFArrays<D, ND> p(w);
   sunrealtype ssq = 0;
-  sunrealtype dmin_s = SUN_BIG_REAL;
   sunindextype i = 0;
   if constexpr (kPairs) {
     if (n >= 2) {
       const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
       const SplatCo<D, ND, Pair> co{k};
-      Pair dmin_p = Splat(SUN_BIG_REAL, Pair{});
-      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK>(p, co, i, &ssq, &dmin_p);
-      dmin_s = Least(dmin_p);
+#pragma GCC unroll 2
+      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK, Pair>(p, co, i, &ssq);
     }
   }
   const PlanCo co{w};
-  for (; i < n; ++i) AfterFEntry<D, ND, WK>(p, co, i, &ssq, &dmin_s);
-  *dmin = WK == AdaptAfterF::kWeightsNone ? 1 : dmin_s;
+  for (; i < n; ++i) AfterFEntry<D, ND, WK, sunrealtype>(p, co, i, &ssq);
+  *dmin = 1;
   return std::sqrt(ssq / static_cast<sunrealtype>(n));
 }
 
@@ -300,6 +292,7 @@ AfterFFn AfterFOf(int weights) {
 
 AfterFFn FusedAfterF(const AdaptAfterF& w) {
   if (w.est_kind != AdaptAfterF::kEstLast || !w.kp->serial) return nullptr;
+  if (w.weights != AdaptAfterF::kWeightsNone && !w.positive) return nullptr;
   const int d = w.d;
   // The full shape: every sum of the plan with all its terms (no weight was zero).
   const UpdatePlan& plan = w.kp->plan;
@@ -361,20 +354,48 @@ sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const 
 
 namespace {
 
-// The position of M terms with the remap before it, entry by entry (pairs, then the tail).
-template <int M, typename V>
-inline void PositionEntry(const AdaptPosition& w, sunrealtype* const* rD,
-                          const sunrealtype* const* rY, const sunrealtype* const* X,
-                          sunrealtype* out, const V* c, const V* rc, sunindextype i,
-                          sunrealtype* l1) {
+// Entry (or pair) i of the position of M terms, with the remap before it (R): x(t_n)'s weight
+// c[0] is 1, so its term is the value itself (1 x exactly). Returns |x(t_n + h)|.
+template <int M, bool R, typename V>
+inline V PositionEntry(int nr, sunrealtype* const* rD, const sunrealtype* const* rY,
+                       const sunrealtype* const* X, sunrealtype* out, const V* c, const V* rc,
+                       sunindextype i) {
   const V tag{};
-  for (int r = 0; r < w.nremap; ++r) {
-    Store(rD[r] + i, Load(rD[r] + i, tag) + rc[r] * Load(rY[r] + i, tag));
+  if constexpr (R) {
+    for (int r = 0; r < nr; ++r) {
+      Store(rD[r] + i, Load(rD[r] + i, tag) + rc[r] * Load(rY[r] + i, tag));
+    }
   }
-  V acc = c[0] * Load(X[0] + i, tag);
+  V acc = Load(X[0] + i, tag);
   for (int j = 1; j < M; ++j) acc += c[j] * Load(X[j] + i, tag);
   Store(out + i, acc);
-  AddInOrder(l1, Abs(acc));
+  return Abs(acc);
+}
+
+// The L1 norm only feeds the growth check: pairs are summed in two lanes (its rounding, not
+// N_VL1Norm's order, does not reach the state).
+template <int M, bool R>
+sunrealtype PositionLoop(const AdaptPosition& w, sunindextype n, sunrealtype* const* rD,
+                         const sunrealtype* const* rY, const sunrealtype* const* X,
+                         sunrealtype* out) {
+  const int nr = w.nremap;
+  sunrealtype l1 = 0;
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if (n >= 2) {
+      constexpr int kR = kMaxDegree * kMaxDegree;
+      Pair c[M];
+      Pair rc[kR];
+      for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
+      for (int r = 0; r < nr; ++r) rc[r] = Splat(w.rc[r], Pair{});
+      Pair l1p = Splat(0, Pair{});
+#pragma GCC unroll 2
+      for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R>(nr, rD, rY, X, out, c, rc, i);
+      l1 = l1p[0] + l1p[1];
+    }
+  }
+  for (; i < n; ++i) l1 += PositionEntry<M, R>(nr, rD, rY, X, out, w.c, w.rc, i);
+  return l1;
 }
 
 template <int M>
@@ -389,25 +410,14 @@ sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
   }
   for (int j = 0; j < M; ++j) X[j] = NV_DATA_S(w.X[j]);
   sunrealtype* out = NV_DATA_S(w.out);
-  sunrealtype l1 = 0;
-  sunindextype i = 0;
-  if constexpr (kPairs) {
-    if (n >= 2) {
-      Pair c[M];
-      Pair rc[kR];
-      for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
-      for (int r = 0; r < w.nremap; ++r) rc[r] = Splat(w.rc[r], Pair{});
-      for (; i + 2 <= n; i += 2) PositionEntry<M>(w, rD, rY, X, out, c, rc, i, &l1);
-    }
-  }
-  for (; i < n; ++i) PositionEntry<M>(w, rD, rY, X, out, w.c, w.rc, i, &l1);
-  return l1;
+  return w.nremap > 0 ? PositionLoop<M, true>(w, n, rD, rY, X, out)
+                      : PositionLoop<M, false>(w, n, rD, rY, X, out);
 }
 
 }  // namespace
 
 sunrealtype AdaptKernels::Position(const AdaptPosition& w) const {
-  if (serial) {
+  if (serial && w.c[0] == 1) {
     static_assert(kMaxDegree == 8, "Position lists every term count");
     switch (w.m) {
       case 3:
