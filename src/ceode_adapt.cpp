@@ -282,6 +282,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
   am.plan_key[0] = am.plan_key[1] = nullptr;
   am.est_h = am.pos_h = 0;  // the method or the start's coefficients may be new
+  am.ewt_next_ready = false;
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (am.sun_controller != nullptr) {
     SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));

@@ -93,6 +93,8 @@ struct AdaptMem {
   sunrealtype pos_h = 0;
   sunrealtype pos_hprev = -1;
   sunrealtype pos_hmap = 0;
+  sunrealtype dmin_next = 1;    // the smallest denominator of ewt_next's weights
+  bool ewt_next_ready = false;  // ewt_next holds the weights of xnext (formed with it)
 
   // Counters
   long int netf = 0;

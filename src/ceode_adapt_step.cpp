@@ -25,6 +25,16 @@ sunrealtype IntPow(sunrealtype x, int j) {
   return r;
 }
 
+// The kind of weights the tolerances give (AdaptAfterF), and whether they are positive for
+// every finite x.
+int WeightsKind(const AdaptMem& am) {
+  if (am.tol_kind == 0) return AdaptAfterF::kWeightsScalar;
+  return am.tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone;
+}
+bool WeightsPositive(const AdaptMem& am) {
+  return am.tol_kind == 0 ? am.atol > 0 : am.atol_min > 0;
+}
+
 // The remap terms that move the node's history from am.hmap to a next step of h (docs/theory.md
 // 12.2): the h-dependent part of the consistent history follows the step.
 void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) {
@@ -81,7 +91,16 @@ sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   for (int i = 1; i < ce->degree; ++i) w.X[i] = ce->D[i];
   if (w.m > ce->degree) w.X[ce->degree] = am->yd;
   w.out = ce->xnext;
-  return am->kernels.Position(w);
+  // The weights of the new position come with it, unless the constrained solve moves it.
+  const bool moved = ce->step->solve_kind == SolveKind::kConstrained;
+  w.weights = moved ? AdaptAfterF::kWeightsNone : WeightsKind(*am);
+  w.positive = WeightsPositive(*am);
+  w.rtol = am->rtol;
+  w.atol = am->atol;
+  w.atolv = am->atol_vec;
+  w.ewt = am->ewt_next;
+  am->ewt_next_ready = !moved;
+  return am->kernels.Position(w, &am->dmin_next);
 }
 
 // The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
@@ -147,7 +166,7 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
 // divided differences, the local error estimate into est and its norm (scaled for tolerance
 // proportionality; 0 while none is estimated), yd over the step into yd_next and the weights of
 // the new position into ewt_next (their smallest denominator in *dmin).
-sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype* dmin) {
+sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
   w.kp = &DerivativePlan(ce, am);
   w.d = ce->degree;
@@ -158,16 +177,17 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype* dm
   w.ewt = am->ewt;
   w.yc = 1 / ce->h;
   w.yd = am->yd_next;
-  w.weights = am->tol_kind == 0
-                  ? AdaptAfterF::kWeightsScalar
-                  : (am->tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone);
-  w.positive = am->tol_kind == 0 ? am->atol > 0 : am->atol_min > 0;
+  // The weights of the new position, unless they came with it (MoveTo).
+  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : WeightsKind(*am);
+  w.positive = WeightsPositive(*am);
   w.x = ce->xnext;
   w.rtol = am->rtol;
   w.atol = am->atol;
   w.atolv = am->atol_vec;
   w.ewt_next = am->ewt_next;
-  const sunrealtype norm = am->kernels.AfterF(w, dmin);
+  sunrealtype dmin = 1;
+  const sunrealtype norm = am->kernels.AfterF(w, &dmin);
+  if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
   return w.est_kind == AdaptAfterF::kEstNone ? 0 : norm * am->err_scale;
 }
 
@@ -265,6 +285,7 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   // its position were formed with the estimate.
   std::swap(am->yd, am->yd_next);
   if (am->tol_kind != 2) std::swap(am->ewt, am->ewt_next);
+  am->ewt_next_ready = false;
   std::swap(ce->D, ce->Dnew);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
@@ -303,7 +324,7 @@ int FirstStepWithinStableStep(CEodeMemRec* ce, AdaptMem* am, bool constrained) {
 // The solve at t = tcur + h, the derivatives there and the error estimate of the step; with
 // constraints the constraint holds at t + h_plan.
 int AttemptStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype* err,
-                sunrealtype* dmin, const char* func) {
+                const char* func) {
   sunrealtype tnext = t + ce->h;
   if (constrained) {
     sunrealtype xoff[kMaxDegree];
@@ -314,7 +335,7 @@ int AttemptStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, 
   }
   const int flag = ce->step->solve(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
   if (flag != CE_SUCCESS) return flag;
-  *err = AfterF(ce, am, t, dmin);
+  *err = AfterF(ce, am, t);
   return CE_SUCCESS;
 }
 
@@ -371,18 +392,18 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   int flag = FirstStepWithinStableStep(ce, am, constrained);
   int nef = 0;
   sunrealtype err = 0;
-  sunrealtype dmin = 1;
   sunrealtype t = 0;
   while (flag == CE_SUCCESS) {
     t = ce->h == tlimit - ce->tcur ? tlimit : ce->tcur + ce->h;  // lands on tstop exactly
-    flag = AttemptStep(ce, am, constrained, t, &err, &dmin, func);
+    flag = AttemptStep(ce, am, constrained, t, &err, func);
     if (flag != CE_SUCCESS || err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
     ++am->netf;
     flag = RetryAfterFailure(ce, am, constrained, t, err, ++nef, func);
   }
   if (flag != CE_SUCCESS) return flag;
   CommitNode(ce, am, t, err);
-  flag = am->tol_kind == 2 ? AdaptWeights(ce, ce->xcur, func) : AdaptWeightsDefined(ce, dmin, func);
+  flag = am->tol_kind == 2 ? AdaptWeights(ce, ce->xcur, func)
+                           : AdaptWeightsDefined(ce, am->dmin_next, func);
   if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
   if (flag == CE_SUCCESS) flag = NextStep(ce, am, constrained, t, err, nef, tlimit, func);
   if (flag != CE_SUCCESS) return flag;

@@ -195,8 +195,9 @@ struct AdaptKernels {
   // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
   // of the new weights in *dmin (1 without them).
   sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin) const;
-  // The history's remap and the position (AdaptPosition); returns the position's L1 norm.
-  sunrealtype Position(const AdaptPosition& w) const;
+  // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
+  // the smallest denominator of its weights in *dmin (1 without them).
+  sunrealtype Position(const AdaptPosition& w, sunrealtype* dmin) const;
 };
 
 // What an adaptive step computes once f is known at its end x(t_{n+1}) (docs/theory.md 12.3),
@@ -241,7 +242,15 @@ struct AdaptAfterF {
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
 // rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,
 // Lin's arithmetic, X possibly among the remapped vectors; c[0] = 1, the weight of x(t_n)).
+// With weights other than kWeightsNone (the fields of AdaptAfterF), the weights of the new
+// position follow into ewt in the same pass.
 struct AdaptPosition {
+  int weights = AdaptAfterF::kWeightsNone;
+  bool positive = false;
+  sunrealtype rtol = 0;
+  sunrealtype atol = 0;
+  N_Vector atolv = nullptr;
+  N_Vector ewt = nullptr;
   int nremap = 0;
   sunrealtype rc[kMaxDegree * kMaxDegree] = {};
   N_Vector rY[kMaxDegree * kMaxDegree] = {};

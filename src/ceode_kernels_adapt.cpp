@@ -3,7 +3,9 @@
 // same numbers (the N_Vector forms are those of SUNDIALS' serial vector, special cases
 // included).
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -354,31 +356,44 @@ sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const 
 
 namespace {
 
-// Entry (or pair) i of the position of M terms, with the remap before it (R): x(t_n)'s weight
-// c[0] is 1, so its term is the value itself (1 x exactly). Returns |x(t_n + h)|.
-template <int M, bool R, typename V>
-inline V PositionEntry(int nr, sunrealtype* const* rD, const sunrealtype* const* rY,
-                       const sunrealtype* const* X, sunrealtype* out, const V* c, const V* rc,
+// The raw arrays of an AdaptPosition.
+struct PositionArrays {
+  int nr = 0;
+  sunrealtype* rD[kMaxDegree * kMaxDegree];
+  const sunrealtype* rY[kMaxDegree * kMaxDegree];
+  const sunrealtype* X[kMaxDegree + 2];
+  sunrealtype* out;
+  const sunrealtype* atolv;
+  sunrealtype* ewt;
+};
+
+// Entry (or pair) i of the position of M terms, with the remap before it (R) and the new
+// weights after it (WK, as AfterFEntry's): x(t_n)'s weight c[0] is 1, so its term is the value
+// itself (1 x exactly). Returns |x(t_n + h)|.
+template <int M, bool R, int WK, typename V>
+inline V PositionEntry(const PositionArrays& p, const V* c, const V* rc, V rtol, V atol,
                        sunindextype i) {
   const V tag{};
   if constexpr (R) {
-    for (int r = 0; r < nr; ++r) {
-      Store(rD[r] + i, Load(rD[r] + i, tag) + rc[r] * Load(rY[r] + i, tag));
+    for (int r = 0; r < p.nr; ++r) {
+      Store(p.rD[r] + i, Load(p.rD[r] + i, tag) + rc[r] * Load(p.rY[r] + i, tag));
     }
   }
-  V acc = Load(X[0] + i, tag);
-  for (int j = 1; j < M; ++j) acc += c[j] * Load(X[j] + i, tag);
-  Store(out + i, acc);
-  return Abs(acc);
+  V acc = Load(p.X[0] + i, tag);
+  for (int j = 1; j < M; ++j) acc += c[j] * Load(p.X[j] + i, tag);
+  Store(p.out + i, acc);
+  const V ax = Abs(acc);
+  if constexpr (WK != AdaptAfterF::kWeightsNone) {
+    const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : atol;
+    Store(p.ewt + i, Splat(1, tag) / (rtol * ax + at));
+  }
+  return ax;
 }
 
 // The L1 norm only feeds the growth check: pairs are summed in two lanes (its rounding, not
 // N_VL1Norm's order, does not reach the state).
-template <int M, bool R>
-sunrealtype PositionLoop(const AdaptPosition& w, sunindextype n, sunrealtype* const* rD,
-                         const sunrealtype* const* rY, const sunrealtype* const* X,
-                         sunrealtype* out) {
-  const int nr = w.nremap;
+template <int M, bool R, int WK>
+sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunindextype n) {
   sunrealtype l1 = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
@@ -387,62 +402,62 @@ sunrealtype PositionLoop(const AdaptPosition& w, sunindextype n, sunrealtype* co
       Pair c[M];
       Pair rc[kR];
       for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
-      for (int r = 0; r < nr; ++r) rc[r] = Splat(w.rc[r], Pair{});
+      for (int r = 0; r < p.nr; ++r) rc[r] = Splat(w.rc[r], Pair{});
+      const Pair rtol = Splat(w.rtol, Pair{});
+      const Pair atol = Splat(w.atol, Pair{});
       Pair l1p = Splat(0, Pair{});
 #pragma GCC unroll 2
-      for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R>(nr, rD, rY, X, out, c, rc, i);
+      for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i);
       l1 = l1p[0] + l1p[1];
     }
   }
-  for (; i < n; ++i) l1 += PositionEntry<M, R>(nr, rD, rY, X, out, w.c, w.rc, i);
+  for (; i < n; ++i) l1 += PositionEntry<M, R, WK>(p, w.c, w.rc, w.rtol, w.atol, i);
   return l1;
 }
 
-template <int M>
+template <int M, int WK>
 sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
-  constexpr int kR = kMaxDegree * kMaxDegree;
-  sunrealtype* rD[kR];
-  const sunrealtype* rY[kR];
-  const sunrealtype* X[M];
-  for (int r = 0; r < w.nremap; ++r) {
-    rD[r] = NV_DATA_S(w.rD[r]);
-    rY[r] = NV_DATA_S(w.rY[r]);
+  PositionArrays p;
+  p.nr = w.nremap;
+  for (int r = 0; r < p.nr; ++r) {
+    p.rD[r] = NV_DATA_S(w.rD[r]);
+    p.rY[r] = NV_DATA_S(w.rY[r]);
   }
-  for (int j = 0; j < M; ++j) X[j] = NV_DATA_S(w.X[j]);
-  sunrealtype* out = NV_DATA_S(w.out);
-  return w.nremap > 0 ? PositionLoop<M, true>(w, n, rD, rY, X, out)
-                      : PositionLoop<M, false>(w, n, rD, rY, X, out);
+  for (int j = 0; j < M; ++j) p.X[j] = NV_DATA_S(w.X[j]);
+  p.out = NV_DATA_S(w.out);
+  p.atolv = WK == AdaptAfterF::kWeightsVector ? NV_DATA_S(w.atolv) : nullptr;
+  p.ewt = WK != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt) : nullptr;
+  return p.nr > 0 ? PositionLoop<M, true, WK>(w, p, n) : PositionLoop<M, false, WK>(w, p, n);
 }
+
+using PositionFn = sunrealtype (*)(const AdaptPosition&, sunindextype);
+
+template <int WK, std::size_t... I>
+constexpr std::array<PositionFn, sizeof...(I)> PositionTable(std::index_sequence<I...> /*m*/) {
+  return {&PositionFused<static_cast<int>(I) + 3, WK>...};
+}
+// By the weights' kind and the term count m = 3 .. kMaxDegree + 2.
+constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
+    PositionTable<AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
+    PositionTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
+    PositionTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
 
 }  // namespace
 
-sunrealtype AdaptKernels::Position(const AdaptPosition& w) const {
-  if (serial && w.c[0] == 1) {
-    static_assert(kMaxDegree == 8, "Position lists every term count");
-    switch (w.m) {
-      case 3:
-        return PositionFused<3>(w, n);
-      case 4:
-        return PositionFused<4>(w, n);
-      case 5:
-        return PositionFused<5>(w, n);
-      case 6:
-        return PositionFused<6>(w, n);
-      case 7:
-        return PositionFused<7>(w, n);
-      case 8:
-        return PositionFused<8>(w, n);
-      case 9:
-        return PositionFused<9>(w, n);
-      case 10:
-        return PositionFused<10>(w, n);
-      default:
-        break;
-    }
+sunrealtype AdaptKernels::Position(const AdaptPosition& w, sunrealtype* dmin) const {
+  *dmin = 1;
+  const bool weights = w.weights != AdaptAfterF::kWeightsNone;
+  if (serial && w.c[0] == 1 && w.m >= 3 && w.m < kMaxDegree + 3 && (!weights || w.positive)) {
+    return kPositionFns[w.weights][w.m - 3](w, n);
   }
   for (int r = 0; r < w.nremap; ++r) Axpy(w.rc[r], w.rY[r], w.rD[r]);
   Lin(w.m, w.c, const_cast<N_Vector*>(w.X), w.out);
-  return L1Norm(w.out);
+  const sunrealtype l1 = L1Norm(w.out);
+  if (weights) {
+    *dmin = Weights(w.out, w.rtol, w.atol,
+                    w.weights == AdaptAfterF::kWeightsVector ? w.atolv : nullptr, w.ewt);
+  }
+  return l1;
 }
 
 }  // namespace ceode
