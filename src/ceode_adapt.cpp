@@ -129,6 +129,21 @@ constexpr sunrealtype kEnvelope = 0.85;
 constexpr sunrealtype kSunSafety = 0.9;
 constexpr sunrealtype kHoldLow = 0.97;
 constexpr sunrealtype kHoldHigh = 1.05;
+// The same band for the exponent of the controllers' exp, 0.9 exp(x) (PI) and exp(x) (H211b):
+// log(kHoldLow / 0.9), log(kHoldHigh / 0.9), log(kHoldLow), log(kHoldHigh), narrowed by 1e-9,
+// far beyond the rounding of exp, so that an exponent inside it is a ratio inside the band.
+constexpr sunrealtype kMargin = 1e-9;
+constexpr sunrealtype kPiHoldLow = 0.0749013081731177 + kMargin;
+constexpr sunrealtype kPiHoldHigh = 0.15415067982725836 - kMargin;
+constexpr sunrealtype kFilterHoldLow = -0.030459207484708574 + kMargin;
+constexpr sunrealtype kFilterHoldHigh = 0.04879016416943205 - kMargin;
+
+// exp(x) (times 0.9 with the PI controller), or 1 for an x whose ratio the band holds anyway:
+// most steps keep their size, and then no exp is taken.
+sunrealtype RatioOfExponent(sunrealtype x, bool pi) {
+  if (pi) return x > kPiHoldLow && x < kPiHoldHigh ? 1 : 0.9 * std::exp(x);
+  return x > kFilterHoldLow && x < kFilterHoldHigh ? 1 : std::exp(x);
+}
 
 // SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
 // error norm err, which it is told of (UpdateH); false without one or when it fails (CEODE's
@@ -357,7 +372,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     // step (the test itself uses the estimate).
     if (am.err_prev > 0) {
       sunrealtype grow = 1;  // eta_prev^(p+1)
-      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      if (am.eta_prev != 1) {
+        for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      }
       err = std::max(err, kEnvelope * am.err_prev * grow);
     }
     // In logarithms: one log and one exp a step instead of two pow calls; the last step's
@@ -367,9 +384,10 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     if (SunControllerRatio(ce, err, hbase, &eta)) {
       // the user's SUNAdaptController chose
     } else if (am.controller == CE_ADAPT_PI) {
-      eta = 0.9 * std::exp((-0.7 * le + 0.4 * (lep - le)) / k);  // e^(-0.7/k) (ep/e)^(0.4/k)
+      eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
     } else {
-      eta = std::exp(-(le + lep) / (kFilterB * k) - std::log(am.eta_prev) / kFilterB);
+      const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+      eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
     }
     am.err_prev = err;
     am.lerr_prev = le;

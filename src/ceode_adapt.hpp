@@ -80,6 +80,7 @@ struct AdaptMem {
   // configurations (keyed by D_1's buffer).
   KernelPlan plans[2];
   sunrealtype plan_h[2] = {};
+  bool plan_full[2] = {};  // AfterFFullShape
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
 

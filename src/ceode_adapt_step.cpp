@@ -124,7 +124,9 @@ const KernelPlan& DerivativePlan(CEodeMemRec* ce, AdaptMem* am) {
     }
     am->plan_h[i] = ce->co.h;
     am->plan_key[i] = ce->D[1];
+    am->plan_full[i] = AfterFFullShape(kp.plan, ce->degree);
   }
+  am->after.full = am->plan_full[i];
   return kp;
 }
 
@@ -293,7 +295,8 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   ce->xnew = old;  // x(t_n): the dense output's left end
   std::swap(am->ele, am->est);
   am->cur = 1 - am->cur;
-  for (int i = kMaxDegree; i > 0; --i) am->tnode[i] = am->tnode[i - 1];
+  // The differences read tnode[0 .. p - 2].
+  for (int i = std::min(am->order, kMaxDegree); i > 0; --i) am->tnode[i] = am->tnode[i - 1];
   am->tnode[0] = t;
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;

@@ -215,6 +215,7 @@ struct AdaptAfterF {
   enum { kEstLast, kEstCopy, kEstNone };
   enum { kWeightsScalar, kWeightsVector, kWeightsNone };
   const KernelPlan* kp = nullptr;  // BuildUpdatePlan's sums without the position
+  bool full = false;               // AfterFFullShape of its plan
   int d = 0;
   N_Vector* D = nullptr;   // the node's history (index 1 .. d - 1)
   N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
@@ -238,6 +239,10 @@ struct AdaptAfterF {
   N_Vector atolv = nullptr;
   N_Vector ewt_next = nullptr;
 };
+
+// Whether every sum of the derivatives' plan of degree d has all its terms (no weight was zero):
+// the shape the serial pass of AdaptKernels::AfterF is written for.
+bool AfterFFullShape(const UpdatePlan& plan, int d);
 
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
 // rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,

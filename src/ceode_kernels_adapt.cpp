@@ -293,17 +293,9 @@ AfterFFn AfterFOf(int weights) {
 }
 
 AfterFFn FusedAfterF(const AdaptAfterF& w) {
-  if (w.est_kind != AdaptAfterF::kEstLast || !w.kp->serial) return nullptr;
+  if (!w.full || w.est_kind != AdaptAfterF::kEstLast || !w.kp->serial) return nullptr;
   if (w.weights != AdaptAfterF::kWeightsNone && !w.positive) return nullptr;
   const int d = w.d;
-  // The full shape: every sum of the plan with all its terms (no weight was zero).
-  const UpdatePlan& plan = w.kp->plan;
-  if (plan.n != (d > 3 ? d - 2 : 1)) return nullptr;
-  int s = 0;
-  if (d > 3 && plan.combos[s++].m != d - 1) return nullptr;
-  for (int k = 1; k <= d - 2; ++k) {
-    if (k != 2 && plan.combos[s++].m != d - k) return nullptr;
-  }
   const int key = 10 * d + w.ndiff;
   switch (key) {
     case 31:
@@ -324,6 +316,16 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
 }
 
 }  // namespace
+
+bool AfterFFullShape(const UpdatePlan& plan, int d) {
+  if (plan.n != (d > 3 ? d - 2 : 1)) return false;
+  int s = 0;
+  if (d > 3 && plan.combos[s++].m != d - 1) return false;
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k != 2 && plan.combos[s++].m != d - k) return false;
+  }
+  return true;
+}
 
 sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
   if (serial) {
