@@ -196,8 +196,8 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
 // x(t + hn; a) for the constrained solve at t = t_n + h: the derivative relations over h, the
 // new node's yd, the remap from h to hn and the position over hn, on coefficient arrays over
 // {x(t), D_1(t_n), ..., D_{d-1}(t_n), a} (index 0, 1..d-1, d): the weights xoff of x(t) and the
-// history, and mu of a (docs/theory.md 12.6). The same operations as UpdateDerivatives,
-// CommitNode, RemapHistory and PositionFromNode perform on the vectors.
+// history, and mu of a (docs/theory.md 12.6). The same operations as AfterF (the
+// derivatives and yd), RemapTerms and PositionWeights (MoveTo) perform on the vectors.
 void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn, sunrealtype* xoff,
                        sunrealtype* mu) {
   using Co = std::array<sunrealtype, kMaxDegree + 1>;
@@ -295,9 +295,10 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   ce->xnew = old;  // x(t_n): the dense output's left end
   std::swap(am->ele, am->est);
   am->cur = 1 - am->cur;
-  // The differences read tnode[0 .. p - 2].
-  for (int i = std::min(am->order, kMaxDegree); i > 0; --i) am->tnode[i] = am->tnode[i - 1];
-  am->tnode[0] = t;
+  // The differences read tnode[0 .. p - 2]: t enters at the front, the others move back by one
+  // (a rotation through a register, not a memmove call).
+  sunrealtype moving = t;
+  for (int i = 0; i <= std::min(am->order, kMaxDegree); ++i) std::swap(moving, am->tnode[i]);
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
@@ -405,8 +406,11 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   }
   if (flag != CE_SUCCESS) return flag;
   CommitNode(ce, am, t, err);
-  flag = am->tol_kind == 2 ? AdaptWeights(ce, ce->xcur, func)
-                           : AdaptWeightsDefined(ce, am->dmin_next, func);
+  if (am->tol_kind == 2) {
+    flag = AdaptWeights(ce, ce->xcur, func);
+  } else if (!(am->dmin_next > 0)) {
+    flag = AdaptWeightsDefined(ce, am->dmin_next, func);
+  }
   if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
   if (flag == CE_SUCCESS) flag = NextStep(ce, am, constrained, t, err, nef, tlimit, func);
   if (flag != CE_SUCCESS) return flag;
