@@ -273,6 +273,15 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   return h;
 }
 
+// What a run keeps between steps: none of it carries over a start.
+void ClearRun(AdaptMem* am) {
+  am->first = true;
+  am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
+  am->plan_key[0] = am->plan_key[1] = nullptr;
+  am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
+  am->ewt_next_ready = false;
+}
+
 }  // namespace
 
 int AdaptStart(CEodeMemRec* ce, const char* func) {
@@ -293,11 +302,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.kernels = {serial, ce->n};
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
-  am.first = true;
-  am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
-  am.plan_key[0] = am.plan_key[1] = nullptr;
-  am.est_h = am.pos_h = 0;  // the method or the start's coefficients may be new
-  am.ewt_next_ready = false;
+  ClearRun(&am);
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (am.sun_controller != nullptr) {
     SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));
