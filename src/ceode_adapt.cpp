@@ -273,8 +273,19 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   return h;
 }
 
-// What a run keeps between steps: none of it carries over a start.
-void ClearRun(AdaptMem* am) {
+// What a run keeps between steps: none of it carries over a start. The fields of the step's
+// passes that stay for the run are set here (ceode_adapt_step.cpp fills the others each step).
+void ClearRun(CEodeMemRec* ce) {
+  AdaptMem* am = ce->adapt.get();
+  am->wkind = am->tol_kind == 0
+                  ? AdaptAfterF::kWeightsScalar
+                  : (am->tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone);
+  const bool positive = am->tol_kind == 0 ? am->atol > 0 : am->atol_min > 0;
+  am->after.d = ce->degree;
+  am->after.positive = am->pos.positive = positive;
+  am->after.rtol = am->pos.rtol = am->rtol;
+  am->after.atol = am->pos.atol = am->atol;
+  am->after.atolv = am->pos.atolv = am->atol_vec;
   am->first = true;
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
@@ -302,7 +313,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.kernels = {serial, ce->n};
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
-  ClearRun(&am);
+  ClearRun(ce);
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (am.sun_controller != nullptr) {
     SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));

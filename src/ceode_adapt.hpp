@@ -94,8 +94,9 @@ struct AdaptMem {
   sunrealtype pos_h = 0;
   sunrealtype pos_hprev = -1;
   sunrealtype pos_hmap = 0;
-  sunrealtype dmin_next = 1;    // the smallest denominator of ewt_next's weights
-  bool ewt_next_ready = false;  // ewt_next holds the weights of xnext (formed with it)
+  sunrealtype dmin_next = 1;              // the smallest denominator of ewt_next's weights
+  bool ewt_next_ready = false;            // ewt_next holds the weights of xnext (formed with it)
+  int wkind = AdaptAfterF::kWeightsNone;  // the weights the tolerances give (AdaptAfterF)
 
   // Counters
   long int netf = 0;

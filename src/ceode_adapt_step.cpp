@@ -25,16 +25,6 @@ sunrealtype IntPow(sunrealtype x, int j) {
   return r;
 }
 
-// The kind of weights the tolerances give (AdaptAfterF), and whether they are positive for
-// every finite x.
-int WeightsKind(const AdaptMem& am) {
-  if (am.tol_kind == 0) return AdaptAfterF::kWeightsScalar;
-  return am.tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone;
-}
-bool WeightsPositive(const AdaptMem& am) {
-  return am.tol_kind == 0 ? am.atol > 0 : am.atol_min > 0;
-}
-
 // The remap terms that move the node's history from am.hmap to a next step of h (docs/theory.md
 // 12.2): the h-dependent part of the consistent history follows the step.
 void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) {
@@ -93,11 +83,7 @@ sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   w.out = ce->xnext;
   // The weights of the new position come with it, unless the constrained solve moves it.
   const bool moved = ce->step->solve_kind == SolveKind::kConstrained;
-  w.weights = moved ? AdaptAfterF::kWeightsNone : WeightsKind(*am);
-  w.positive = WeightsPositive(*am);
-  w.rtol = am->rtol;
-  w.atol = am->atol;
-  w.atolv = am->atol_vec;
+  w.weights = moved ? AdaptAfterF::kWeightsNone : am->wkind;
   w.ewt = am->ewt_next;
   am->ewt_next_ready = !moved;
   return am->kernels.Position(w, &am->dmin_next);
@@ -171,7 +157,6 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
 sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
   w.kp = &DerivativePlan(ce, am);
-  w.d = ce->degree;
   w.D = ce->D;
   w.Dn = ce->Dnew;
   EstimateTerms(ce, am, t, &w);
@@ -180,12 +165,8 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.yc = 1 / ce->h;
   w.yd = am->yd_next;
   // The weights of the new position, unless they came with it (MoveTo).
-  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : WeightsKind(*am);
-  w.positive = WeightsPositive(*am);
+  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
-  w.rtol = am->rtol;
-  w.atol = am->atol;
-  w.atolv = am->atol_vec;
   w.ewt_next = am->ewt_next;
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin);
