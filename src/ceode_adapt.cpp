@@ -289,7 +289,7 @@ void ClearRun(CEodeMemRec* ce) {
   am->first = true;
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
-  am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
+  am->cw_h = am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
   am->ewt_next_ready = false;
 }
 

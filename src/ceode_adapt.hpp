@@ -80,15 +80,15 @@ struct AdaptMem {
   // configurations (keyed by D_1's buffer).
   KernelPlan plans[2];
   sunrealtype plan_h[2] = {};
-  bool plan_full[2] = {};  // AfterFFullShape
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
 
   // The fused passes' descriptions (ceode_adapt_step.cpp), kept so that a step fills only what
-  // changed: the estimate's scale for est_h, the position's weights for (pos_h, pos_hprev,
-  // pos_hmap).
+  // changed: the derivatives' weights for cw_h, the estimate's scale for est_h, the position's
+  // weights for (pos_h, pos_hprev, pos_hmap).
   AdaptAfterF after;
   AdaptPosition pos;
+  sunrealtype cw_h = 0;  // the step after.cw belongs to
   sunrealtype est_h = 0;
   sunrealtype est_scale = 0;
   sunrealtype pos_h = 0;

@@ -110,10 +110,36 @@ const KernelPlan& DerivativePlan(CEodeMemRec* ce, AdaptMem* am) {
     }
     am->plan_h[i] = ce->co.h;
     am->plan_key[i] = ce->D[1];
-    am->plan_full[i] = AfterFFullShape(kp.plan, ce->degree);
   }
-  am->after.full = am->plan_full[i];
   return kp;
+}
+
+// The derivatives' weights of the serial pass (AdaptAfterF::cw) for the step's h, once per h:
+// BuildUpdatePlan's values in its order, and whether none is zero (full).
+void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
+  if (am->cw_h == ce->co.h) return;
+  am->cw_h = ce->co.h;
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  AdaptAfterF& w = am->after;
+  bool full = true;
+  int s = 0;
+  const auto put = [&](int j, sunrealtype c) {
+    w.cw[s][j] = c;
+    full = full && c != 0;
+  };
+  if (d > 3) {
+    put(0, 1 / co.c[2]);
+    for (int j = 2; j < d; ++j) put(j - 1, -co.T[2][j] / co.c[2]);
+    ++s;
+  }
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k == 2) continue;
+    for (int j = k + 1; j < d; ++j) put(j - k - 1, co.T[k][j]);
+    put(d - k - 1, co.c[k]);
+    ++s;
+  }
+  w.full = full;
 }
 
 // The estimate's source: the last of the new divided differences a[t, t_n, ..., t_{n+2-p}]
@@ -156,7 +182,7 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
 // the new position into ewt_next (their smallest denominator in *dmin).
 sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
-  w.kp = &DerivativePlan(ce, am);
+  DerivativeWeights(ce, am);
   w.D = ce->D;
   w.Dn = ce->Dnew;
   EstimateTerms(ce, am, t, &w);
@@ -168,6 +194,7 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
+  w.kp = am->kernels.AfterFIsFused(w) ? nullptr : &DerivativePlan(ce, am);
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;

@@ -195,6 +195,8 @@ struct AdaptKernels {
   // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
   // of the new weights in *dmin (1 without them).
   sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin) const;
+  // Whether AfterF runs w in one serial pass (then w.kp is not read).
+  bool AfterFIsFused(const AdaptAfterF& w) const;
   // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
   // the smallest denominator of its weights in *dmin (1 without them).
   sunrealtype Position(const AdaptPosition& w, sunrealtype* dmin) const;
@@ -214,8 +216,14 @@ struct AdaptKernels {
 struct AdaptAfterF {
   enum { kEstLast, kEstCopy, kEstNone };
   enum { kWeightsScalar, kWeightsVector, kWeightsNone };
-  const KernelPlan* kp = nullptr;  // BuildUpdatePlan's sums without the position
-  bool full = false;               // AfterFFullShape of its plan
+  // The derivatives' sums: the reference runs the plan (BuildUpdatePlan's sums without the
+  // position); the serial pass takes their weights from cw, sum s (z first when d > 3, then D_1,
+  // D_3, .., D_{d-2}), term j in the plan's order without the accumulated value's 1, when full
+  // (no weight zero, so that the plan dropped none). kp is needed only when the pass is not
+  // fused (AfterFIsFused).
+  const KernelPlan* kp = nullptr;
+  bool full = false;
+  sunrealtype cw[kMaxDegree][kMaxDegree] = {};
   int d = 0;
   N_Vector* D = nullptr;   // the node's history (index 1 .. d - 1)
   N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
@@ -239,10 +247,6 @@ struct AdaptAfterF {
   N_Vector atolv = nullptr;
   N_Vector ewt_next = nullptr;
 };
-
-// Whether every sum of the derivatives' plan of degree d has all its terms (no weight was zero):
-// the shape the serial pass of AdaptKernels::AfterF is written for.
-bool AfterFFullShape(const UpdatePlan& plan, int d);
 
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
 // rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,

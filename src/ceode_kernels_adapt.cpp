@@ -169,9 +169,11 @@ struct AfterFCoeffs {
   V r[ND];
   V scale, yc, rtol, atol;
   AfterFCoeffs(const AdaptAfterF& w, V tag) {
-    const UpdatePlan& plan = w.kp->plan;
-    for (int s = 0; s < plan.n; ++s) {
-      for (int j = 0; j < plan.combos[s].m; ++j) c[s][j] = Splat(plan.combos[s].c[j], tag);
+    const int nsum = D > 3 ? D - 2 : 1;
+    for (int s = 0; s < nsum; ++s) {
+      // sum 0 has D - 1 terms (z, or D_1 when D = 3), the sum of D_k has D - k
+      const int m = s == 0 ? D - 1 : (s == 1 ? D - 1 : D - s - 1);
+      for (int j = 0; j < m; ++j) c[s][j] = Splat(w.cw[s][j], tag);
     }
     for (int j = 0; j < ND; ++j) r[j] = Splat(w.r[j], tag);
     scale = Splat(w.scale, tag);
@@ -249,7 +251,7 @@ struct SplatCo {
 };
 struct PlanCo {
   const AdaptAfterF& w;
-  sunrealtype c(int s, int j) const { return w.kp->plan.combos[s].c[j]; }
+  sunrealtype c(int s, int j) const { return w.cw[s][j]; }
   sunrealtype r(int j) const { return w.r[j]; }
   sunrealtype scale() const { return w.scale; }
   sunrealtype yc() const { return w.yc; }
@@ -293,7 +295,7 @@ AfterFFn AfterFOf(int weights) {
 }
 
 AfterFFn FusedAfterF(const AdaptAfterF& w) {
-  if (!w.full || w.est_kind != AdaptAfterF::kEstLast || !w.kp->serial) return nullptr;
+  if (!w.full || w.est_kind != AdaptAfterF::kEstLast) return nullptr;
   if (w.weights != AdaptAfterF::kWeightsNone && !w.positive) return nullptr;
   const int d = w.d;
   const int key = 10 * d + w.ndiff;
@@ -317,14 +319,8 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
 
 }  // namespace
 
-bool AfterFFullShape(const UpdatePlan& plan, int d) {
-  if (plan.n != (d > 3 ? d - 2 : 1)) return false;
-  int s = 0;
-  if (d > 3 && plan.combos[s++].m != d - 1) return false;
-  for (int k = 1; k <= d - 2; ++k) {
-    if (k != 2 && plan.combos[s++].m != d - k) return false;
-  }
-  return true;
+bool AdaptKernels::AfterFIsFused(const AdaptAfterF& w) const {
+  return serial && FusedAfterF(w) != nullptr;
 }
 
 sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
