@@ -290,6 +290,7 @@ void ClearRun(CEodeMemRec* ce) {
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
   am->cw_h = am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
+  am->after.fused_key = am->pos.fused_key = -1;  // and the backend (CEodeSetFusedKernel)
   am->ewt_next_ready = false;
 }
 

@@ -94,7 +94,7 @@ sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   w.weights = moved ? AdaptAfterF::kWeightsNone : am->wkind;
   w.ewt = am->ewt_next;
   am->ewt_next_ready = !moved;
-  return am->kernels.Position(w, &am->dmin_next);
+  return am->kernels.Position(&w, &am->dmin_next);
 }
 
 // The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
@@ -202,7 +202,7 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
-  w.kp = am->kernels.AfterFIsFused(w) ? nullptr : &DerivativePlan(ce, am);
+  w.kp = am->kernels.AfterFIsFused(&w) ? nullptr : &DerivativePlan(ce, am);
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;

@@ -195,11 +195,12 @@ struct AdaptKernels {
   // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
   // of the new weights in *dmin (1 without them).
   sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin) const;
-  // Whether AfterF runs w in one serial pass (then w.kp is not read).
-  bool AfterFIsFused(const AdaptAfterF& w) const;
+  // Chooses AfterF's serial pass for w (kept in w while what it depends on stays); whether AfterF
+  // runs w in one serial pass (then w.kp is not read).
+  bool AfterFIsFused(AdaptAfterF* w) const;
   // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
   // the smallest denominator of its weights in *dmin (1 without them).
-  sunrealtype Position(const AdaptPosition& w, sunrealtype* dmin) const;
+  sunrealtype Position(AdaptPosition* w, sunrealtype* dmin) const;
 };
 
 // What an adaptive step computes once f is known at its end x(t_{n+1}) (docs/theory.md 12.3),
@@ -223,6 +224,8 @@ struct AdaptAfterF {
   // fused (AfterFIsFused).
   const KernelPlan* kp = nullptr;
   bool full = false;
+  int fused_key = -1;     // AfterFIsFused's choice for these fields: the serial pass,
+  void* fused = nullptr;  // or nullptr for the operations one by one
   sunrealtype cw[kMaxDegree][kMaxDegree] = {};
   int d = 0;
   N_Vector* D = nullptr;   // the node's history (index 1 .. d - 1)
@@ -268,6 +271,8 @@ struct AdaptPosition {
   sunrealtype c[kMaxDegree + 2] = {};
   N_Vector X[kMaxDegree + 2] = {};
   N_Vector out = nullptr;
+  int fused_key = -1;     // Position's choice of its serial pass for m and the weights,
+  void* fused = nullptr;  // kept while they stay
 };
 
 }  // namespace ceode

@@ -319,13 +319,28 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
 
 }  // namespace
 
-bool AdaptKernels::AfterFIsFused(const AdaptAfterF& w) const {
-  return serial && FusedAfterF(w) != nullptr;
+namespace {
+
+// What FusedAfterF's choice depends on.
+int AfterFKey(const AdaptAfterF& w) {
+  return ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
+         (w.positive ? 1 : 0);
+}
+
+}  // namespace
+
+bool AdaptKernels::AfterFIsFused(AdaptAfterF* w) const {
+  const int key = AfterFKey(*w);
+  if (key != w->fused_key) {
+    w->fused_key = key;
+    w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w)) : nullptr;
+  }
+  return w->fused != nullptr;
 }
 
 sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
-  if (serial) {
-    if (AfterFFn fn = FusedAfterF(w)) return fn(w, n, dmin);
+  if (w.fused != nullptr && w.fused_key == AfterFKey(w)) {
+    return reinterpret_cast<AfterFFn>(w.fused)(w, n, dmin);
   }
   RunPlan(*w.kp, n);
   for (int j = 0; j < w.ndiff; ++j) {
@@ -442,12 +457,18 @@ constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
 
 }  // namespace
 
-sunrealtype AdaptKernels::Position(const AdaptPosition& w, sunrealtype* dmin) const {
+sunrealtype AdaptKernels::Position(AdaptPosition* pw, sunrealtype* dmin) const {
+  const AdaptPosition& w = *pw;
   *dmin = 1;
   const bool weights = w.weights != AdaptAfterF::kWeightsNone;
-  if (serial && w.c[0] == 1 && w.m >= 3 && w.m < kMaxDegree + 3 && (!weights || w.positive)) {
-    return kPositionFns[w.weights][w.m - 3](w, n);
+  const int key = (w.m * 4 + w.weights) * 2 + (w.positive ? 1 : 0);
+  if (key != w.fused_key) {
+    pw->fused_key = key;
+    const bool fusable = serial && w.m >= 3 && w.m < kMaxDegree + 3 && (!weights || w.positive);
+    pw->fused = fusable ? reinterpret_cast<void*>(kPositionFns[w.weights][w.m - 3]) : nullptr;
   }
+  // x(t_n)'s weight is 1 (AdaptPosition)
+  if (w.fused != nullptr && w.c[0] == 1) return reinterpret_cast<PositionFn>(w.fused)(w, n);
   for (int r = 0; r < w.nremap; ++r) Axpy(w.rc[r], w.rY[r], w.rD[r]);
   Lin(w.m, w.c, const_cast<N_Vector*>(w.X), w.out);
   const sunrealtype l1 = L1Norm(w.out);
