@@ -213,7 +213,8 @@ struct AdaptKernels {
 //  4. its WRMS norm in the node's weights ewt;
 //  5. the top derivative's rate yd = yc (Dn[d-1] - D[d-1]);
 //  6. the weights of x = x(t_{n+1}) into ewt_next: 1 / (rtol |x| + atol) with a scalar atol
-//     (kWeightsScalar) or the vector atolv (kWeightsVector); none with the user's (kWeightsNone).
+//     (kWeightsScalar) or the vector atolv (kWeightsVector); none (kWeightsNone) with the
+//     user's weights or where the position's pass made them (AdaptPosition).
 struct AdaptAfterF {
   enum { kEstLast, kEstCopy, kEstNone };
   enum { kWeightsScalar, kWeightsVector, kWeightsNone };
