@@ -129,6 +129,21 @@ constexpr sunrealtype kEnvelope = 0.85;
 constexpr sunrealtype kSunSafety = 0.9;
 constexpr sunrealtype kHoldLow = 0.97;
 constexpr sunrealtype kHoldHigh = 1.05;
+// The same band for the exponent of the controllers' exp, 0.9 exp(x) (PI) and exp(x) (H211b):
+// log(kHoldLow / 0.9), log(kHoldHigh / 0.9), log(kHoldLow), log(kHoldHigh), narrowed by 1e-9,
+// far beyond the rounding of exp, so that an exponent inside it is a ratio inside the band.
+constexpr sunrealtype kMargin = 1e-9;
+constexpr sunrealtype kPiHoldLow = 0.0749013081731177 + kMargin;
+constexpr sunrealtype kPiHoldHigh = 0.15415067982725836 - kMargin;
+constexpr sunrealtype kFilterHoldLow = -0.030459207484708574 + kMargin;
+constexpr sunrealtype kFilterHoldHigh = 0.04879016416943205 - kMargin;
+
+// exp(x) (times 0.9 with the PI controller), or 1 for an x whose ratio the band holds anyway:
+// most steps keep their size, and then no exp is taken.
+sunrealtype RatioOfExponent(sunrealtype x, bool pi) {
+  if (pi) return x > kPiHoldLow && x < kPiHoldHigh ? 1 : 0.9 * std::exp(x);
+  return x > kFilterHoldLow && x < kFilterHoldHigh ? 1 : std::exp(x);
+}
 
 // SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
 // error norm err, which it is told of (UpdateH); false without one or when it fails (CEODE's
@@ -192,6 +207,14 @@ sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
   return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
 }
 
+int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func) {
+  if (dmin > 0) return CE_SUCCESS;
+  return ProcessError(ce, CE_ILL_INPUT, func,
+                      "An error weight is not defined at t = %.17g: some x_i = 0 where its "
+                      "abstol is 0. Give abstol > 0 for every entry.",
+                      static_cast<double>(ce->tcur));
+}
+
 int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
   AdaptMem& am = *ce->adapt;
   if (am.tol_kind == 2) {
@@ -203,13 +226,7 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
   } else {
     const sunrealtype dmin =
         am.kernels.Weights(x, am.rtol, am.atol, am.tol_kind == 1 ? am.atol_vec : nullptr, am.ewt);
-    if (!(dmin > 0)) {
-      return ProcessError(ce, CE_ILL_INPUT, func,
-                          "An error weight is not defined at t = %.17g: some x_i = 0 where its "
-                          "abstol is 0. Give abstol > 0 for every entry.",
-                          static_cast<double>(ce->tcur));
-    }
-    return CE_SUCCESS;
+    return AdaptWeightsDefined(ce, dmin, func);
   }
   if (!(N_VMin(am.ewt) > 0) || !IsFinite(am.ewt)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
@@ -229,8 +246,9 @@ bool CloneOnce(N_Vector* v, N_Vector tmpl) {
 
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
-  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ele, ce->xcur) &&
-            CloneOnce(&am.est, ce->xcur) && CloneOnce(&am.yd, ce->xcur);
+  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
+            CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
+            CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
     for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j)
@@ -267,6 +285,27 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   return h;
 }
 
+// What a run keeps between steps: none of it carries over a start. The fields of the step's
+// passes that stay for the run are set here (ceode_adapt_step.cpp fills the others each step).
+void ClearRun(CEodeMemRec* ce) {
+  AdaptMem* am = ce->adapt.get();
+  am->wkind = am->tol_kind == 0
+                  ? AdaptAfterF::kWeightsScalar
+                  : (am->tol_kind == 1 ? AdaptAfterF::kWeightsVector : AdaptAfterF::kWeightsNone);
+  const bool positive = am->tol_kind == 0 ? am->atol > 0 : am->atol_min > 0;
+  am->after.d = ce->degree;
+  am->after.positive = am->pos.positive = positive;
+  am->after.rtol = am->pos.rtol = am->rtol;
+  am->after.atol = am->pos.atol = am->atol;
+  am->after.atolv = am->pos.atolv = am->atol_vec;
+  am->first = true;
+  am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
+  am->plan_key[0] = am->plan_key[1] = nullptr;
+  am->cw_h = am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
+  am->after.fused_key = am->pos.fused_key = -1;  // and the backend (CEodeSetFusedKernel)
+  am->ewt_next_ready = false;
+}
+
 // The method's error, remap and refresh coefficients (at each start: the method may have changed).
 int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
@@ -297,9 +336,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
   am.kernels = {serial, ce->n};
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
-  am.first = true;
-  am.plan_h[0] = am.plan_h[1] = 0;  // the vectors may have been cloned again
-  am.plan_key[0] = am.plan_key[1] = nullptr;
+  ClearRun(ce);
 #if SUNDIALS_VERSION_MAJOR >= 7
   if (am.sun_controller != nullptr) {
     SUNAdaptController_Reset(static_cast<SUNAdaptController>(am.sun_controller));
@@ -374,7 +411,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     // step (the test itself uses the estimate).
     if (am.err_prev > 0) {
       sunrealtype grow = 1;  // eta_prev^(p+1)
-      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      if (am.eta_prev != 1) {
+        for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      }
       err = std::max(err, kEnvelope * am.err_prev * grow);
     }
     // In logarithms: one log and one exp a step instead of two pow calls; the last step's
@@ -384,9 +423,10 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     if (SunControllerRatio(ce, err, hbase, &eta)) {
       // the user's SUNAdaptController chose
     } else if (am.controller == CE_ADAPT_PI) {
-      eta = 0.9 * std::exp((-0.7 * le + 0.4 * (lep - le)) / k);  // e^(-0.7/k) (ep/e)^(0.4/k)
+      eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
     } else {
-      eta = std::exp(-(le + lep) / (kFilterB * k) - std::log(am.eta_prev) / kFilterB);
+      const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+      eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
     }
     am.err_prev = err;
     am.lerr_prev = le;
@@ -418,7 +458,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 void AdaptFree(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) return;
   AdaptMem& am = *ce->adapt;
-  N_Vector* vs[] = {&am.ewt, &am.ele, &am.est, &am.yd, &am.atol_vec};
+  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ele, &am.est, &am.yd, &am.yd_next, &am.atol_vec};
   for (N_Vector* v : vs) {
     if (*v != nullptr) N_VDestroy(*v);
     *v = nullptr;
@@ -523,6 +563,7 @@ int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol) {
   if (am.atol_vec == nullptr) am.atol_vec = N_VClone(ce->xcur);
   if (am.atol_vec == nullptr) return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
   N_VScale(1, abstol, am.atol_vec);
+  am.atol_min = N_VMin(abstol);
   am.rtol = reltol;
   return EnableTolerances(ce, 1);
 }

@@ -29,6 +29,7 @@ struct AdaptMem {
   sunrealtype rtol = 0;
   sunrealtype atol = 0;
   N_Vector atol_vec = nullptr;  // CEodeSVtolerances' copy
+  sunrealtype atol_min = 0;     // its smallest entry
   CEodeEwtFn efun = nullptr;
   sunrealtype hin = 0;  // 0: chosen by the start
   sunrealtype hmin = 0;
@@ -55,11 +56,13 @@ struct AdaptMem {
   sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
 
   // The run
-  AdaptKernels kernels;  // the backend of its vector work, chosen at the start
-  N_Vector ewt = nullptr;
-  N_Vector ele = nullptr;  // the last accepted step's local error estimate
-  N_Vector est = nullptr;  // the estimate of the step under test
-  N_Vector yd = nullptr;   // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  AdaptKernels kernels;         // the backend of its vector work, chosen at the start
+  N_Vector ewt = nullptr;       // the node's weights: the test of the step from it
+  N_Vector ewt_next = nullptr;  // those of the step's end, formed with its estimate
+  N_Vector ele = nullptr;       // the last accepted step's local error estimate
+  N_Vector est = nullptr;       // the estimate of the step under test
+  N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
+  N_Vector yd_next = nullptr;   // the same at the step's end
   N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
   int cur = 0;                             // dd[cur] belongs to the node
   sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
@@ -88,6 +91,21 @@ struct AdaptMem {
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
 
+  // The fused passes' descriptions (ceode_adapt_step.cpp), kept so that a step fills only what
+  // changed: the derivatives' weights for cw_h, the estimate's scale for est_h, the position's
+  // weights for (pos_h, pos_hprev, pos_hmap).
+  AdaptAfterF after;
+  AdaptPosition pos;
+  sunrealtype cw_h = 0;  // the step after.cw belongs to
+  sunrealtype est_h = 0;
+  sunrealtype est_scale = 0;
+  sunrealtype pos_h = 0;
+  sunrealtype pos_hprev = -1;
+  sunrealtype pos_hmap = 0;
+  sunrealtype dmin_next = 1;              // the smallest denominator of ewt_next's weights
+  bool ewt_next_ready = false;            // ewt_next holds the weights of xnext (formed with it)
+  int wkind = AdaptAfterF::kWeightsNone;  // the weights the tolerances give (AdaptAfterF)
+
   // Counters
   long int netf = 0;
   long int ncapped = 0;
@@ -101,6 +119,9 @@ int AdaptStart(CEodeMemRec* ce, const char* func);
 void AdaptStartHistory(CEodeMemRec* ce);
 // The error weights from x (the tolerances or the user's function).
 int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func);
+// CE_SUCCESS when dmin, the smallest denominator of weights from the tolerances, is positive;
+// otherwise the error that names the cause.
+int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func);
 // The step after hbase (starting at tfrom) from the error norm err of the last accepted step (0:
 // none estimated): the controller's ratio applied to hbase, then hmax, the stable step and the
 // stop time limit_t.

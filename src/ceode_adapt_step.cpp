@@ -25,56 +25,83 @@ sunrealtype IntPow(sunrealtype x, int j) {
   return r;
 }
 
-// The node's history for a next step of h instead of am.hmap: the h-dependent part of the
-// consistent history follows the step (docs/theory.md 12.2).
-void RemapHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+// The remap terms that move the node's history from am.hmap to a next step of h (docs/theory.md
+// 12.2): the h-dependent part of the consistent history follows the step. None when the history
+// is refreshed instead (12.5).
+void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) {
+  w->nremap = 0;
   if (h == am->hmap || RefreshHistory(ce, am, h)) return;
   const int d = ce->degree;
+  // h^j and hmap^j, j <= d, by the multiplications IntPow makes (the same values)
+  sunrealtype hp[kMaxDegree + 1];
+  sunrealtype mp[kMaxDegree + 1];
+  hp[0] = mp[0] = 1;
+  for (int j = 1; j <= d; ++j) {
+    hp[j] = hp[j - 1] * h;
+    mp[j] = mp[j - 1] * am->hmap;
+  }
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    const sunrealtype c = r.gamma * (IntPow(h, r.j) - IntPow(am->hmap, r.j));
-    N_Vector y = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
-    am->kernels.Axpy(c, y, ce->D[r.k]);
+    w->rc[i] = r.gamma * (hp[r.j] - mp[r.j]);
+    w->rY[i] = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
+    w->rD[i] = ce->D[r.k];
   }
+  w->nremap = am->nremap;
   am->hmap = h;
 }
 
-// x(t_n + h) into out from the node (x(t_n) = xcur and its remapped history): the Taylor terms,
-// and the top derivative's blend over the new interval, z_n - (1 - p0) h yd with the node's own
-// z_n (before the remap).
-void PositionFromNode(CEodeMemRec* ce, AdaptMem& am, sunrealtype h, N_Vector out) {
+// The position's weights over {x(t_n), D_1 .. D_{d-1} (remapped), yd} for the step ce->h: the
+// Taylor terms and the top derivative's blend over the new interval, z_n - (1 - p0) h yd with
+// the node's own z_n (before the remap). Kept while h, hprev and hmap stay.
+void PositionWeights(CEodeMemRec* ce, AdaptMem* am) {
+  const sunrealtype h = ce->h;
+  if (h == am->pos_h && am->hprev == am->pos_hprev && am->hmap == am->pos_hmap) return;
   const int d = ce->degree;
-  sunrealtype own[kMaxDegree + 1];
-  const sunrealtype* tw = ce->co.tw;  // the step's own weights unless h is another
-  if (h != ce->co.h) {
-    TaylorWeightsByProducts(h, d, own);
-    tw = own;
-  }
-  sunrealtype c[kMaxDegree + 2];
-  N_Vector X[kMaxDegree + 2];
-  int m = 0;
-  c[m] = 1;
-  X[m++] = ce->xcur;
-  for (int i = 1; i < d; ++i) {
-    c[m] = tw[i];
-    X[m++] = ce->D[i];
-  }
+  const sunrealtype* tw = ce->co.tw;
+  AdaptPosition& w = am->pos;
+  w.c[0] = 1;
+  for (int i = 1; i < d; ++i) w.c[i] = tw[i];
   sunrealtype top_shift = 0;  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap
-  for (int i = 0; i < am.nremap; ++i) {
-    if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (am.hmap - am.hprev);
+  for (int i = 0; i < am->nremap; ++i) {
+    if (am->remap[i].k == d - 1) top_shift += am->remap[i].gamma * (am->hmap - am->hprev);
   }
   const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * h);
-  if (yd_coef != 0 && am.hprev > 0) {
-    c[m] = yd_coef;
-    X[m++] = am.yd;
-  }
-  am.kernels.Lin(m, c, X, out);
+  w.m = d;
+  if (yd_coef != 0 && am->hprev > 0) w.c[w.m++] = yd_coef;
+  am->pos_h = h;
+  am->pos_hprev = am->hprev;
+  am->pos_hmap = am->hmap;
+}
+
+// The step's coefficients for a new h.
+void SetStep(CEodeMemRec* ce, sunrealtype h) {
+  if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co, true);
+  ce->h = h;
+}
+
+// The node's next step becomes h: the history remapped for it and x(t_n + h) into xnext, in one
+// pass; returns ||x(t_n + h)||_1.
+sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+  AdaptPosition& w = am->pos;
+  RemapTerms(ce, am, h, &w);
+  SetStep(ce, h);
+  PositionWeights(ce, am);
+  w.X[0] = ce->xcur;
+  for (int i = 1; i < ce->degree; ++i) w.X[i] = ce->D[i];
+  if (w.m > ce->degree) w.X[ce->degree] = am->yd;
+  w.out = ce->xnext;
+  // The weights of the new position come with it, unless the constrained solve moves it.
+  const bool moved = ce->step->solve_kind == SolveKind::kConstrained;
+  w.weights = moved ? AdaptAfterF::kWeightsNone : am->wkind;
+  w.ewt = am->ewt_next;
+  am->ewt_next_ready = !moved;
+  return am->kernels.Position(&w, &am->dmin_next);
 }
 
 // The derivatives at t = tcur + h from the history and the acceleration in Dnew[2]: the fixed
-// step's plan without its position sum.
-// The plans of the two history configurations are kept while h stays.
-void UpdateDerivatives(CEodeMemRec* ce, AdaptMem* am) {
+// step's plan without its position sum. The plans of the two history configurations are kept
+// while h stays.
+const KernelPlan& DerivativePlan(CEodeMemRec* ce, AdaptMem* am) {
   // A configuration without a plan takes the slot the other configuration did not use last.
   int i = ce->D[1] == am->plan_key[0] ? 0 : (ce->D[1] == am->plan_key[1] ? 1 : -1);
   if (i < 0) i = 1 - am->plan_last;
@@ -93,46 +120,101 @@ void UpdateDerivatives(CEodeMemRec* ce, AdaptMem* am) {
     am->plan_h[i] = ce->co.h;
     am->plan_key[i] = ce->D[1];
   }
-  RunPlan(kp, ce->n);
+  return kp;
 }
 
-// The new divided differences a[t, t_n, ..., t_{n+1-j}] (dd[1 - cur]) and the local error
-// estimate of the step into est; returns its WRMS norm (scaled for tolerance proportionality).
-// One difference short (the first step of the sets of order d), the top difference available
-// over the step stands in for the missing one: an overestimate while h is below the solution's
-// time scale, so the first step is tested too. 0 while the history is shorter still.
-sunrealtype EstimateError(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, N_Vector est) {
+// The derivatives' weights of the serial pass (AdaptAfterF::cw) for the step's h, once per h:
+// BuildUpdatePlan's values in its order, and whether none is zero (full).
+void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
+  if (am->cw_h == ce->co.h) return;
+  am->cw_h = ce->co.h;
+  const int d = ce->degree;
+  const StepCoeffs& co = ce->co;
+  AdaptAfterF& w = am->after;
+  bool full = true;
+  int s = 0;
+  const auto put = [&](int j, sunrealtype c) {
+    w.cw[s][j] = c;
+    full = full && c != 0;
+  };
+  if (d > 3) {
+    put(0, 1 / co.c[2]);
+    for (int j = 2; j < d; ++j) put(j - 1, -co.T[2][j] / co.c[2]);
+    ++s;
+  }
+  for (int k = 1; k <= d - 2; ++k) {
+    if (k == 2) continue;
+    for (int j = k + 1; j < d; ++j) put(j - k - 1, co.T[k][j]);
+    put(d - k - 1, co.c[k]);
+    ++s;
+  }
+  w.full = full;
+}
+
+// The estimate's source: the last of the new divided differences a[t, t_n, ..., t_{n+2-p}]
+// (dd[1 - cur]); one difference short (the first step of the sets of order d), the top
+// difference available over the step stands in for the missing one: an overestimate while h is
+// below the solution's time scale, so the first step is tested too; none while the history is
+// shorter still.
+void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
   const int p = am->order;
   const int jmax = std::min(p - 1, am->ndata);
+  w->ndiff = jmax;
   for (int j = 1; j <= jmax; ++j) {
-    N_Vector prev_new = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
-    N_Vector prev_old = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-    N_Vector out = j == p - 1 ? est : am->dd[1 - am->cur][j];
-    const sunrealtype r = 1 / (t - am->tnode[j - 1]);
-    const sunrealtype c[2] = {r, -r};
-    N_Vector X[2] = {prev_new, prev_old};
-    am->kernels.Lin(2, c, X, out);
+    w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
+    w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
+    w->dout[j - 1] = j == p - 1 ? am->est : am->dd[1 - am->cur][j];
+    w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
   }
   const sunrealtype h = ce->h;
-  sunrealtype scale = am->cerr * IntPow(h, p + 1) * am->pfac;
-  if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
-    CopyVector(ce->Dnew[2], est);
-  } else if (jmax == p - 2 && jmax >= 1) {
-    CopyVector(am->dd[1 - am->cur][jmax], est);
-    scale /= h;
-  } else if (jmax < p - 1) {
-    N_VConst(0, est);
-    return 0;
+  if (h != am->est_h) {
+    am->est_h = h;
+    am->est_scale = am->cerr * IntPow(h, p + 1) * am->pfac;
   }
-  am->kernels.Scale(scale, est);
-  return am->kernels.WrmsNorm(est, am->ewt) * am->err_scale;
+  w->scale = am->est_scale;
+  w->est_kind = AdaptAfterF::kEstLast;
+  if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
+    w->est_kind = AdaptAfterF::kEstCopy;
+    w->est_src = ce->Dnew[2];
+  } else if (jmax == p - 2 && jmax >= 1) {
+    w->est_kind = AdaptAfterF::kEstCopy;
+    w->est_src = am->dd[1 - am->cur][jmax];
+    w->scale /= h;
+  } else if (jmax < p - 1) {
+    w->est_kind = AdaptAfterF::kEstNone;
+  }
+}
+
+// The step's vector work once f is known at its end (AdaptAfterF): the derivatives there, the
+// divided differences, the local error estimate into est and its norm (scaled for tolerance
+// proportionality; 0 while none is estimated), yd over the step into yd_next and the weights of
+// the new position into ewt_next (their smallest denominator in *dmin).
+sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
+  AdaptAfterF& w = am->after;
+  DerivativeWeights(ce, am);
+  w.D = ce->D;
+  w.Dn = ce->Dnew;
+  EstimateTerms(ce, am, t, &w);
+  w.est = am->est;
+  w.ewt = am->ewt;
+  w.yc = 1 / ce->h;
+  w.yd = am->yd_next;
+  // The weights of the new position, unless they came with it (MoveTo).
+  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
+  w.x = ce->xnext;
+  w.ewt_next = am->ewt_next;
+  w.kp = am->kernels.AfterFIsFused(&w) ? nullptr : &DerivativePlan(ce, am);
+  sunrealtype dmin = 1;
+  const sunrealtype norm = am->kernels.AfterF(w, &dmin);
+  if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
+  return w.est_kind == AdaptAfterF::kEstNone ? 0 : norm * am->err_scale;
 }
 
 // x(t + hn; a) for the constrained solve at t = t_n + h: the derivative relations over h, the
 // new node's yd, the remap from h to hn and the position over hn, on coefficient arrays over
 // {x(t), D_1(t_n), ..., D_{d-1}(t_n), a} (index 0, 1..d-1, d): the weights xoff of x(t) and the
-// history, and mu of a (docs/theory.md 12.6). The same operations as UpdateDerivatives,
-// CommitNode, RemapHistory and PositionFromNode perform on the vectors.
+// history, and mu of a (docs/theory.md 12.6). The same operations as AfterF (the
+// derivatives and yd), RemapTerms and PositionWeights (MoveTo) perform on the vectors.
 void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn, sunrealtype* xoff,
                        sunrealtype* mu) {
   using Co = std::array<sunrealtype, kMaxDegree + 1>;
@@ -186,12 +268,6 @@ void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn
   *mu = x[d];
 }
 
-// The step's coefficients for a new h.
-void SetStep(CEodeMemRec* ce, sunrealtype h) {
-  if (h != ce->co.h) ComputeStepCoeffs(ce->degree, ce->params, h, &ce->co, true);
-  ce->h = h;
-}
-
 // While the stable step decides the steps, the frequency it comes from is estimated again every
 // kRefreshSteps steps: the state moves away from where it was estimated (a Kepler orbit whose
 // pericentre closes in), and a stale cap lets the step grow past the stability limit.
@@ -203,11 +279,7 @@ int RefreshStableStep(CEodeMemRec* ce, AdaptMem* am, const char* func) {
 }
 
 // The node's next step becomes h (the history remapped, the position again).
-void ReviseStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
-  RemapHistory(ce, am, h);
-  SetStep(ce, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
-}
+void ReviseStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) { MoveTo(ce, am, h); }
 
 int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err, int nef) {
   if (!IsFinite(ce->Dnew[2])) {
@@ -227,12 +299,12 @@ int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err
 // The accepted step becomes the node: the history, the positions (x(t_n) stays as the dense
 // output's left end), the divided differences and the times.
 void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
-  const int d = ce->degree;
   const sunrealtype h = ce->h;
-  // yd of the new node: its z (un-remapped) less the node's z over the step.
-  const sunrealtype c[2] = {1 / h, -1 / h};
-  N_Vector X[2] = {ce->Dnew[d - 1], ce->D[d - 1]};
-  am->kernels.Lin(2, c, X, am->yd);
+  // yd of the new node (its z, un-remapped, less the node's z over the step) and the weights of
+  // its position were formed with the estimate.
+  std::swap(am->yd, am->yd_next);
+  if (am->tol_kind != 2) std::swap(am->ewt, am->ewt_next);
+  am->ewt_next_ready = false;
   std::swap(ce->D, ce->Dnew);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
@@ -240,8 +312,10 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   ce->xnew = old;  // x(t_n): the dense output's left end
   std::swap(am->ele, am->est);
   am->cur = 1 - am->cur;
-  for (int i = kMaxDegree; i > 0; --i) am->tnode[i] = am->tnode[i - 1];
-  am->tnode[0] = t;
+  // The differences read tnode[0 .. p - 2]: t enters at the front, the others move back by one
+  // (a rotation through a register, not a memmove call).
+  sunrealtype moving = t;
+  for (int i = 0; i <= std::min(am->order, kMaxDegree); ++i) std::swap(moving, am->tnode[i]);
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
@@ -282,8 +356,7 @@ int AttemptStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, 
   }
   const int flag = ce->step->solve(ce, t, tnext, ce->xnext, ce->Dnew[2], func);
   if (flag != CE_SUCCESS) return flag;
-  UpdateDerivatives(ce, am);
-  *err = EstimateError(ce, am, t, am->est);
+  *err = AfterF(ce, am, t);
   return CE_SUCCESS;
 }
 
@@ -299,16 +372,12 @@ int RetryAfterFailure(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealty
   }
   if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
   if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
-  const sunrealtype h = AdaptRetryStep(ce, err);
-  RemapHistory(ce, am, h);
-  SetStep(ce, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
+  MoveTo(ce, am, AdaptRetryStep(ce, err));
   return CE_SUCCESS;
 }
 
 // Growth that the relative error weights follow: stop long before overflow, as the fixed step.
-int CheckGrowth(CEodeMemRec* ce, const AdaptMem& am, sunrealtype t, const char* func) {
-  const sunrealtype xl1 = am.kernels.L1Norm(ce->xnext);
+int CheckGrowth(CEodeMemRec* ce, sunrealtype xl1, sunrealtype t, const char* func) {
   if (xl1 <= kGrowthLimit * (1 + ce->xl1_start)) return CE_SUCCESS;
   return ProcessError(ce, CE_UNSTABLE, func,
                       "The state grew explosively or stopped being finite (||x||_1 = %g at t = "
@@ -334,10 +403,7 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
   }
   if (capped) ++am->ncapped;
   am->capped_last = capped;
-  RemapHistory(ce, am, h);
-  SetStep(ce, h);
-  PositionFromNode(ce, *am, h, ce->xnext);
-  return CheckGrowth(ce, *am, t, func);
+  return CheckGrowth(ce, MoveTo(ce, am, h), t, func);
 }
 
 // One accepted step (with as many retries as the error test asks for), then the next step's
@@ -357,7 +423,11 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   }
   if (flag != CE_SUCCESS) return flag;
   CommitNode(ce, am, t, err);
-  flag = AdaptWeights(ce, ce->xcur, func);
+  if (am->tol_kind == 2) {
+    flag = AdaptWeights(ce, ce->xcur, func);
+  } else if (!(am->dmin_next > 0)) {
+    flag = AdaptWeightsDefined(ce, am->dmin_next, func);
+  }
   if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
   if (flag == CE_SUCCESS) flag = NextStep(ce, am, constrained, t, err, nef, tlimit, func);
   if (flag != CE_SUCCESS) return flag;

@@ -181,6 +181,9 @@ void RunPlan(const KernelPlan& kp, sunindextype n);
 
 // ---- The adaptive step's vector work (ceode_kernels_adapt.cpp) ----
 
+struct AdaptAfterF;
+struct AdaptPosition;
+
 // Each operation on the backend chosen once per start: N_Vector operations, or loops on the
 // raw arrays of serial vectors with the same arithmetic in the same order (the same numbers;
 // test_fused compares them).
@@ -198,6 +201,89 @@ struct AdaptKernels {
   // the smallest denominator (ewt is not formed when it is not positive).
   sunrealtype Weights(N_Vector x, sunrealtype rtol, sunrealtype atol, N_Vector atolv,
                       N_Vector ewt) const;
+  // The whole vector work of a step once f is known at its end (AdaptAfterF); returns the
+  // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
+  // of the new weights in *dmin (1 without them).
+  sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin) const;
+  // Chooses AfterF's serial pass for w (kept in w while what it depends on stays); whether AfterF
+  // runs w in one serial pass (then w.kp is not read).
+  bool AfterFIsFused(AdaptAfterF* w) const;
+  // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
+  // the smallest denominator of its weights in *dmin (1 without them).
+  sunrealtype Position(AdaptPosition* w, sunrealtype* dmin) const;
+};
+
+// What an adaptive step computes once f is known at its end x(t_{n+1}) (docs/theory.md 12.3),
+// in this order on the reference backend (each operation as above) and entry by entry in one
+// pass on the serial one for the named sets' shapes (the same operations per entry):
+//  1. the derivatives at t_{n+1}: the plan's sums (z, D_1, D_3 .. D_{d-2} into Dn);
+//  2. the divided differences dout[j] = r[j] (dnew[j] - dold[j]), j < ndiff, in order;
+//  3. the estimate est: the last difference (kEstLast), a copy of est_src (kEstCopy), times
+//     scale; or zero (kEstNone, no norm);
+//  4. its WRMS norm in the node's weights ewt;
+//  5. the top derivative's rate yd = yc (Dn[d-1] - D[d-1]);
+//  6. the weights of x = x(t_{n+1}) into ewt_next: 1 / (rtol |x| + atol) with a scalar atol
+//     (kWeightsScalar) or the vector atolv (kWeightsVector); none (kWeightsNone) with the
+//     user's weights or where the position's pass made them (AdaptPosition).
+struct AdaptAfterF {
+  enum { kEstLast, kEstCopy, kEstNone };
+  enum { kWeightsScalar, kWeightsVector, kWeightsNone };
+  // The derivatives' sums: the reference runs the plan (BuildUpdatePlan's sums without the
+  // position); the serial pass takes their weights from cw, sum s (z first when d > 3, then D_1,
+  // D_3, .., D_{d-2}), term j in the plan's order without the accumulated value's 1, when full
+  // (no weight zero, so that the plan dropped none). kp is needed only when the pass is not
+  // fused (AfterFIsFused).
+  const KernelPlan* kp = nullptr;
+  bool full = false;
+  int fused_key = -1;     // AfterFIsFused's choice for these fields: the serial pass,
+  void* fused = nullptr;  // or nullptr for the operations one by one
+  sunrealtype cw[kMaxDegree][kMaxDegree] = {};
+  int d = 0;
+  N_Vector* D = nullptr;   // the node's history (index 1 .. d - 1)
+  N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
+  int ndiff = 0;
+  sunrealtype r[kMaxDegree] = {};
+  N_Vector dnew[kMaxDegree] = {};
+  N_Vector dold[kMaxDegree] = {};
+  N_Vector dout[kMaxDegree] = {};
+  int est_kind = kEstNone;
+  N_Vector est_src = nullptr;
+  sunrealtype scale = 0;
+  N_Vector est = nullptr;
+  N_Vector ewt = nullptr;
+  sunrealtype yc = 0;
+  N_Vector yd = nullptr;
+  int weights = kWeightsNone;
+  bool positive = false;  // atol > 0 in every entry: the denominators are positive for finite x
+  N_Vector x = nullptr;
+  sunrealtype rtol = 0;
+  sunrealtype atol = 0;
+  N_Vector atolv = nullptr;
+  N_Vector ewt_next = nullptr;
+};
+
+// The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
+// rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,
+// Lin's arithmetic, X possibly among the remapped vectors; c[0] = 1, the weight of x(t_n)).
+// With weights other than kWeightsNone (the fields of AdaptAfterF), the weights of the new
+// position follow into ewt in the same pass.
+struct AdaptPosition {
+  int weights = AdaptAfterF::kWeightsNone;
+  bool positive = false;
+  sunrealtype rtol = 0;
+  sunrealtype atol = 0;
+  N_Vector atolv = nullptr;
+  N_Vector ewt = nullptr;
+  int nremap = 0;
+  sunrealtype rc[kMaxDegree * kMaxDegree] = {};
+  N_Vector rY[kMaxDegree * kMaxDegree] = {};
+  N_Vector rD[kMaxDegree * kMaxDegree] = {};
+  int m = 0;
+  sunrealtype c[kMaxDegree + 2] = {};
+  N_Vector X[kMaxDegree + 2] = {};
+  N_Vector out = nullptr;
+  int fused_key = -1;     // Position's choice of its serial pass for m and the weights,
+  void* fused = nullptr;  // kept while they stay
 };
 
 }  // namespace ceode

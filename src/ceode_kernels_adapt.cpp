@@ -3,7 +3,12 @@
 // same numbers (the N_Vector forms are those of SUNDIALS' serial vector, special cases
 // included).
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "ceode_kernels.hpp"
 
@@ -91,6 +96,387 @@ sunrealtype AdaptKernels::Weights(N_Vector x, sunrealtype rtol, sunrealtype atol
   if (!(dmin > 0)) return dmin;
   for (sunindextype i = 0; i < n; ++i) wd[i] = 1 / wd[i];
   return dmin;
+}
+
+}  // namespace ceode
+
+// ---- The fused passes of the adaptive step -------------------------------------------------
+
+namespace ceode {
+
+namespace {
+
+// Entry-wise arithmetic on one double or, with SSE2, on a pair: the same IEEE operations per
+// entry either way, so a pair loop with a scalar tail gives the scalar loop's values.
+inline sunrealtype Load(const sunrealtype* p, sunrealtype /*tag*/) { return *p; }
+inline void Store(sunrealtype* p, sunrealtype v) { *p = v; }
+inline sunrealtype Abs(sunrealtype v) { return std::fabs(v); }
+// s += each entry of v in the order of the entries (the reference's sums are sequential).
+inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
+
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+constexpr bool kPairs = true;
+using Pair =
+    double __attribute__((vector_size(16)));  // __m128d without may_alias: a template argument
+inline Pair Load(const sunrealtype* p, Pair /*tag*/) { return _mm_loadu_pd(p); }
+inline void Store(sunrealtype* p, Pair v) { _mm_storeu_pd(p, v); }
+inline Pair Abs(Pair v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
+inline void AddInOrder(sunrealtype* s, Pair v) {
+  *s += _mm_cvtsd_f64(v);
+  *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
+}
+inline Pair Splat(sunrealtype c, Pair /*tag*/) { return _mm_set1_pd(c); }
+#else
+constexpr bool kPairs = false;
+using Pair = sunrealtype;
+#endif
+inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
+
+// The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
+template <int D, int ND>
+struct AfterFArrays {
+  const sunrealtype* Do[D];  // the node's history, 1 .. D - 1
+  sunrealtype* Dn[D];        // the new node's (Dn[2] = a)
+  const sunrealtype* ddo[ND + 1];
+  sunrealtype* ddn[ND + 1];  // ddn[ND]: the estimate
+  const sunrealtype* ewt;
+  sunrealtype* yd;
+  const sunrealtype* x;
+  const sunrealtype* atolv;
+  sunrealtype* ewt_next;
+  explicit AfterFArrays(const AdaptAfterF& w) {
+    for (int k = 1; k < D; ++k) {
+      Do[k] = NV_DATA_S(w.D[k]);
+      Dn[k] = NV_DATA_S(w.Dn[k]);
+    }
+    for (int j = 1; j < ND; ++j) {
+      ddo[j] = NV_DATA_S(w.dold[j]);
+      ddn[j] = NV_DATA_S(w.dout[j - 1]);
+    }
+    ddn[ND] = NV_DATA_S(w.est);
+    ewt = NV_DATA_S(w.ewt);
+    yd = NV_DATA_S(w.yd);
+    x = NV_DATA_S(w.x);
+    atolv = w.atolv != nullptr ? NV_DATA_S(w.atolv) : nullptr;
+    ewt_next = w.weights != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt_next) : nullptr;
+  }
+};
+
+// The coefficients of an AdaptAfterF as values of type V (splatted once for the pair loop).
+template <int D, int ND, typename V>
+struct AfterFCoeffs {
+  V c[D][D + 1];  // sum s (the plan's order), term j
+  V r[ND];
+  V scale, yc, rtol, atol;
+  AfterFCoeffs(const AdaptAfterF& w, V tag) {
+    const int nsum = D > 3 ? D - 2 : 1;
+    for (int s = 0; s < nsum; ++s) {
+      // sum 0 has D - 1 terms (z, or D_1 when D = 3), the sum of D_k has D - k
+      const int m = s == 0 ? D - 1 : (s == 1 ? D - 1 : D - s - 1);
+      for (int j = 0; j < m; ++j) c[s][j] = Splat(w.cw[s][j], tag);
+    }
+    for (int j = 0; j < ND; ++j) r[j] = Splat(w.r[j], tag);
+    scale = Splat(w.scale, tag);
+    yc = Splat(w.yc, tag);
+    rtol = Splat(w.rtol, tag);
+    atol = Splat(w.atol, tag);
+  }
+};
+
+// One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
+// from the plan's sums) with ND differences; C yields the coefficients (V values).
+template <int D, int ND, int WK, typename V, typename C>
+inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i,
+                        sunrealtype* ssq) {
+  const V tag{};
+  const V a = Load(p.Dn[2] + i, tag);
+  V old[D];
+  for (int k = 1; k < D; ++k) old[k] = Load(p.Do[k] + i, tag);
+  // 1. z (D > 3), then D_1, D_3 .. D_{D-2}: BuildUpdatePlan's terms in its order, the
+  // accumulated value last (its weight 1 exactly: added, not multiplied).
+  V z = a;
+  int s = 0;
+  if constexpr (D > 3) {
+    z = co.c(0, 0) * a;
+    for (int j = 2; j < D; ++j) z += co.c(0, j - 1) * old[j];
+    Store(p.Dn[D - 1] + i, z);
+    s = 1;
+  }
+  for (int k = 1; k <= D - 2; ++k) {
+    if (k == 2) continue;
+    V acc = co.c(s, 0) * old[k + 1];
+    for (int j = k + 2; j < D; ++j) acc += co.c(s, j - k - 1) * old[j];
+    acc += co.c(s, D - k - 1) * z;
+    acc += old[k];
+    Store(p.Dn[k] + i, acc);
+    ++s;
+  }
+  // 2., 3. the differences, the last one scaled into the estimate
+  V prev_new = a;
+  V prev_old = old[2];
+  for (int j = 1; j <= ND; ++j) {
+    V e = co.r(j - 1) * (prev_new - prev_old);
+    if (j == ND) {
+      e = co.scale() * e;
+      Store(p.ddn[ND] + i, e);
+      // 4. the weighted square
+      const V q = e * Load(p.ewt + i, tag);
+      AddInOrder(ssq, q * q);
+    } else {
+      Store(p.ddn[j] + i, e);
+      prev_old = Load(p.ddo[j] + i, tag);
+      prev_new = e;
+    }
+  }
+  // 5. the top derivative's rate
+  Store(p.yd + i, co.yc() * (z - old[D - 1]));
+  // 6. the new weights
+  if constexpr (WK != AdaptAfterF::kWeightsNone) {
+    const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
+    const V den = co.rtol() * Abs(Load(p.x + i, tag)) + at;
+    Store(p.ewt_next + i, Splat(1, tag) / den);
+  }
+}
+
+// Coefficient access for the entry: splatted values (pairs) or the plan's own (the tail, n = 1).
+template <int D, int ND, typename V>
+struct SplatCo {
+  const AfterFCoeffs<D, ND, V>& k;
+  V c(int s, int j) const { return k.c[s][j]; }
+  V r(int j) const { return k.r[j]; }
+  V scale() const { return k.scale; }
+  V yc() const { return k.yc; }
+  V rtol() const { return k.rtol; }
+  V atol() const { return k.atol; }
+};
+struct PlanCo {
+  const AdaptAfterF& w;
+  sunrealtype c(int s, int j) const { return w.cw[s][j]; }
+  sunrealtype r(int j) const { return w.r[j]; }
+  sunrealtype scale() const { return w.scale; }
+  sunrealtype yc() const { return w.yc; }
+  sunrealtype rtol() const { return w.rtol; }
+  sunrealtype atol() const { return w.atol; }
+};
+
+// The weights' denominators are positive (FusedAfterF): no smallest one to find.
+template <int D, int ND, int WK>
+sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin) {
+  const AfterFArrays<D, ND> p(w);
+  sunrealtype ssq = 0;
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if (n >= 2) {
+      const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
+      const SplatCo<D, ND, Pair> co{k};
+#pragma GCC unroll 2
+      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK, Pair>(p, co, i, &ssq);
+    }
+  }
+  const PlanCo co{w};
+  for (; i < n; ++i) AfterFEntry<D, ND, WK, sunrealtype>(p, co, i, &ssq);
+  *dmin = 1;
+  return std::sqrt(ssq / static_cast<sunrealtype>(n));
+}
+
+using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*);
+
+// The named sets' shapes: (degree, differences = order - 1).
+template <int D, int ND>
+AfterFFn AfterFOf(int weights) {
+  switch (weights) {
+    case AdaptAfterF::kWeightsScalar:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar>;
+    case AdaptAfterF::kWeightsVector:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector>;
+    default:
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsNone>;
+  }
+}
+
+AfterFFn FusedAfterF(const AdaptAfterF& w) {
+  if (!w.full || w.est_kind != AdaptAfterF::kEstLast) return nullptr;
+  if (w.weights != AdaptAfterF::kWeightsNone && !w.positive) return nullptr;
+  const int d = w.d;
+  const int key = 10 * d + w.ndiff;
+  switch (key) {
+    case 31:
+      return AfterFOf<3, 1>(w.weights);
+    case 42:
+      return AfterFOf<4, 2>(w.weights);
+    case 53:
+      return AfterFOf<5, 3>(w.weights);
+    case 64:
+      return AfterFOf<6, 4>(w.weights);
+    case 76:
+      return AfterFOf<7, 6>(w.weights);
+    case 87:
+      return AfterFOf<8, 7>(w.weights);
+    default:
+      return nullptr;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// What FusedAfterF's choice depends on.
+int AfterFKey(const AdaptAfterF& w) {
+  return ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
+         (w.positive ? 1 : 0);
+}
+
+}  // namespace
+
+bool AdaptKernels::AfterFIsFused(AdaptAfterF* w) const {
+  const int key = AfterFKey(*w);
+  if (key != w->fused_key) {
+    w->fused_key = key;
+    w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w)) : nullptr;
+  }
+  return w->fused != nullptr;
+}
+
+sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
+  if (w.fused != nullptr && w.fused_key == AfterFKey(w)) {
+    return reinterpret_cast<AfterFFn>(w.fused)(w, n, dmin);
+  }
+  RunPlan(*w.kp, n);
+  for (int j = 0; j < w.ndiff; ++j) {
+    const sunrealtype c[2] = {w.r[j], -w.r[j]};
+    N_Vector X[2] = {w.dnew[j], w.dold[j]};
+    Lin(2, c, X, w.dout[j]);
+  }
+  sunrealtype norm = 0;
+  if (w.est_kind == AdaptAfterF::kEstNone) {
+    N_VConst(0, w.est);
+  } else {
+    if (w.est_kind == AdaptAfterF::kEstCopy) CopyVector(w.est_src, w.est);
+    Scale(w.scale, w.est);
+    norm = WrmsNorm(w.est, w.ewt);
+  }
+  const sunrealtype c[2] = {w.yc, -w.yc};
+  N_Vector X[2] = {w.Dn[w.d - 1], w.D[w.d - 1]};
+  Lin(2, c, X, w.yd);
+  *dmin = 1;
+  if (w.weights != AdaptAfterF::kWeightsNone) {
+    *dmin = Weights(w.x, w.rtol, w.atol,
+                    w.weights == AdaptAfterF::kWeightsVector ? w.atolv : nullptr, w.ewt_next);
+  }
+  return norm;
+}
+
+namespace {
+
+// The raw arrays of an AdaptPosition.
+struct PositionArrays {
+  int nr = 0;
+  sunrealtype* rD[kMaxDegree * kMaxDegree];
+  const sunrealtype* rY[kMaxDegree * kMaxDegree];
+  const sunrealtype* X[kMaxDegree + 2];
+  sunrealtype* out;
+  const sunrealtype* atolv;
+  sunrealtype* ewt;
+};
+
+// Entry (or pair) i of the position of M terms, with the remap before it (R) and the new
+// weights after it (WK, as AfterFEntry's): x(t_n)'s weight c[0] is 1, so its term is the value
+// itself (1 x exactly). Returns |x(t_n + h)|.
+template <int M, bool R, int WK, typename V>
+inline V PositionEntry(const PositionArrays& p, const V* c, const V* rc, V rtol, V atol,
+                       sunindextype i) {
+  const V tag{};
+  if constexpr (R) {
+    for (int r = 0; r < p.nr; ++r) {
+      Store(p.rD[r] + i, Load(p.rD[r] + i, tag) + rc[r] * Load(p.rY[r] + i, tag));
+    }
+  }
+  V acc = Load(p.X[0] + i, tag);
+  for (int j = 1; j < M; ++j) acc += c[j] * Load(p.X[j] + i, tag);
+  Store(p.out + i, acc);
+  const V ax = Abs(acc);
+  if constexpr (WK != AdaptAfterF::kWeightsNone) {
+    const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : atol;
+    Store(p.ewt + i, Splat(1, tag) / (rtol * ax + at));
+  }
+  return ax;
+}
+
+// The L1 norm only feeds the growth check: pairs are summed in two lanes (its rounding, not
+// N_VL1Norm's order, does not reach the state).
+template <int M, bool R, int WK>
+sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunindextype n) {
+  sunrealtype l1 = 0;
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if (n >= 2) {
+      constexpr int kR = kMaxDegree * kMaxDegree;
+      Pair c[M];
+      Pair rc[kR];
+      for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
+      for (int r = 0; r < p.nr; ++r) rc[r] = Splat(w.rc[r], Pair{});
+      const Pair rtol = Splat(w.rtol, Pair{});
+      const Pair atol = Splat(w.atol, Pair{});
+      Pair l1p = Splat(0, Pair{});
+#pragma GCC unroll 2
+      for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i);
+      l1 = l1p[0] + l1p[1];
+    }
+  }
+  for (; i < n; ++i) l1 += PositionEntry<M, R, WK>(p, w.c, w.rc, w.rtol, w.atol, i);
+  return l1;
+}
+
+template <int M, int WK>
+sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
+  PositionArrays p;
+  p.nr = w.nremap;
+  for (int r = 0; r < p.nr; ++r) {
+    p.rD[r] = NV_DATA_S(w.rD[r]);
+    p.rY[r] = NV_DATA_S(w.rY[r]);
+  }
+  for (int j = 0; j < M; ++j) p.X[j] = NV_DATA_S(w.X[j]);
+  p.out = NV_DATA_S(w.out);
+  p.atolv = WK == AdaptAfterF::kWeightsVector ? NV_DATA_S(w.atolv) : nullptr;
+  p.ewt = WK != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt) : nullptr;
+  return p.nr > 0 ? PositionLoop<M, true, WK>(w, p, n) : PositionLoop<M, false, WK>(w, p, n);
+}
+
+using PositionFn = sunrealtype (*)(const AdaptPosition&, sunindextype);
+
+template <int WK, std::size_t... I>
+constexpr std::array<PositionFn, sizeof...(I)> PositionTable(std::index_sequence<I...> /*m*/) {
+  return {&PositionFused<static_cast<int>(I) + 3, WK>...};
+}
+// By the weights' kind and the term count m = 3 .. kMaxDegree + 2.
+constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
+    PositionTable<AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
+    PositionTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
+    PositionTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
+
+}  // namespace
+
+sunrealtype AdaptKernels::Position(AdaptPosition* pw, sunrealtype* dmin) const {
+  const AdaptPosition& w = *pw;
+  *dmin = 1;
+  const bool weights = w.weights != AdaptAfterF::kWeightsNone;
+  const int key = (w.m * 4 + w.weights) * 2 + (w.positive ? 1 : 0);
+  if (key != w.fused_key) {
+    pw->fused_key = key;
+    const bool fusable = serial && w.m >= 3 && w.m < kMaxDegree + 3 && (!weights || w.positive);
+    pw->fused = fusable ? reinterpret_cast<void*>(kPositionFns[w.weights][w.m - 3]) : nullptr;
+  }
+  // x(t_n)'s weight is 1 (AdaptPosition)
+  if (w.fused != nullptr && w.c[0] == 1) return reinterpret_cast<PositionFn>(w.fused)(w, n);
+  for (int r = 0; r < w.nremap; ++r) Axpy(w.rc[r], w.rY[r], w.rD[r]);
+  Lin(w.m, w.c, const_cast<N_Vector*>(w.X), w.out);
+  const sunrealtype l1 = L1Norm(w.out);
+  if (weights) {
+    *dmin = Weights(w.out, w.rtol, w.atol,
+                    w.weights == AdaptAfterF::kWeightsVector ? w.atolv : nullptr, w.ewt);
+  }
+  return l1;
 }
 
 }  // namespace ceode

@@ -4,6 +4,8 @@
 #
 #   bench/step_cost/instructions.sh step BUILD_DIR [METHOD N]...        bench_step: per step of each variant
 #   bench/step_cost/instructions.sh passes BUILD_DIR METHOD             bench_step: N_Vector data passes per step
+#   bench/step_cost/instructions.sh adaptive BUILD_DIR [METHOD N]...    bench_step: per accepted adaptive step
+#                                                                       against the fixed step
 #   bench/step_cost/instructions.sh high-order BUILD_DIR [METHOD[+comp]]...   wp_high_order: per run and per step
 #   bench/step_cost/instructions.sh rk8pd BUILD_DIR                     wp_high_order: G8_O8 against GSL rk8pd
 #   bench/step_cost/instructions.sh fe-plate BUILD_DIR [NY ...]         wp_fe_plate: per step and DOF, and LL misses
@@ -11,7 +13,7 @@
 # Needs valgrind. The simulated last-level-cache misses (fe-plate) follow the cache valgrind reads
 # from cpuid; read them only where that size is real (or pass --LL= by hand).
 set -euo pipefail
-mode=${1:?mode: step, passes, high-order, rk8pd or fe-plate}
+mode=${1:?mode: step, passes, adaptive, high-order, rk8pd or fe-plate}
 build=${2:?BUILD_DIR}
 shift 2
 command -v valgrind > /dev/null || { echo "valgrind not found (apt-get install valgrind)"; exit 1; }
@@ -38,6 +40,33 @@ step)  # instructions per step of each bench_step variant: S1 and S2 steps after
       printf '%-7s n=%-8s %-12s %12.1f instructions/step\n' "$m" "$n" "$v" \
         "$(per "$(count bench_step $v "$m" "$n" $s1)" "$(count bench_step $v "$m" "$n" $s2)" $((s2 - s1)))"
     done
+  done ;;
+adaptive)  # instructions per accepted step with tolerances 1e-8 (ceode_adaptive), and per fixed step
+  # The window: from the first output time (1, 2, 5, 10, 20, ... fixed steps of 1e-3 ahead) after at
+  # least 20 accepted steps (the start and the first step sizes behind) to the first one at least
+  # W accepted steps later (W = 1000 for n < 1000, 20 otherwise); the steps are counted by a run
+  # outside valgrind (the same arithmetic, the same steps).
+  while [ $# -ge 2 ]; do
+    m=$1 n=$2
+    shift 2
+    steps() { "$build/bench/bench_step" --count ceode_adaptive "$m" "$n" "$1" | sed -n 's/^steps //p'; }
+    if [ "$n" -ge 1000 ]; then w=20; else w=1000; fi
+    k1= k2= s1= s2=
+    for k in 1 2 5 10 20 50 100 200 500 1000 2000 5000 10000 20000 50000 100000 200000; do
+      s=$(steps $k)
+      if [ -z "$k1" ]; then
+        [ "$s" -ge 20 ] && k1=$k s1=$s
+      elif [ $((s - s1)) -ge $w ]; then
+        k2=$k s2=$s
+        break
+      fi
+    done
+    [ -n "$k2" ] || { echo "$m n=$n: no window of $w steps found" >&2; exit 1; }
+    a=$(per "$(count bench_step ceode_adaptive "$m" "$n" $k1)" "$(count bench_step ceode_adaptive "$m" "$n" $k2)" $((s2 - s1)))
+    if [ "$n" -ge 100000 ]; then f1=2 f2=12; elif [ "$n" -ge 1000 ]; then f1=20 f2=120; else f1=1000 f2=11000; fi
+    f=$(per "$(count bench_step ceode "$m" "$n" $f1)" "$(count bench_step ceode "$m" "$n" $f2)" $((f2 - f1)))
+    awk -v m="$m" -v n="$n" -v a="$a" -v f="$f" -v s="$((s2 - s1))" \
+      'BEGIN {printf "%-7s n=%-8s adaptive %12.1f  fixed %12.1f instructions/step  ratio %.2f  (%d accepted steps)\n", m, n, a, f, a / f, s}'
   done ;;
 passes)  # N_Vector operations that pass over the data, per step (callgrind's call counts)
   out=$(mktemp)
@@ -115,5 +144,5 @@ fe-plate)  # per step and DOF on the 4 ny x ny meshes (default 35 112 354: 10^4 
       'BEGIN {printf " %s %.3f", s, log(i1 / i0) / log(n1 / n0)}'
   done
   echo ;;
-*) echo "unknown mode $mode (step, passes, high-order, rk8pd, fe-plate)"; exit 2 ;;
+*) echo "unknown mode $mode (step, passes, adaptive, high-order, rk8pd, fe-plate)"; exit 2 ;;
 esac
