@@ -54,11 +54,20 @@ void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out) {
 // A return at tcur (s = 0, every CE_ONE_STEP call and every output on the step grid) copies the
 // method's own values and tests them in the same pass; inside the step the interpolant, then the
 // test. Both copies are made before the answer (& rather than &&).
-bool OutputState(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
-  if (s == 0) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+namespace {
+
+__attribute__((noinline)) bool InterpolateState(CEodeMemRec* ce, sunrealtype s, N_Vector xout,
+                                                N_Vector vout) {
   InterpolatePolynomial(ce, s, 0, xout);
   InterpolatePolynomial(ce, s, 1, vout);
   return AllFinite(xout) && AllFinite(vout);
+}
+
+}  // namespace
+
+bool OutputState(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+  if (s == 0) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  return InterpolateState(ce, s, xout, vout);
 }
 
 }  // namespace ceode

@@ -183,8 +183,9 @@ constexpr int StepTerms(int d, unsigned ones, int s) {
 }
 
 // One entry of sum S of a plan of a known shape: its term count is a constant, so no dispatch.
+// Always inlined: the small kernels are these sums unrolled, and a call each would double them.
 template <int D, unsigned Ones, int S>
-inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
+__attribute__((always_inline)) inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
   const FusedTerms& tk = fp.terms[S];
   StoreSum(tk, i, TermsAt<StepTerms(D, Ones, S)>(tk, i));
 }
