@@ -166,8 +166,10 @@ void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sun
 
 // The end of a fixed-step CEodeEvolve that reached target: the outputs there (the method's own
 // values when target is tcur), tested as they are written.
-int ReturnAtTarget(CEodeMemRec* ce, const char* func, sunrealtype target, N_Vector xout,
-                   N_Vector vout, sunrealtype* tret, bool hit_tstop) {
+__attribute__((always_inline)) inline int ReturnAtTarget(CEodeMemRec* ce, const char* func,
+                                                         sunrealtype target, N_Vector xout,
+                                                         N_Vector vout, sunrealtype* tret,
+                                                         bool hit_tstop) {
   if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
   const bool finite = OutputState(ce, target - ce->tcur, xout, vout);
   *tret = target;
@@ -238,30 +240,6 @@ int StepToRoots(CEodeMemRec* ce, const char* func, sunrealtype target) {
   }
 }
 
-// CE_ONE_STEP needs the general path's target logic only for a stop time, roots, error control
-// or a pending guard check; without them (and with the step's direct form) its call is the
-// step and the copies: what EvolveTarget and StepTo would do for target = tcur + h. Arguments
-// that CheckEvolveArgs would refuse take the general path, which reports them.
-inline bool DirectOneStep(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                          const sunrealtype* tret) {
-  const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&
-                    VectorLength(xout) == ce->n && VectorLength(vout) == ce->n;
-  return args && ce->started && ce->h > 0 && !ce->tstop_set && ce->root == nullptr &&
-         ce->adapt == nullptr && !ce->guard.pending && ce->mxstep > 0 && DirectStepReady(ce);
-}
-int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret) {
-  const sunrealtype target = ce->tcur + ce->h;
-  int flag = StepsRemain(ce, target) ? TakeDirectStep(ce) : CE_SUCCESS;
-  if (flag == CE_SUCCESS && StepsRemain(ce, target)) flag = StepTo(ce, func, target);
-  if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
-    ReturnCurrentState(ce, xout, vout, tret);
-    ce->tretlast = ce->tcur;
-    return flag;
-  }
-  return ReturnAtTarget(ce, func, target, xout, vout, tret, false);
-}
-
 // The state at the root, as its time.
 int ReturnRoot(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
   const sunrealtype tr = RootTime(ce);
@@ -306,6 +284,48 @@ __attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealt
     return flag;
   }
   return ReturnAtTarget(ce, func, target, xout, vout, tret, hit_tstop);
+}
+
+// A fixed-step call needs the general path's target logic only for a stop time, roots, error
+// control or a pending guard check, and its checks of the start only before one; without them
+// the call is the steps and the outputs. Arguments that CheckEvolveArgs would refuse take the
+// general path, which reports them.
+inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                         const sunrealtype* tret) {
+  const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&
+                    VectorLength(xout) == ce->n && VectorLength(vout) == ce->n;
+  return args && ce->started && ce->h > 0 && !ce->tstop_set && ce->root == nullptr &&
+         ce->adapt == nullptr && !ce->guard.pending && ce->mxstep > 0;
+}
+
+// CE_NORMAL on the direct path: what EvolveTarget and StepTo do for target = tout (a tout behind
+// tcur takes the general path, which reports it).
+__attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                           N_Vector xout, N_Vector vout, sunrealtype* tret) {
+  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
+  if (tout < ce->tcur - troundoff) return Evolve(ce, func, tout, xout, vout, tret, CE_NORMAL);
+  const int flag = StepTo(ce, func, tout);
+  if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
+    ReturnCurrentState(ce, xout, vout, tret);
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
+}
+
+// CE_ONE_STEP on the direct path with the step's direct form: what EvolveTarget and StepTo do
+// for target = tcur + h.
+int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  const sunrealtype target = ce->tcur + ce->h;
+  int flag = StepsRemain(ce, target) ? TakeDirectStep(ce) : CE_SUCCESS;
+  if (flag == CE_SUCCESS && StepsRemain(ce, target)) flag = StepTo(ce, func, target);
+  if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
+    ReturnCurrentState(ce, xout, vout, tret);
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  return ReturnAtTarget(ce, func, target, xout, vout, tret, false);
 }
 
 // What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
@@ -425,8 +445,11 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (itask == CE_ONE_STEP && ceode::DirectOneStep(ce, tout, xout, vout, tret)) {
-    return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
+  if (ceode::DirectEvolve(ce, tout, xout, vout, tret)) {
+    if (itask == CE_ONE_STEP && ceode::DirectStepReady(ce)) {
+      return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
+    }
+    if (itask == CE_NORMAL) return ceode::EvolveToTout(ce, __func__, tout, xout, vout, tret);
   }
   return ceode::Evolve(ce, __func__, tout, xout, vout, tret, itask);
 }

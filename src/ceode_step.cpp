@@ -381,14 +381,19 @@ int LeanOneStep(CEodeMemRec* ce) {
 }
 
 // StepMem::steps with the lean loop: it runs unless only a few steps remain (CE_ONE_STEP calls
-// decide on the distance alone).
+// decide on the distance alone); those are taken here one by one, as StepTo would ask for them.
 template <bool kMpi>
 int LeanOrOneStep(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
   if (target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps) {
     return LeanExplicitSteps<kMpi>(ce, ce->step.get(), target, max_steps, taken);
   }
-  const int flag = LeanOneStep<kMpi>(ce);
-  *taken = flag == CE_SUCCESS ? 1 : 0;
+  long int k = 0;
+  int flag = CE_SUCCESS;
+  do {
+    flag = LeanOneStep<kMpi>(ce);
+    k += flag == CE_SUCCESS ? 1 : 0;
+  } while (flag == CE_SUCCESS && k < max_steps && StepsRemain(ce, target));
+  *taken = k;
   return flag;
 }
 
