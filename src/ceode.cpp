@@ -171,7 +171,9 @@ __attribute__((always_inline)) inline int ReturnAtTarget(CEodeMemRec* ce, const 
                                                          N_Vector vout, sunrealtype* tret,
                                                          bool hit_tstop) {
   if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
-  const bool finite = OutputState(ce, target - ce->tcur, xout, vout);
+  const sunrealtype s = target - ce->tcur;  // 0: the method's own values (OutputState's copy)
+  const bool finite =
+      s == 0 ? CopyPairFinite(ce->xcur, ce->D[1], xout, vout) : OutputState(ce, s, xout, vout);
   *tret = target;
   ce->tretlast = target;
   if (hit_tstop) ce->tstop_set = false;
@@ -318,7 +320,11 @@ __attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, su
 int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
   const sunrealtype target = ce->tcur + ce->h;
-  int flag = StepsRemain(ce, target) ? TakeDirectStep(ce) : CE_SUCCESS;
+  int flag = CE_SUCCESS;
+  // Interval too short for a step (h near t's round-off), or no direct form: the general path.
+  if (!StepsRemain(ce, target) || !TakeDirectStep(ce, &flag)) {
+    return Evolve(ce, func, target, xout, vout, tret, CE_ONE_STEP);
+  }
   if (flag == CE_SUCCESS && StepsRemain(ce, target)) flag = StepTo(ce, func, target);
   if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
     ReturnCurrentState(ce, xout, vout, tret);
@@ -446,9 +452,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
   if (ceode::DirectEvolve(ce, tout, xout, vout, tret)) {
-    if (itask == CE_ONE_STEP && ceode::DirectStepReady(ce)) {
-      return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
-    }
+    if (itask == CE_ONE_STEP) return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
     if (itask == CE_NORMAL) return ceode::EvolveToTout(ce, __func__, tout, xout, vout, tret);
   }
   return ceode::Evolve(ce, __func__, tout, xout, vout, tret, itask);

@@ -373,10 +373,10 @@ inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
-// Whether the run's step has a direct form (the explicit step of the lean loop's configuration,
-// chosen by ChooseStep), and one step in it: TakeStep's effect and flags without its dispatch.
-bool DirectStepReady(const CEodeMemRec* ce);
-int TakeDirectStep(CEodeMemRec* ce);
+// One step in the run's direct form, when it has one (the explicit step of the lean loop's
+// configuration, chosen by ChooseStep): TakeStep's effect and flag (*flag) without its dispatch.
+// false: no direct form, nothing done.
+bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option

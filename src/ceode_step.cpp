@@ -403,11 +403,12 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
   return ce->step->steps(ce, target, max_steps, taken);
 }
 
-bool DirectStepReady(const CEodeMemRec* ce) {
-  return ce->step != nullptr && ce->step->one != nullptr;
+bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
+  const StepMem* sm = ce->step.get();
+  if (sm == nullptr || sm->one == nullptr) return false;
+  *flag = sm->one(ce);
+  return true;
 }
-
-int TakeDirectStep(CEodeMemRec* ce) { return ce->step->one(ce); }
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
 
