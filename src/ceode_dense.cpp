@@ -3,6 +3,7 @@
 // accepted step [tcur - hlast, tcur] and the position x(tcur - hlast) (section 12.4). The same
 // weights and operations for one derivative (Interpolate: CEodeGetDky, roots) and for both
 // outputs of CEodeEvolve (OutputState).
+#include <algorithm>
 #include <cmath>
 
 #include "ceode_adapt.hpp"
@@ -29,7 +30,11 @@ DenseFrame Frame(const CEodeMemRec* ce, sunrealtype s) {
   f.h = back ? -ce->adapt->hlast : ce->h;
   f.xend = back ? ce->xnew : ce->xnext;
   TaylorWeights(s, d, f.ts);
-  TaylorWeights(f.h, d, f.th);
+  if (!AdaptOn(ce) && ce->co.h == f.h) {  // the fixed step's own weights: TaylorWeights(h, d)
+    std::copy(ce->co.tw, ce->co.tw + d, f.th);
+  } else {
+    TaylorWeights(f.h, d, f.th);
+  }
   f.hd = std::pow(f.h, d);
   return f;
 }
