@@ -8,6 +8,7 @@
 
 #include "ceode_adapt.hpp"
 #include "ceode_impl.hpp"
+#include "ceode_kernels.hpp"
 
 namespace ceode {
 
@@ -99,7 +100,7 @@ int CheckOutputVector(CEodeMemRec* ce, const char* func, N_Vector y, const char*
   if (y == nullptr) {
     return ProcessError(ce, CE_ILL_INPUT, func, "%s = NULL: pass a vector cloned from x0.", name);
   }
-  if (N_VGetLength(y) != ce->n) {
+  if (VectorLength(y) != ce->n) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "%s has %ld entries but the problem has %ld: clone it from x0.", name,
                         static_cast<long>(N_VGetLength(y)), static_cast<long>(ce->n));
@@ -140,14 +141,15 @@ int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vecto
   if (itask != CE_NORMAL && itask != CE_ONE_STEP) {
     return ProcessError(ce, CE_ILL_INPUT, func, "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
   }
-  return ValidateTime(ce, func, "tout", tout);
+  return std::isfinite(tout) ? CE_SUCCESS : ValidateTime(ce, func, "tout", tout);
 }
 
 // The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
 // cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
-// extreme for this h) is caught here, once per call, and never returned with success.
-int CheckReturned(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout, int flag) {
-  if (flag < 0 || (IsFinite(xout) && IsFinite(vout))) return flag;
+// extreme for this h) is caught here, once per call, and never returned with success. finite:
+// whether xout and vout are finite, as the output (OutputState) found while writing them.
+int CheckReturned(CEodeMemRec* ce, const char* func, bool finite, N_Vector xout, int flag) {
+  if (flag < 0 || finite) return flag;
   return ProcessError(ce, CE_UNSTABLE, func,
                       "The %s at t = %.17g is not finite although every step passed its growth "
                       "check: h = %g is beyond what %s can represent (its velocity weights "
@@ -160,6 +162,22 @@ void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sun
   N_VScale(1.0, ce->xcur, xout);
   N_VScale(1.0, ce->D[1], vout);
   *tret = ce->tcur;
+}
+
+// The end of a fixed-step CEodeEvolve that reached target: the outputs there (the method's own
+// values when target is tcur), tested as they are written.
+__attribute__((always_inline)) inline int ReturnAtTarget(CEodeMemRec* ce, const char* func,
+                                                         sunrealtype target, N_Vector xout,
+                                                         N_Vector vout, sunrealtype* tret,
+                                                         bool hit_tstop) {
+  if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
+  const sunrealtype s = target - ce->tcur;  // 0: the method's own values (OutputState's copy)
+  const bool finite =
+      s == 0 ? CopyPairFinite(ce->xcur, ce->D[1], xout, vout) : OutputState(ce, s, xout, vout);
+  *tret = target;
+  ce->tretlast = target;
+  if (hit_tstop) ce->tstop_set = false;
+  return CheckReturned(ce, func, finite, xout, hit_tstop ? CE_TSTOP_RETURN : CE_SUCCESS);
 }
 
 // Where this call ends: tout (CE_NORMAL) or one step on (CE_ONE_STEP), cut at the stop time.
@@ -231,6 +249,89 @@ int ReturnRoot(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret)
   Interpolate(ce, tr - ce->tcur, 1, vout);
   *tret = ce->tretlast = tr;
   return CE_ROOT_RETURN;
+}
+
+// CEodeEvolve after the access guard: the arguments, the (re)start, then the steps to the target
+// and the outputs there (or error control's own loop).
+__attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                     N_Vector xout, N_Vector vout, sunrealtype* tret, int itask) {
+  int flag = CheckEvolveArgs(ce, func, tout, xout, vout, tret, itask);
+  if (flag != CE_SUCCESS) return flag;
+  if (ce->adapt != nullptr) AdaptSetTarget(ce, tout);
+  flag = Prepare(ce, func);
+  if (flag == CE_SUCCESS && ce->guard.pending) flag = GuardCheckPending(ce, func);
+  if (flag < 0) {
+    // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
+    *tret = ce->tcur;
+    return flag;
+  }
+  if (AdaptOn(ce)) {
+    flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask);
+    const bool finite = flag < 0 || (AllFinite(xout) && AllFinite(vout));
+    return CheckReturned(ce, func, finite, xout, flag);
+  }
+  sunrealtype target = 0;
+  bool hit_tstop = false;
+  flag = EvolveTarget(ce, func, tout, itask, &target, &hit_tstop);
+  if (flag != CE_SUCCESS) {
+    *tret = ce->tcur;
+    return flag;
+  }
+  flag = ce->root == nullptr ? StepTo(ce, func, target) : StepToRoots(ce, func, target);
+  if (flag == CE_ROOT_RETURN) return ReturnRoot(ce, xout, vout, tret);
+  if (flag != CE_SUCCESS) {
+    // The last good state is returned; the memory stays usable.
+    ReturnCurrentState(ce, xout, vout, tret);
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  return ReturnAtTarget(ce, func, target, xout, vout, tret, hit_tstop);
+}
+
+// A fixed-step call needs the general path's target logic only for a stop time, roots, error
+// control or a pending guard check, and its checks of the start only before one; without them
+// the call is the steps and the outputs. Arguments that CheckEvolveArgs would refuse take the
+// general path, which reports them.
+inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                         const sunrealtype* tret) {
+  const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&
+                    VectorLength(xout) == ce->n && VectorLength(vout) == ce->n;
+  return args && ce->started && ce->h > 0 && !ce->tstop_set && ce->root == nullptr &&
+         ce->adapt == nullptr && !ce->guard.pending && ce->mxstep > 0;
+}
+
+// CE_NORMAL on the direct path: what EvolveTarget and StepTo do for target = tout (a tout behind
+// tcur takes the general path, which reports it).
+__attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                           N_Vector xout, N_Vector vout, sunrealtype* tret) {
+  const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
+  if (tout < ce->tcur - troundoff) return Evolve(ce, func, tout, xout, vout, tret, CE_NORMAL);
+  const int flag = StepTo(ce, func, tout);
+  if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
+    ReturnCurrentState(ce, xout, vout, tret);
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
+}
+
+// CE_ONE_STEP on the direct path with the step's direct form: what EvolveTarget and StepTo do
+// for target = tcur + h.
+int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  const sunrealtype target = ce->tcur + ce->h;
+  int flag = CE_SUCCESS;
+  // Interval too short for a step (h near t's round-off), or no direct form: the general path.
+  if (!StepsRemain(ce, target) || !TakeDirectStep(ce, &flag)) {
+    return Evolve(ce, func, target, xout, vout, tret, CE_ONE_STEP);
+  }
+  if (flag == CE_SUCCESS && StepsRemain(ce, target)) flag = StepTo(ce, func, target);
+  if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
+    ReturnCurrentState(ce, xout, vout, tret);
+    ce->tretlast = ce->tcur;
+    return flag;
+  }
+  return ReturnAtTarget(ce, func, target, xout, vout, tret, false);
 }
 
 // What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
@@ -347,45 +448,13 @@ int CEodeReset(void* mem, sunrealtype t0, N_Vector x0, N_Vector v0) {
 int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
                 int itask) {
   CEodeMemRec* ce = nullptr;
-  int flag = ceode::Access(mem, __func__, &ce, true);
-  if (flag == CE_SUCCESS)
-    flag = ceode::CheckEvolveArgs(ce, __func__, tout, xout, vout, tret, itask);
+  const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (ce->adapt != nullptr) ceode::AdaptSetTarget(ce, tout);
-  flag = ceode::Prepare(ce, __func__);
-  if (flag == CE_SUCCESS && ce->guard.pending) flag = ceode::GuardCheckPending(ce, __func__);
-  if (flag < 0) {
-    // Nothing was integrated: as CVODE, the outputs are left alone and *tret is the current time.
-    *tret = ce->tcur;
-    return flag;
+  if (ceode::DirectEvolve(ce, tout, xout, vout, tret)) {
+    if (itask == CE_ONE_STEP) return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
+    if (itask == CE_NORMAL) return ceode::EvolveToTout(ce, __func__, tout, xout, vout, tret);
   }
-  if (ceode::AdaptOn(ce)) {
-    flag = ceode::AdaptEvolve(ce, __func__, tout, xout, vout, tret, itask);
-    return ceode::CheckReturned(ce, __func__, xout, vout, flag);
-  }
-  sunrealtype target = 0;
-  bool hit_tstop = false;
-  flag = ceode::EvolveTarget(ce, __func__, tout, itask, &target, &hit_tstop);
-  if (flag != CE_SUCCESS) {
-    *tret = ce->tcur;
-    return flag;
-  }
-  flag = ce->root == nullptr ? ceode::StepTo(ce, __func__, target)
-                             : ceode::StepToRoots(ce, __func__, target);
-  if (flag == CE_ROOT_RETURN) return ceode::ReturnRoot(ce, xout, vout, tret);
-  if (flag != CE_SUCCESS) {
-    // The last good state is returned; the memory stays usable.
-    ceode::ReturnCurrentState(ce, xout, vout, tret);
-    ce->tretlast = ce->tcur;
-    return flag;
-  }
-  if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
-  ceode::Interpolate(ce, target - ce->tcur, 0, xout);
-  ceode::Interpolate(ce, target - ce->tcur, 1, vout);
-  *tret = target;
-  ce->tretlast = target;
-  if (hit_tstop) ce->tstop_set = false;
-  return ceode::CheckReturned(ce, __func__, xout, vout, hit_tstop ? CE_TSTOP_RETURN : CE_SUCCESS);
+  return ceode::Evolve(ce, __func__, tout, xout, vout, tret, itask);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

@@ -373,6 +373,10 @@ inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
+// One step in the run's direct form, when it has one (the explicit step of the lean loop's
+// configuration, chosen by ChooseStep): TakeStep's effect and flag (*flag) without its dispatch.
+// false: no direct form, nothing done.
+bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option
@@ -431,6 +435,9 @@ void FreeVectors(CEodeMemRec* ce);
 
 // ceode_dense.cpp
 void Interpolate(CEodeMemRec* ce, sunrealtype s, int k, N_Vector out);
+// xout = x(tcur + s), vout = x'(tcur + s) as Interpolate gives them; returns whether both are
+// finite (CEodeEvolve's outputs, tested where they are written).
+bool OutputState(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout);
 
 // ceode_root.cpp (called only while ce->root is set, except the two resets)
 // Checks the roots of g over [tlo, tend], tend inside the dense output's interval: CE_SUCCESS

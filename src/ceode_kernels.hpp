@@ -139,6 +139,21 @@ void CombineSerial(sunindextype n, int m, const sunrealtype* c, const N_Vector* 
                    sunrealtype* out);
 // to = from: memcpy on serial vectors, N_VScale(1, ...) on others; the same values either way.
 void CopyVector(N_Vector from, N_Vector to);
+// CopyVector that also tells whether every value copied is finite: on serial vectors the test
+// rides on the copy (one pass, no call per vector); on others N_VScale, then IsFinite.
+bool CopyFinite(N_Vector from, N_Vector to);
+// xout = x and vout = v (CopyFinite on both, in one call), all four of one length: whether the
+// values copied are finite.
+bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout);
+// Whether every entry is finite, on the data of a serial vector (or any exposing it) without a
+// call per vector; IsFinite (two norms) on the others.
+bool AllFinite(N_Vector v);
+// N_VGetLength without the two calls through the operations table on serial vectors: the
+// output vectors' lengths are checked on every CEodeEvolve call.
+inline sunindextype VectorLength(N_Vector v) {
+  if (v->ops->nvgetlength == N_VGetLength_Serial) return NV_LENGTH_S(v);
+  return N_VGetLength(v);
+}
 // The plan on its raw-pointer form (vectors of length n): one pass over the vectors (entry by
 // entry for small n). Returns the L1 norm of the last combination's output (the new position)
 // for the growth check, summed in four interleaved partial sums, so it may differ from

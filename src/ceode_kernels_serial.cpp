@@ -220,8 +220,9 @@ constexpr int StepTerms(int d, unsigned ones, int s) {
 }
 
 // One entry of sum S of a plan of a known shape: its term count is a constant, so no dispatch.
+// Always inlined: the small kernels are these sums unrolled, and a call each would double them.
 template <int D, unsigned Ones, int S>
-inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
+__attribute__((always_inline)) inline void ShapedSum(const FusedPlan& fp, sunindextype i) {
   const FusedTerms& tk = fp.terms[S];
   StoreSum(tk, i, TermsAt<StepTerms(D, Ones, S)>(tk, i));
 }
@@ -498,6 +499,173 @@ sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
+// ---- Each value read once: the step's update as a hand loop runs it ----
+// UpdatePairs reads every term from memory, so a history vector that several sums weigh (D_{d-1}
+// enters all of them) is loaded once per sum, through a pointer loaded as often. The plans of
+// BuildUpdatePlan read few distinct values, each in a role: a = D_2(t) (0), the history
+// D_j(t - h) (j = 1 .. d-1), x(t) (d), and the results of earlier sums, z(t) (d + 1; a itself
+// for d = 3) and the new D_k(t) (d + 1 + k). UpdateRoles loads each input role once per two
+// entries, keeps the results in registers for the sums after them and stores each output once.
+constexpr int kRoleA = 0;
+constexpr int RoleZ(int d) { return d > 3 ? d + 1 : kRoleA; }
+constexpr int RoleNew(int d, int k) { return k == 2 ? kRoleA : d + 1 + k; }
+constexpr int NumRoles(int d) { return 2 * d; }
+// The derivative level of sum s other than the position's (StepTerms' numbering).
+constexpr int SumLevel(int d, int s) { return d > 3 ? (s == 1 ? 1 : s + 1) : 1; }
+
+// The role of term j of sum s in the shape (d, ones), in BuildUpdatePlan's order: z from a and
+// D_2 .. D_{d-1}; level k from D_{k+1} .. D_{d-1}, z and D_k (the accumulated term); the position
+// from the new D_1 .. D_{d-2}, D_{d-1}(t - h), z and x(t). A weight p_k = 1 drops D_{d-1}.
+constexpr int TermRole(int d, unsigned ones, int s, int j) {
+  if (s == StepSums(d) - 1) {
+    if (j < d - 2) return RoleNew(d, j + 1);
+    int r = j - (d - 2);
+    if ((ones & 1U) == 0) {
+      if (r == 0) return d - 1;
+      --r;
+    }
+    return r == 0 ? RoleZ(d) : d;
+  }
+  if (d > 3 && s == 0) return j == 0 ? kRoleA : j + 1;
+  const int k = SumLevel(d, s);
+  const int hk = d - 1 - k - static_cast<int>((ones >> k) & 1U);
+  if (j < hk) return k + 1 + j;
+  return j == hk ? RoleZ(d) : k;
+}
+// The role sum s writes (the position, the last sum, has none: it is stored and summed only).
+constexpr int OutRole(int d, int s) {
+  return d > 3 && s == 0 ? RoleZ(d) : RoleNew(d, SumLevel(d, s));
+}
+// An input role (a, the history, x(t)) is loaded only when some sum reads it.
+constexpr bool RoleRead(int d, unsigned ones, int r) {
+  for (int s = 0; s < StepSums(d); ++s) {
+    for (int j = 0; j < StepTerms(d, ones, s); ++j) {
+      if (TermRole(d, ones, s, j) == r) return true;
+    }
+  }
+  return false;
+}
+
+// Whether a plan of the shape (d, ones) reads its vectors in these roles, so that loading every
+// input first gives the terms the values the plan's order gives them: each input role one
+// vector, written by no earlier sum (the results of earlier sums are read as their roles), and
+// each result read from the output of the sum that computes it.
+template <int D, unsigned Ones>
+bool RolesMatch(const FusedPlan& fp) {
+  if (fp.compensated || fp.n != StepSums(D)) return false;
+  const sunrealtype* in[NumRoles(D)] = {};
+  const sunrealtype* made[NumRoles(D)] = {};
+  for (int s = 0; s < fp.n; ++s) {
+    const FusedTerms& tk = fp.terms[s];
+    if (tk.m != StepTerms(D, Ones, s) || tk.old != nullptr) return false;
+    for (int j = 0; j < tk.m; ++j) {
+      const int r = TermRole(D, Ones, s, j);
+      const sunrealtype* x = tk.X[j];
+      if (r > D) {
+        if (made[r] != x) return false;
+        continue;
+      }
+      if (in[r] != nullptr && in[r] != x) return false;
+      in[r] = x;
+      for (int e = 0; e < s; ++e) {
+        if (fp.terms[e].out == x) return false;
+      }
+    }
+    if (s + 1 < fp.n) made[OutRole(D, s)] = tk.out;
+  }
+  return true;
+}
+
+// The pointers and weights of a plan in its roles, held where the loop keeps them in registers.
+template <int D, unsigned Ones>
+struct RolePlan {
+  static constexpr int kS = StepSums(D);
+  const sunrealtype* in[NumRoles(D)] = {};
+  __m128d c[kS][kMaxTerms] = {};
+  sunrealtype* out[kS] = {};
+  explicit RolePlan(const FusedPlan& fp) {
+    for (int s = 0; s < kS; ++s) {
+      for (int j = 0; j < StepTerms(D, Ones, s); ++j) {
+        c[s][j] = _mm_set1_pd(fp.terms[s].c[j]);
+        const int r = TermRole(D, Ones, s, j);
+        if (r <= D) in[r] = fp.terms[s].X[j];
+      }
+      out[s] = fp.terms[s].out;
+    }
+  }
+};
+
+// Terms J .. of sum S on the role values v, added to acc in the plan's order.
+template <int D, unsigned Ones, int S, int J>
+inline __m128d RoleTerms(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d acc) {
+  if constexpr (J == StepTerms(D, Ones, S)) {
+    return acc;
+  } else {
+    const __m128d t = _mm_mul_pd(rp.c[S][J], v[TermRole(D, Ones, S, J)]);
+    return RoleTerms<D, Ones, S, J + 1>(rp, v, _mm_add_pd(acc, t));
+  }
+}
+// Sums S .. in order, each result kept as its role; returns the position's.
+template <int D, unsigned Ones, int S>
+inline __m128d RoleSums(const RolePlan<D, Ones>& rp, __m128d* v) {
+  const __m128d first = _mm_mul_pd(rp.c[S][0], v[TermRole(D, Ones, S, 0)]);
+  const __m128d r = RoleTerms<D, Ones, S, 1>(rp, v, first);
+  if constexpr (S + 1 < StepSums(D)) {
+    v[OutRole(D, S)] = r;
+    return RoleSums<D, Ones, S + 1>(rp, v);
+  } else {
+    return r;
+  }
+}
+template <int D, unsigned Ones, int R>
+inline void LoadRoles(const RolePlan<D, Ones>& rp, __m128d* v, sunindextype i) {
+  if constexpr (R <= D) {
+    if constexpr (RoleRead(D, Ones, R)) v[R] = _mm_loadu_pd(rp.in[R] + i);
+    LoadRoles<D, Ones, R + 1>(rp, v, i);
+  }
+}
+template <int D, unsigned Ones, int S>
+inline void StoreRoles(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d x, sunindextype i) {
+  if constexpr (S + 1 < StepSums(D)) {
+    _mm_storeu_pd(rp.out[S] + i, v[OutRole(D, S)]);
+    StoreRoles<D, Ones, S + 1>(rp, v, x, i);
+  } else {
+    _mm_storeu_pd(rp.out[S] + i, x);
+  }
+}
+// Entries i, i + 1 through every sum; returns the new position's.
+template <int D, unsigned Ones>
+inline __m128d RolePair(const RolePlan<D, Ones>& rp, sunindextype i) {
+  __m128d v[NumRoles(D)];
+  LoadRoles<D, Ones, 0>(rp, v, i);
+  const __m128d x = RoleSums<D, Ones, 0>(rp, v);
+  StoreRoles<D, Ones, 0>(rp, v, x, i);
+  return x;
+}
+
+// UpdatePairs (without streaming) on a plan whose roles match: the same operations in the same
+// order on each entry, and the norm's partial sums as UpdatePairs forms them.
+template <int D, unsigned Ones>
+sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
+  const RolePlan<D, Ones> rp(fp);
+  const __m128d sign = _mm_set1_pd(-0.0);
+  __m128d s01 = _mm_setzero_pd();
+  __m128d s23 = _mm_setzero_pd();
+  sunindextype i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i)));
+    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i + 2)));
+  }
+  sunrealtype s[4];
+  _mm_storeu_pd(s, s01);
+  _mm_storeu_pd(s + 2, s23);
+  for (; i < n; ++i) {
+    ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
+    s[0] += std::fabs(rp.out[StepSums(D) - 1][i]);
+  }
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
 template <int D, unsigned Ones>
 sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
   // A position written over its last value stays in cache until written back, as in a hand loop:
@@ -507,20 +675,33 @@ sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
       n >= kStreamSystem && !last.in_place && reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
   return stream ? UpdatePairs<D, Ones, true>(fp, n) : UpdatePairs<D, Ones, false>(fp, n);
 }
+// The kernel of a plan of the shape: the roles' when they match and nothing is to be streamed.
+template <int D, unsigned Ones>
+SerialKernelFn PairKernel(const FusedPlan& fp, sunindextype n) {
+  const FusedTerms& last = fp.terms[StepSums(D) - 1];
+  const bool stream = n >= kStreamSystem && !last.in_place;
+  if (!stream && RolesMatch<D, Ones>(fp)) return &UpdateRoles<D, Ones>;
+  return &UpdatePairsAuto<D, Ones>;
+}
 constexpr bool kHavePairs = true;
 #else
 template <int D, unsigned Ones>
 sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
   return UpdateBlocked(fp, n);
 }
+template <int D, unsigned Ones>
+SerialKernelFn PairKernel(const FusedPlan& /*fp*/, sunindextype /*n*/) {
+  return &UpdatePairsAuto<D, Ones>;
+}
 constexpr bool kHavePairs = false;
 #endif
 
+using PairKernelFn = SerialKernelFn (*)(const FusedPlan&, sunindextype);
 template <std::size_t... I>
-constexpr std::array<SerialKernelFn, kNumShapes> PairTable(std::index_sequence<I...> /*shapes*/) {
-  return {&UpdatePairsAuto<kShapes[I].d, kShapes[I].ones>...};
+constexpr std::array<PairKernelFn, kNumShapes> PairTable(std::index_sequence<I...> /*shapes*/) {
+  return {&PairKernel<kShapes[I].d, kShapes[I].ones>...};
 }
-constexpr std::array<SerialKernelFn, kNumShapes> kPairs =
+constexpr std::array<PairKernelFn, kNumShapes> kPairs =
     PairTable(std::make_index_sequence<kNumShapes>{});
 
 // Systems smaller than this take the entry-by-entry kernel.
@@ -536,7 +717,7 @@ sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
   if (fp.compensated) return &UpdateCompensated;
   if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
-  if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1];
+  if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1](fp, n);
   if (n == 1) return &UpdateOne;
   return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
 }
@@ -677,6 +858,121 @@ void CopyVector(N_Vector from, N_Vector to) {
     }
   }
   N_VScale(1, from, to);
+}
+
+namespace {
+
+// Whether x[0 .. n) are all finite. A NaN or an infinity makes their sum NaN or infinite, so a
+// finite sum (four additions per eight entries) answers for all; only a sum that is not (a value
+// that is not, or finite values overflowing together) looks at the entries one by one.
+bool FiniteData(const sunrealtype* x, sunindextype n) {
+  sunindextype i = 0;
+  sunrealtype sum = 0;
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+  __m128d a = _mm_setzero_pd();
+  __m128d b = _mm_setzero_pd();
+  __m128d c = _mm_setzero_pd();
+  __m128d e = _mm_setzero_pd();
+  for (; i + 8 <= n; i += 8) {
+    a = _mm_add_pd(a, _mm_loadu_pd(x + i));
+    b = _mm_add_pd(b, _mm_loadu_pd(x + i + 2));
+    c = _mm_add_pd(c, _mm_loadu_pd(x + i + 4));
+    e = _mm_add_pd(e, _mm_loadu_pd(x + i + 6));
+  }
+  sunrealtype lanes[2];
+  _mm_storeu_pd(lanes, _mm_add_pd(_mm_add_pd(a, b), _mm_add_pd(c, e)));
+  sum = lanes[0] + lanes[1];
+#endif
+  for (; i < n; ++i) sum += x[i];
+  if (std::isfinite(sum)) return true;
+  for (i = 0; i < n; ++i) {
+    if (!std::isfinite(x[i])) return false;
+  }
+  return true;
+}
+
+// to[0 .. n) = from[0 .. n) (to == from: only the test); returns whether all are finite. The
+// copy and FiniteData's sum in one loop: memcpy would be a second pass, and from a few pages on it
+// is a string instruction repeated per byte.
+bool CopyFiniteData(const sunrealtype* from, sunrealtype* to, sunindextype n) {
+  if (to == from) return FiniteData(from, n);
+  sunindextype i = 0;
+  sunrealtype sum = 0;
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+  __m128d a = _mm_setzero_pd();
+  __m128d b = _mm_setzero_pd();
+  __m128d c = _mm_setzero_pd();
+  __m128d e = _mm_setzero_pd();
+  for (; i + 8 <= n; i += 8) {
+    const __m128d x0 = _mm_loadu_pd(from + i);
+    const __m128d x1 = _mm_loadu_pd(from + i + 2);
+    const __m128d x2 = _mm_loadu_pd(from + i + 4);
+    const __m128d x3 = _mm_loadu_pd(from + i + 6);
+    _mm_storeu_pd(to + i, x0);
+    _mm_storeu_pd(to + i + 2, x1);
+    _mm_storeu_pd(to + i + 4, x2);
+    _mm_storeu_pd(to + i + 6, x3);
+    a = _mm_add_pd(a, x0);
+    b = _mm_add_pd(b, x1);
+    c = _mm_add_pd(c, x2);
+    e = _mm_add_pd(e, x3);
+  }
+  sunrealtype lanes[2];
+  _mm_storeu_pd(lanes, _mm_add_pd(_mm_add_pd(a, b), _mm_add_pd(c, e)));
+  sum = lanes[0] + lanes[1];
+#endif
+  for (; i < n; ++i) {
+    to[i] = from[i];
+    sum += from[i];
+  }
+  return std::isfinite(sum) || FiniteData(from, n);
+}
+
+// The data and length of a serial vector, or nullptr for the other kinds.
+inline sunrealtype* SerialOnly(N_Vector v) {
+  return v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial ? NV_DATA_S(v) : nullptr;
+}
+
+}  // namespace
+
+bool CopyFinite(N_Vector from, N_Vector to) {
+  const sunrealtype* src = SerialOnly(from);
+  sunrealtype* dst = SerialOnly(to);
+  if (src != nullptr && dst != nullptr && NV_LENGTH_S(from) == NV_LENGTH_S(to)) {
+    return CopyFiniteData(src, dst, NV_LENGTH_S(from));
+  }
+  N_VScale(1, from, to);
+  return IsFinite(to);
+}
+
+namespace {
+
+__attribute__((noinline)) bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout,
+                                                 N_Vector vout, bool serial) {
+  if (!serial) return CopyFinite(x, xout) & CopyFinite(v, vout);
+  const sunindextype n = NV_LENGTH_S(x);
+  return CopyFiniteData(NV_DATA_S(x), NV_DATA_S(xout), n) &
+         CopyFiniteData(NV_DATA_S(v), NV_DATA_S(vout), n);
+}
+
+}  // namespace
+
+bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout) {
+  const auto get = N_VGetArrayPointer_Serial;
+  const bool serial = x->ops->nvgetarraypointer == get && v->ops->nvgetarraypointer == get &&
+                      xout->ops->nvgetarraypointer == get && vout->ops->nvgetarraypointer == get;
+  if (!serial || NV_LENGTH_S(x) != 1) return CopyPairFiniteAny(x, v, xout, vout, serial);
+  // One unknown (a call of CE_ONE_STEP on a small problem): no loop set-up.
+  const sunrealtype a = NV_DATA_S(x)[0];
+  const sunrealtype b = NV_DATA_S(v)[0];
+  NV_DATA_S(xout)[0] = a;
+  NV_DATA_S(vout)[0] = b;
+  return std::isfinite(a) && std::isfinite(b);
+}
+
+bool AllFinite(N_Vector v) {
+  const sunrealtype* data = SerialOnly(v);
+  return data != nullptr ? FiniteData(data, NV_LENGTH_S(v)) : IsFinite(v);
 }
 
 void PreparePlan(bool serial_allowed, KernelPlan* kp) {

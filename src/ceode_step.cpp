@@ -357,20 +357,57 @@ int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, lon
   return flag;
 }
 
+// TakeStep on the lean loop's configuration, one step: f called directly and the update's
+// kernel run directly (no solve or backend to dispatch), out of place, as the lean loop's last
+// step. What CE_ONE_STEP and outputs a few steps apart take.
+template <bool kMpi>
+int LeanOneStep(CEodeMemRec* ce) {
+  static const char* func = "CEodeEvolve";
+  StepMem* sm = ce->step.get();
+  const sunrealtype t = StepTime(ce, 1);
+  const int rv = CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
+  ++ce->nfe;
+  if (rv != 0) return RhsFailed(ce, rv, t, func);
+  const int ip = sm->plan_ix;
+  UpdateResult r = {CE_SUCCESS, sm->kernels[ip](sm->fused_plans[ip], sm->len)};
+  if constexpr (kMpi) r = GlobalL1(ce->xnext, r.xl1);
+  if (!std::isfinite(r.xl1) || Exploded(r.xl1, GrowthBound(ce))) {
+    const int flag = CheckState(ce, t, r, func);
+    if (flag != CE_SUCCESS) return flag;
+  }
+  Commit(ce, sm, t);
+  if (ce->guard.every > 0 && ce->nst % ce->guard.every == 0) return GuardCheck(ce, func);
+  return CE_SUCCESS;
+}
+
 // StepMem::steps with the lean loop: it runs unless only a few steps remain (CE_ONE_STEP calls
-// decide on the distance alone).
+// decide on the distance alone); those are taken here one by one, as StepTo would ask for them.
 template <bool kMpi>
 int LeanOrOneStep(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
   if (target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps) {
     return LeanExplicitSteps<kMpi>(ce, ce->step.get(), target, max_steps, taken);
   }
-  return OneStep(ce, target, max_steps, taken);
+  long int k = 0;
+  int flag = CE_SUCCESS;
+  do {
+    flag = LeanOneStep<kMpi>(ce);
+    k += flag == CE_SUCCESS ? 1 : 0;
+  } while (flag == CE_SUCCESS && k < max_steps && StepsRemain(ce, target));
+  *taken = k;
+  return flag;
 }
 
 }  // namespace
 
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
   return ce->step->steps(ce, target, max_steps, taken);
+}
+
+bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
+  const StepMem* sm = ce->step.get();
+  if (sm == nullptr || sm->one == nullptr) return false;
+  *flag = sm->one(ce);
+  return true;
 }
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
@@ -401,6 +438,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   const bool lean = (serial || mpi) && sm->solve_kind == SolveKind::kExplicit &&
                     ce->ls.mfn == nullptr && ce->ls.M == nullptr;
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
+  sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
 }
 
 }  // namespace ceode

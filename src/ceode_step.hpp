@@ -31,9 +31,10 @@ struct StepMem {
   // The step, chosen once (ChooseStep)
   SolveKind implicit = SolveKind::kNewton;  // ceode_pc.cpp's choice for a velocity dependence
   SolveKind solve_kind = SolveKind::kExplicit;
-  SolveFn solve = nullptr;    // the acceleration at t (TakeStep)
-  UpdateFn update = nullptr;  // the derivatives and x(t + h) after the solve (TakeStep)
-  StepsFn steps = nullptr;    // TakeSteps: the lean loop or one TakeStep
+  SolveFn solve = nullptr;                // the acceleration at t (TakeStep)
+  UpdateFn update = nullptr;              // the derivatives and x(t + h) after the solve (TakeStep)
+  StepsFn steps = nullptr;                // TakeSteps: the lean loop or one TakeStep
+  int (*one)(CEodeMemRec* ce) = nullptr;  // TakeDirectStep: TakeStep of the lean configuration
 
   // The update plans (ceode_step_plans.cpp)
   bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place

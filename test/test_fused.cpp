@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <initializer_list>
 #include <limits>
 #include <string>
@@ -488,6 +489,50 @@ TEST_P(FusedKernelAgainstReference, RawCombinationAndCopyGiveBitwiseTheReference
   ceode::CopyVector(pool_[0], pool_[10]);
   EXPECT_TRUE(std::equal(N_VGetArrayPointer(pool_[0]), N_VGetArrayPointer(pool_[0]) + n,
                          N_VGetArrayPointer(pool_[10])));
+}
+
+// CEodeEvolve's outputs are copied and tested in one pass (CopyPairFinite): the copies equal the
+// sources bit for bit, and the answer is false exactly when a copied value is NaN or +-Inf, at
+// the first, the last or the middle entry (the pair loop, its tail and n = 1's own path), and the
+// same on serial vectors as through the N_Vector fallback (a vector of another kind).
+TEST_P(FusedKernelAgainstReference, OutputCopyTellsEveryNonFiniteValueAndCopiesBitwise) {
+  const sunindextype n = GetParam().n;
+  Fill();
+  N_Vector x = pool_[0], v = pool_[1], xout = pool_[10], vout = pool_[11];
+  EXPECT_TRUE(ceode::CopyPairFinite(x, v, xout, vout));
+  EXPECT_TRUE(
+      std::equal(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + n, N_VGetArrayPointer(xout)));
+  EXPECT_TRUE(
+      std::equal(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + n, N_VGetArrayPointer(vout)));
+  // A vector that is not NVECTOR_SERIAL takes the fallback: a serial vector with other operations.
+  N_Vector other = N_VClone(x);
+  other->ops->nvgetarraypointer = nullptr;
+  N_VScale(1, x, other);
+  for (const sunrealtype bad : {SUN_RCONST(NAN), SUN_RCONST(INFINITY), -SUN_RCONST(INFINITY)}) {
+    for (const sunindextype at : {sunindextype{0}, n / 2, n - 1}) {
+      for (N_Vector target : {x, v}) {
+        sunrealtype& entry = N_VGetArrayPointer(target)[at];
+        const sunrealtype kept = entry;
+        entry = bad;
+        EXPECT_FALSE(ceode::CopyPairFinite(x, v, xout, vout)) << bad << " at " << at;
+        EXPECT_EQ(
+            std::memcmp(N_VGetArrayPointer(target), N_VGetArrayPointer(target == x ? xout : vout),
+                        sizeof(sunrealtype) * n),
+            0);
+        EXPECT_FALSE(ceode::AllFinite(target));
+        entry = kept;
+      }
+      N_VScale(1, x, other);
+      NV_DATA_S(other)[at] = bad;  // its array accessor is gone: the content directly
+      EXPECT_FALSE(ceode::CopyPairFinite(other, v, xout, vout)) << "fallback, " << bad;
+    }
+  }
+  Fill();
+  N_VScale(1, x, other);
+  EXPECT_TRUE(ceode::CopyPairFinite(other, v, xout, vout));
+  EXPECT_TRUE(
+      std::equal(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + n, N_VGetArrayPointer(xout)));
+  N_VDestroy(other);
 }
 
 std::vector<KernelCase> Cases() {

@@ -4,12 +4,15 @@
 //
 // Problem: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n, x(0) = 1, v(0) = 0, h = 1e-3
 // (far inside every stability limit). Methods G3_CD and G4_A34 at n = 1, 10^4, 3*10^4, 10^5,
-// 3*10^5, 10^6 and G8_O8 at n = 1 (the high-order pendulum is n = 1). Variants (one benchmark
+// 3*10^5, 10^6 and G8_O8 at n = 1, 10^3, 10^4 (G6_O5 for --count). Variants (one benchmark
 // iteration = K steps; the time shown is per iteration, the ratios table is per step):
 //   ceode       CEodeEvolve(tout K steps ahead, CE_NORMAL): no output copy per step;
 //   ceode_1step CEodeEvolve(CE_ONE_STEP) K times: two output copies per step (the API's);
+//   ceode_freq  CEodeEvolve(CE_NORMAL) with an output every 4 steps on the step grid;
 //   hand_fpass  the hand loop calling f as its own pass over the vectors (as CEODE does);
-//   hand_fused  the hand loop with f fused into the update (one pass, the practical limit).
+//   hand_fused  the hand loop with f fused into the update (one pass, the practical limit);
+//   hand_d8     G8_O8 only: the degree-8 step written out by hand in the arithmetic of CEODE's
+//               update plan, f as its own pass (CheckHandDegree8 compares it with CEODE).
 // Both hand loops carry the method's history D_1..D_{d-1} and x(t) as CEODE does, update them
 // in place and swap the acceleration buffer instead of copying it; f is the same function
 // (SpringAccel) everywhere, called through CEODE's N_Vector interface by CEODE.
@@ -20,6 +23,9 @@
 //                                               VARIANT also ceode_generic: the N_Vector
 //                                               reference update, to count its passes;
 //                                               ceode_two_buffers: CEodeSetInPlaceUpdate off;
+//                                               ceode_freq_mid: as ceode_freq, half a step
+//                                               past the grid (dense output every return);
+//                                               f_only: f alone, STEPS calls;
 //                                               ceode_adaptive: tolerances 1e-8 instead of
 //                                               the fixed step, prints the steps taken;
 //                                               instructions per step = difference of two
@@ -216,6 +222,71 @@ HandFn HandStepFn(int degree, bool fused) {
   }
 }
 
+// ---- the hand degree-8 loop -------------------------------------------------------------------
+// The G8_O8 step written out by hand in the arithmetic of CEODE's update plan (docs/theory.md
+// section 2.2, src/ceode_method.cpp BuildUpdatePlan): z(t) = (a - B_2) / c_2 as one sum with the
+// weights 1/c_2 and -T[2][j]/c_2, each lower derivative D_k(t) = sum_j T[k][j] D_j(t - h) + c_k z
+// + D_k(t - h) (the old value added last), and x(t + h) = sum_i w_i D_i(t) + wz_old z(t - h) +
+// wz_new z + x(t). f is its own pass (hand_fpass); every history vector is updated in place, z
+// over D_7 (its old value read first) and a swapped in as D_2. The same products and sums in the
+// same order as CEODE's step, so CheckHandDegree8 expects CEODE's numbers to round-off.
+struct D8Weights {
+  double z[7];     // a, D_2 .. D_7
+  double l[7][8];  // level k: D_{k+1} .. D_7, then z (k = 1, 3 .. 6)
+  double x[8];     // D_1 .. D_6 (new), z(t - h), z
+};
+
+D8Weights MakeD8Weights(const Coeffs& co) {
+  D8Weights w{};
+  const double c2 = co.c[2];
+  w.z[0] = 1 / c2;
+  for (int j = 2; j < 8; ++j) w.z[j - 1] = -co.T[2][j] / c2;
+  for (int k : {1, 3, 4, 5, 6}) {
+    int m = 0;
+    for (int j = k + 1; j < 8; ++j) w.l[k][m++] = co.T[k][j];
+    w.l[k][m] = co.c[k];
+  }
+  for (int i = 1; i <= 6; ++i) w.x[i - 1] = co.w[i];
+  w.x[6] = co.wz_old;
+  w.x[7] = co.wz_new;
+  return w;
+}
+
+__attribute__((noinline)) void HandD8Update(const D8Weights& w, const double* __restrict a,
+                                            double* __restrict d1, const double* __restrict d2,
+                                            double* __restrict d3, double* __restrict d4,
+                                            double* __restrict d5, double* __restrict d6,
+                                            double* __restrict d7, double* __restrict x, long n) {
+  for (long i = 0; i < n; ++i) {
+    const double o2 = d2[i], o3 = d3[i], o4 = d4[i], o5 = d5[i], o6 = d6[i], o7 = d7[i];
+    const double z = w.z[0] * a[i] + w.z[1] * o2 + w.z[2] * o3 + w.z[3] * o4 + w.z[4] * o5 +
+                     w.z[5] * o6 + w.z[6] * o7;
+    const double n1 = w.l[1][0] * o2 + w.l[1][1] * o3 + w.l[1][2] * o4 + w.l[1][3] * o5 +
+                      w.l[1][4] * o6 + w.l[1][5] * o7 + w.l[1][6] * z + d1[i];
+    const double n3 =
+        w.l[3][0] * o4 + w.l[3][1] * o5 + w.l[3][2] * o6 + w.l[3][3] * o7 + w.l[3][4] * z + o3;
+    const double n4 = w.l[4][0] * o5 + w.l[4][1] * o6 + w.l[4][2] * o7 + w.l[4][3] * z + o4;
+    const double n5 = w.l[5][0] * o6 + w.l[5][1] * o7 + w.l[5][2] * z + o5;
+    const double n6 = w.l[6][0] * o7 + w.l[6][1] * z + o6;
+    x[i] = w.x[0] * n1 + w.x[1] * a[i] + w.x[2] * n3 + w.x[3] * n4 + w.x[4] * n5 + w.x[5] * n6 +
+           w.x[6] * o7 + w.x[7] * z + x[i];
+    d1[i] = n1;
+    d3[i] = n3;
+    d4[i] = n4;
+    d5[i] = n5;
+    d6[i] = n6;
+    d7[i] = z;
+  }
+}
+
+void HandStepD8(const D8Weights& w, HandState* s, long n) {
+  SpringAccel(s->k.data(), s->x.data(), s->an.data(), n);
+  double* const* D = s->Dp;
+  HandD8Update(w, s->an.data(), D[1], D[2], D[3], D[4], D[5], D[6], D[7], s->x.data(), n);
+  s->D[2].swap(s->an);
+  s->Dp[2] = s->D[2].data();
+}
+
 // ---- CEODE ----------------------------------------------------------------------------------
 // The update's test-only toggles (the fused one-pass kernel, in-place plans): the one place they
 // are set. Defaults: both on.
@@ -264,27 +335,52 @@ struct CeodeRun {
   CeodeRun& operator=(const CeodeRun&) = delete;
 
   // K steps; x and v hold the state at the end.
-  bool Steps(long K, bool one_step) {
-    if (!one_step) {
+  bool Steps(long K, bool one_step) { return Drive(K, one_step ? kOneStep : kToEnd); }
+
+  // How the K steps are asked for: one CE_NORMAL call to the end, one CE_ONE_STEP call per step,
+  // or CE_NORMAL outputs every kOutputEvery steps on the step grid (copies of the method's values)
+  // or half a step past it (dense output at every return).
+  enum Mode { kToEnd, kOneStep, kFrequent, kFrequentMid };
+  static constexpr long kOutputEvery = 4;
+  bool Drive(long K, Mode mode) {
+    if (mode == kToEnd) {
       return CEodeEvolve(mem, t + static_cast<double>(K) * kStep, x, v, &t, CE_NORMAL) >= 0;
     }
-    for (long s = 0; s < K; ++s) {
-      if (CEodeEvolve(mem, t + 1.0, x, v, &t, CE_ONE_STEP) < 0) return false;
+    if (mode == kOneStep) {
+      for (long s = 0; s < K; ++s) {
+        if (CEodeEvolve(mem, t + 1.0, x, v, &t, CE_ONE_STEP) < 0) return false;
+      }
+      return true;
+    }
+    const double off = mode == kFrequentMid ? 0.5 : 0.0;
+    for (long s = 0; s < K; s += kOutputEvery) {
+      grid += kOutputEvery;
+      const double tout = (static_cast<double>(grid) + off) * kStep;
+      if (CEodeEvolve(mem, tout, x, v, &t, CE_NORMAL) < 0) return false;
     }
     return true;
   }
+  long grid = 0;  // the step-grid index of the last frequent output
 };
 
-enum Variant { kCeode, kCeodeOneStep, kHandFpass, kHandFused, kNumVariants };
-const char* const kVariantNames[kNumVariants] = {"ceode", "ceode_1step", "hand_fpass",
-                                                 "hand_fused"};
+enum Variant {
+  kCeode,
+  kCeodeOneStep,
+  kCeodeFrequent,
+  kHandFpass,
+  kHandFused,
+  kHandD8,
+  kNumVariants
+};
+const char* const kVariantNames[kNumVariants] = {"ceode",      "ceode_1step", "ceode_freq",
+                                                 "hand_fpass", "hand_fused",  "hand_d8"};
 
 // Steps per benchmark iteration: 1000 on small systems, 100 from n = 10^4 on, so that `ceode`
 // is a tout many steps away at every n (its two output copies at tout then cost <= 2 % of a
 // step's vector traffic; with one step per iteration they were half the time at n = 10^6).
 long StepsPerIteration(long n) { return n < 10000 ? 1000 : 100; }
 
-void BM_Ceode(benchmark::State& state, const Method* m, long n, bool one_step) {
+void BM_Ceode(benchmark::State& state, const Method* m, long n, CeodeRun::Mode mode) {
   CeodeRun run(*m, n);
   if (!run.ok) {
     state.SkipWithError("CEODE setup failed");
@@ -294,12 +390,12 @@ void BM_Ceode(benchmark::State& state, const Method* m, long n, bool one_step) {
   // One untimed iteration first (as for the hand loop): the first steps write buffers that the
   // start allocated but never touched, and their page faults are a one-time cost of the run, not
   // of a step (at n = 10^6 they were a third of a 100-step iteration).
-  if (!run.Steps(K, one_step)) {
+  if (!run.Drive(K, mode)) {
     state.SkipWithError("CEodeEvolve failed");
     return;
   }
   for (auto _ : state) {
-    if (!run.Steps(K, one_step)) {
+    if (!run.Drive(K, mode)) {
       state.SkipWithError("CEodeEvolve failed");
       break;
     }
@@ -316,6 +412,19 @@ void BM_Hand(benchmark::State& state, const Method* m, long n, bool fused) {
   for (long j = 0; j < K; ++j) step(co, &s, n);  // untimed, as BM_Ceode's
   for (auto _ : state) {
     for (long j = 0; j < K; ++j) step(co, &s, n);
+    benchmark::DoNotOptimize(s.x.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["steps"] = static_cast<double>(K);
+}
+
+void BM_HandD8(benchmark::State& state, const Method* m, long n) {
+  const D8Weights w = MakeD8Weights(MakeCoeffs(*m, kStep));
+  HandState s = MakeHand(*m, n);
+  const long K = StepsPerIteration(n);
+  for (long j = 0; j < K; ++j) HandStepD8(w, &s, n);  // untimed, as BM_Ceode's
+  for (auto _ : state) {
+    for (long j = 0; j < K; ++j) HandStepD8(w, &s, n);
     benchmark::DoNotOptimize(s.x.data());
     benchmark::ClobberMemory();
   }
@@ -354,6 +463,44 @@ bool CheckVariants(const Method& m, long n) {
   return ok;
 }
 
+// The hand degree-8 loop from CEODE's own start (its history at t = 0 and its x(h), read through
+// CEodeGetDky) against CEODE over 2000 steps: the same update, so the same numbers to round-off.
+// x(h) comes from the dense output (x(t0) + (x(t0 + h) - x(t0)), one rounding), so the two runs
+// differ from the first step by at most that rounding as propagated by a stable method.
+bool CheckHandDegree8(long n) {
+  constexpr long kSteps = 2000;
+  const Method& m = *FindMethod("G8_O8");
+  CeodeRun run(m, n);
+  HandState s = MakeHand(m, n);
+  N_Vector tmp = run.ok ? N_VClone(run.x) : nullptr;
+  bool ok = tmp != nullptr;
+  const auto read = [&](double t, int k, double* to) {  // CEODE's D_k(t) into the hand state
+    ok = ok && CEodeGetDky(run.mem, t, k, tmp) == CE_SUCCESS;
+    if (ok) std::copy(N_VGetArrayPointer(tmp), N_VGetArrayPointer(tmp) + n, to);
+  };
+  for (int k = 1; k < m.degree; ++k) read(0.0, k, s.Dp[k]);
+  read(kStep, 0, s.x.data());
+  if (tmp != nullptr) N_VDestroy(tmp);
+  ok = ok && run.Steps(kSteps, false);
+  const D8Weights w = MakeD8Weights(MakeCoeffs(m, kStep));
+  for (long j = 0; j + 1 < kSteps; ++j) HandStepD8(w, &s, n);  // x(t + h) = CEODE's x at kSteps
+  double dx = 0, dv = 0, xmax = 0, vmax = 0;
+  const double* cx = N_VGetArrayPointer(run.x);
+  for (long i = 0; ok && i < n; ++i) dx = std::max(dx, std::fabs(s.x[i] - cx[i]));
+  HandStepD8(w, &s, n);  // D_1 at kSteps, CEODE's v
+  const double* cv = N_VGetArrayPointer(run.v);
+  for (long i = 0; ok && i < n; ++i) {
+    dv = std::max(dv, std::fabs(s.D[1][i] - cv[i]));
+    xmax = std::max(xmax, std::fabs(cx[i]));
+    vmax = std::max(vmax, std::fabs(cv[i]));
+  }
+  // Round-off: 2000 steps of a few roundings each on values of order 1.
+  const bool pass = ok && dx <= 1e-12 * (1 + xmax) && dv <= 1e-12 * (1 + vmax);
+  std::printf("check G8_O8  n = %-7ld hand_d8 against ceode: max |dx| %.3e  max |dv| %.3e %s\n", n,
+              dx, dv, pass ? "ok" : "FAILED");
+  return pass;
+}
+
 // ---- the ratios --------------------------------------------------------------------------------
 // Collects the CPU time per step of each benchmark (the median when repeated) while the console
 // reporter prints as usual; Summarise prints CEODE / hand loop.
@@ -371,18 +518,22 @@ class RatioReporter : public benchmark::ConsoleReporter {
     }
   }
   void Summarise(const std::vector<std::pair<const Method*, long>>& cases) const {
-    std::printf("\nPer-step CPU time (median) and ratios to the hand loops\n");
-    std::printf("%-7s %8s %12s %12s %12s %12s %9s %9s %9s\n", "method", "n", "ceode", "ceode_1step",
-                "hand_fpass", "hand_fused", "c/fpass", "c/fused", "1s/fpass");
+    std::printf(
+        "\nPer-step CPU time (median, ns) and ratios to the hand loop with f as its pass\n");
+    std::printf("%-7s %8s %10s %10s %10s %10s %10s %10s %8s %8s %8s %8s\n", "method", "n", "ceode",
+                "1step", "freq", "hand_fpass", "hand_fused", "hand_d8", "c/fpass", "1s/fpass",
+                "fr/fpass", "c/d8");
     for (const auto& c : cases) {
       double tv[kNumVariants];
       for (int v = 0; v < kNumVariants; ++v) {
         const auto it = per_step_.find(Name(v, *c.first, c.second));
         tv[v] = it == per_step_.end() ? NAN : it->second;
       }
-      std::printf("%-7s %8ld %9.4g %-2s %9.4g %-2s %9.4g %-2s %9.4g %-2s %9.3f %9.3f %9.3f\n",
-                  c.first->name, c.second, tv[0], "ns", tv[1], "ns", tv[2], "ns", tv[3], "ns",
-                  tv[0] / tv[2], tv[0] / tv[3], tv[1] / tv[2]);
+      std::printf("%-7s %8ld %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g %8.3f %8.3f %8.3f %8.3f\n",
+                  c.first->name, c.second, tv[kCeode], tv[kCeodeOneStep], tv[kCeodeFrequent],
+                  tv[kHandFpass], tv[kHandFused], tv[kHandD8], tv[kCeode] / tv[kHandFpass],
+                  tv[kCeodeOneStep] / tv[kHandFpass], tv[kCeodeFrequent] / tv[kHandFpass],
+                  tv[kCeode] / tv[kHandD8]);
     }
   }
   static std::string Name(int variant, const Method& m, long n) {
@@ -393,7 +544,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
   std::map<std::string, double> per_step_;
 };
 
-// The cases: G3_CD and G4_A34 at every n, G8_O8 at n = 1.
+// The cases: G3_CD and G4_A34 at every n, G8_O8 at n = 1, 10^3 and 10^4.
 std::vector<std::pair<const Method*, long>> Cases(bool quick) {
   std::vector<std::pair<const Method*, long>> out;
   for (const char* name : {"G3_CD", "G4_A34"}) {
@@ -401,7 +552,7 @@ std::vector<std::pair<const Method*, long>> Cases(bool quick) {
       if (!quick || n <= 10000) out.emplace_back(FindMethod(name), n);
     }
   }
-  out.emplace_back(FindMethod("G8_O8"), 1L);
+  for (long n : {1L, 1000L, 10000L}) out.emplace_back(FindMethod("G8_O8"), n);
   return out;
 }
 
@@ -416,11 +567,14 @@ int CountMode(int argc, char** argv) {
   const long n = std::atol(argv[4]);
   const long steps = std::atol(argv[5]);
   if (m == nullptr || n < 1 || steps < 0) return 2;
-  if (variant == "ceode" || variant == "ceode_1step" || variant == "ceode_generic" ||
-      variant == "ceode_two_buffers" || variant == "ceode_adaptive") {
+  if (variant.rfind("ceode", 0) == 0) {
     CeodeRun run(*m, n, variant == "ceode_generic", variant == "ceode_two_buffers",
                  variant == "ceode_adaptive");
-    const bool ok = run.ok && run.Steps(steps, variant == "ceode_1step");
+    const CeodeRun::Mode mode = variant == "ceode_1step"      ? CeodeRun::kOneStep
+                                : variant == "ceode_freq"     ? CeodeRun::kFrequent
+                                : variant == "ceode_freq_mid" ? CeodeRun::kFrequentMid
+                                                              : CeodeRun::kToEnd;
+    const bool ok = run.ok && run.Drive(steps, mode);
     long nst = 0;
     CEodeGetNumSteps(run.mem, &nst);
     if (variant == "ceode_adaptive") std::printf("steps %ld\n", nst);
@@ -428,6 +582,18 @@ int CountMode(int argc, char** argv) {
   }
   const Coeffs co = MakeCoeffs(*m, kStep);
   HandState s = MakeHand(*m, n);
+  if (variant == "f_only") {  // f alone, STEPS calls: what the other variants' counts include
+    for (long j = 0; j < steps; ++j) SpringAccel(s.k.data(), s.x.data(), s.an.data(), n);
+    benchmark::DoNotOptimize(s.an.data());
+    return 0;
+  }
+  if (variant == "hand_d8") {
+    if (m->degree != 8) return 2;
+    const D8Weights w = MakeD8Weights(co);
+    for (long j = 0; j < steps; ++j) HandStepD8(w, &s, n);
+    benchmark::DoNotOptimize(s.x.data());
+    return 0;
+  }
   const HandFn step = HandStepFn(m->degree, variant == "hand_fused");
   for (long j = 0; j < steps; ++j) step(co, &s, n);
   benchmark::DoNotOptimize(s.x.data());
@@ -453,15 +619,19 @@ int main(int argc, char** argv) {
   for (const char* name : {"G3_CD", "G4_A34", "G8_O8"}) {
     for (long n : {1L, 1000L}) ok = CheckVariants(*FindMethod(name), n) && ok;
   }
+  for (long n : {1L, 1000L}) ok = CheckHandDegree8(n) && ok;
   if (!ok) return 1;
   const auto cases = Cases(quick);
+  constexpr CeodeRun::Mode kModes[] = {CeodeRun::kToEnd, CeodeRun::kOneStep, CeodeRun::kFrequent};
   for (const auto& c : cases) {
     const Method* m = c.first;
     const long n = c.second;
     for (int v = 0; v < kNumVariants; ++v) {
       const std::string name = RatioReporter::Name(v, *m, n);
-      if (v == kCeode || v == kCeodeOneStep) {
-        benchmark::RegisterBenchmark(name.c_str(), BM_Ceode, m, n, v == kCeodeOneStep);
+      if (v == kCeode || v == kCeodeOneStep || v == kCeodeFrequent) {
+        benchmark::RegisterBenchmark(name.c_str(), BM_Ceode, m, n, kModes[v]);
+      } else if (v == kHandD8) {
+        if (m->degree == 8) benchmark::RegisterBenchmark(name.c_str(), BM_HandD8, m, n);
       } else {
         benchmark::RegisterBenchmark(name.c_str(), BM_Hand, m, n, v == kHandFused);
       }

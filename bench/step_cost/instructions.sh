@@ -2,7 +2,8 @@
 # Instruction counts of the bench programs under callgrind (not timings): each figure is the
 # difference of two runs of a program's --count mode, so that start-up and set-up cancel.
 #
-#   bench/step_cost/instructions.sh step BUILD_DIR [METHOD N]...        bench_step: per step of each variant
+#   bench/step_cost/instructions.sh step BUILD_DIR [METHOD N]...        bench_step: per step of each variant,
+#                                                                        all and beyond f
 #   bench/step_cost/instructions.sh passes BUILD_DIR METHOD             bench_step: N_Vector data passes per step
 #   bench/step_cost/instructions.sh adaptive BUILD_DIR [METHOD N]...    bench_step: per accepted adaptive step
 #                                                                       against the fixed step
@@ -31,14 +32,19 @@ count() {
 per() { awk -v a="$1" -v b="$2" -v s="$3" 'BEGIN {printf "%.6e", (b - a) / s}'; }
 
 case $mode in
-step)  # instructions per step of each bench_step variant: S1 and S2 steps after the same set-up
+step)  # instructions per step of each bench_step variant: S1 and S2 steps after the same set-up,
+       # and beyond f: less f_only's (the benchmark's f alone, called as often)
   while [ $# -ge 2 ]; do
     m=$1 n=$2
     shift 2
-    if [ "$n" -ge 100000 ]; then s1=2 s2=12; elif [ "$n" -ge 1000 ]; then s1=20 s2=120; else s1=1000 s2=11000; fi
-    for v in ceode ceode_1step hand_fpass hand_fused; do
-      printf '%-7s n=%-8s %-12s %12.1f instructions/step\n' "$m" "$n" "$v" \
-        "$(per "$(count bench_step $v "$m" "$n" $s1)" "$(count bench_step $v "$m" "$n" $s2)" $((s2 - s1)))"
+    if [ "$n" -ge 100000 ]; then s1=4 s2=12; elif [ "$n" -ge 1000 ]; then s1=20 s2=120; else s1=1000 s2=11000; fi
+    f=$(per "$(count bench_step f_only "$m" "$n" $s1)" "$(count bench_step f_only "$m" "$n" $s2)" $((s2 - s1)))
+    vs="ceode ceode_1step ceode_freq ceode_freq_mid hand_fpass hand_fused"
+    [ "$m" = G8_O8 ] && vs="$vs hand_d8"
+    for v in $vs; do
+      i=$(per "$(count bench_step $v "$m" "$n" $s1)" "$(count bench_step $v "$m" "$n" $s2)" $((s2 - s1)))
+      awk -v m="$m" -v n="$n" -v v="$v" -v i="$i" -v f="$f" \
+        'BEGIN {printf "%-7s n=%-8s %-15s %12.1f instructions/step %12.1f beyond f\n", m, n, v, i, i - f}'
     done
   done ;;
 adaptive)  # instructions per accepted step with tolerances 1e-8 (ceode_adaptive), and per fixed step
