@@ -3,10 +3,9 @@
 // here name the cause.
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
+#include <pybind11/stl.h>
 
 #include <string>
-
-#include <pybind11/stl.h>
 
 #include "ceode_py.hpp"
 
