@@ -88,7 +88,7 @@ class LinearStructure {
 
  private:
   sunindextype n_ = 0;
-  std::vector<sunrealtype> mass_;
+  std::vector<sunrealtype> mass_, inv_mass_;
   Csr sparse_mass_, K_, C_;
   py::object force_;
 };

@@ -100,6 +100,7 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
       if (!(mi > 0.0) || !std::isfinite(mi)) {
         throw py::value_error("M (lumped masses) must be positive and finite.");
       }
+      inv_mass_.push_back(1.0 / mi);
     }
   } else {
     sparse_mass_ = ToCsr(M, "M");
@@ -115,11 +116,11 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
 }
 
 void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const {
-  const bool damped = C_.rows > 0, lumped = mass_.size() > 0;
+  const bool damped = C_.rows > 0, lumped = !inv_mass_.empty();
   for (sunindextype i = 0; i < n_; ++i) {
     sunrealtype s = out[i] - RowProduct(K_, i, x);
     if (damped) s -= RowProduct(C_, i, v);
-    out[i] = lumped ? s / mass_[i] : s;
+    out[i] = lumped ? s * inv_mass_[i] : s;  // a product: a division costs several
   }
 }
 
