@@ -112,6 +112,8 @@ struct CallbackData {
   std::shared_ptr<LinearStructure> structure;  // or the right-hand side in C++
   MassSpec mass;
   ConstraintSpec constr;
+  py::object roots = py::none();  // g(t, x, v, gout), or None
+  int nroots = 0;
   ViewCache in{false}, out{true};
   long python_calls = 0;
   // The first exception a callback raised; CEODE is stopped by the failing return.
@@ -143,6 +145,9 @@ int AttachSolvers(void* mem, SUNContext ctx, const CallbackData& cb, SolverSet* 
 // ---- constraints.cpp -------------------------------------------------------------------
 int PhiFn(sunrealtype t, N_Vector x, N_Vector phi, void* user_data);
 int PhiJacFn(sunrealtype t, N_Vector x, SUNMatrix G, void* user_data);
+
+// ---- roots.cpp -------------------------------------------------------------------------
+int RootFn(sunrealtype t, N_Vector x, N_Vector v, sunrealtype* gout, void* user_data);
 
 // ---- integrator.cpp, integrator_run.cpp ------------------------------------------------
 void RegisterIntegrator(py::module_& m);
