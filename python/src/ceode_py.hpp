@@ -8,6 +8,7 @@
 #include <sundials/sundials_linearsolver.h>
 #include <sundials/sundials_matrix.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -71,6 +72,11 @@ struct Csr {
   std::vector<sunrealtype> val;
 };
 Csr ToCsr(py::handle matrix, const char* what);
+// The arrays the right-hand side loops over: 32-bit indices move less memory per entry.
+struct Csr32 {
+  std::vector<int32_t> ptr, idx;
+  std::vector<sunrealtype> val;
+};
 bool IsSparse(py::handle obj);
 class LinearStructure {
  public:
@@ -90,6 +96,7 @@ class LinearStructure {
   sunindextype n_ = 0;
   std::vector<sunrealtype> mass_, inv_mass_;
   Csr sparse_mass_, K_, C_;
+  Csr32 k32_, c32_;
   py::object force_;
 };
 void RegisterStructure(py::module_& m);

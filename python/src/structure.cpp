@@ -71,10 +71,22 @@ void CheckSquare(const Csr& A, sunindextype n, const char* what) {
   CheckFinite(A.val, what);
 }
 
-// y_i -= sum_k A_ik x_k for row i.
-inline sunrealtype RowProduct(const Csr& A, sunindextype i, const sunrealtype* x) {
+Csr32 Narrow(const Csr& A, const char* what) {
+  if (A.val.size() > static_cast<size_t>(INT32_MAX)) {
+    throw py::value_error(std::string(what) + " has more than 2^31 - 1 nonzeros.");
+  }
+  Csr32 out;
+  out.ptr.assign(A.ptr.begin(), A.ptr.end());
+  out.idx.assign(A.idx.begin(), A.idx.end());
+  out.val = A.val;
+  return out;
+}
+
+// sum_k A_ik x_k for row i.
+inline sunrealtype RowProduct(const int32_t* ptr, const int32_t* idx, const sunrealtype* val,
+                              sunindextype i, const sunrealtype* x) {
   sunrealtype s = 0.0;
-  for (sunindextype k = A.ptr[i]; k < A.ptr[i + 1]; ++k) s += A.val[k] * x[A.idx[k]];
+  for (int32_t k = ptr[i]; k < ptr[i + 1]; ++k) s += val[k] * x[idx[k]];
   return s;
 }
 
@@ -110,17 +122,24 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
     C_ = ToCsr(C, "C");
     CheckSquare(C_, n_, "C");
   }
+  k32_ = Narrow(K_, "K");
+  if (C_.rows > 0) c32_ = Narrow(C_, "C");
   if (!force_.is_none() && !PyCallable_Check(force_.ptr())) {
     throw py::type_error("force must be a callable force(t, out) or None.");
   }
 }
 
 void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const {
+  const int32_t *kp = k32_.ptr.data(), *ki = k32_.idx.data();
+  const sunrealtype* kv = k32_.val.data();
+  const int32_t *cp = c32_.ptr.data(), *ci = c32_.idx.data();
+  const sunrealtype* cv = c32_.val.data();
+  const sunrealtype* im = inv_mass_.data();
   const bool damped = C_.rows > 0, lumped = !inv_mass_.empty();
   for (sunindextype i = 0; i < n_; ++i) {
-    sunrealtype s = out[i] - RowProduct(K_, i, x);
-    if (damped) s -= RowProduct(C_, i, v);
-    out[i] = lumped ? s * inv_mass_[i] : s;  // a product: a division costs several
+    sunrealtype s = out[i] - RowProduct(kp, ki, kv, i, x);
+    if (damped) s -= RowProduct(cp, ci, cv, i, v);
+    out[i] = lumped ? s * im[i] : s;  // a product: a division costs several
   }
 }
 
