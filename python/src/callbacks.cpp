@@ -16,14 +16,13 @@ namespace {
 int StructureRhs(CallbackData* cb, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
   const LinearStructure& s = *cb->structure;
   sunrealtype* out = N_VGetArrayPointer(f);
+  std::fill(out, out + cb->n, 0.0);  // force writes only the loaded entries
   if (s.has_force()) {
     const int r = cb->Guard([&] {
       ++cb->python_calls;
       s.force()(t, cb->out.Vector(out, cb->n));
     });
     if (r != 0) return r;
-  } else {
-    std::fill(out, out + cb->n, 0.0);
   }
   s.Evaluate(N_VGetArrayPointer(x), N_VGetArrayPointer(v), out);
   return 0;
