@@ -119,6 +119,7 @@ struct CallbackData {
   std::shared_ptr<LinearStructure> structure;  // or the right-hand side in C++
   MassSpec mass;
   ConstraintSpec constr;
+  bool dense_solver = false;      // a dense linear solver for Newton without a mass matrix
   py::object roots = py::none();  // g(t, x, v, gout), or None
   int nroots = 0;
   ViewCache in{false}, out{true};
@@ -146,7 +147,8 @@ struct SolverSet {
   SUNLinearSolver LS = nullptr;
   void Free();
 };
-// Attaches the mass matrix and a linear solver (dense, or KLU for a sparse M).
+// Attaches the mass matrix and a linear solver (dense, or KLU for a sparse M), or a dense
+// solver alone for Newton after set_linear_solver("dense").
 int AttachSolvers(void* mem, SUNContext ctx, const CallbackData& cb, SolverSet* set);
 
 // ---- constraints.cpp -------------------------------------------------------------------

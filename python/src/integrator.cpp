@@ -202,6 +202,25 @@ void Integrator::SetConstraints(py::object phi, py::object G, long nc) {
   solvers_dirty_ = true;
 }
 
+void Integrator::SetLinearSolver(const std::string& kind) {
+  mem();
+  if (kind != "dense") throw py::value_error("linear solver \"" + kind + "\": use \"dense\".");
+  cb_->dense_solver = true;
+  solvers_dirty_ = true;
+}
+
+void Integrator::SetImplicitMode(const std::string& mode) {
+  int m = CE_IMPLICIT_AUTO;
+  if (mode == "newton") {
+    m = CE_IMPLICIT_NEWTON;
+  } else if (mode == "pc") {
+    m = CE_IMPLICIT_PC;
+  } else if (mode != "auto") {
+    throw py::value_error("implicit mode \"" + mode + "\": use \"auto\", \"newton\" or \"pc\".");
+  }
+  Check(CEodeSetImplicitMode(mem(), m));
+}
+
 void Integrator::SetZeroStart(bool on) { Check(CEodeSetZeroStart(mem(), on ? SUNTRUE : SUNFALSE)); }
 void Integrator::SetStopTime(double tstop) { Check(CEodeSetStopTime(mem(), tstop)); }
 void Integrator::SetMaxNumSteps(long mxsteps) { Check(CEodeSetMaxNumSteps(mem(), mxsteps)); }

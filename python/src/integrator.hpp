@@ -27,6 +27,8 @@ class Integrator {
   double GetStableStep(double safety);
   void SetMass(py::handle M, py::handle constant);
   void SetConstraints(py::object phi, py::object G, long nc);
+  void SetLinearSolver(const std::string& kind);
+  void SetImplicitMode(const std::string& mode);
   void SetZeroStart(bool on);
   void SetStopTime(double tstop);
   void SetMaxNumSteps(long mxsteps);

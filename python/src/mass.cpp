@@ -74,8 +74,8 @@ bool CreateSolvers(SUNContext ctx, const CallbackData& cb, SolverSet* set) {
   const sunindextype n = cb.n, N = n + cb.constr.nc;
   N_Vector tmpl = N_VNew_Serial(N, ctx);
   if (tmpl == nullptr) return false;
-  if (cb.mass.kind == MassSpec::kDense) {
-    set->M = SUNDenseMatrix(n, n, ctx);
+  if (cb.mass.kind != MassSpec::kSparse) {
+    if (cb.mass.kind == MassSpec::kDense) set->M = SUNDenseMatrix(n, n, ctx);
     set->A = SUNDenseMatrix(N, N, ctx);
     if (set->A != nullptr) set->LS = SUNLinSol_Dense(tmpl, set->A, ctx);
   } else {
@@ -85,7 +85,8 @@ bool CreateSolvers(SUNContext ctx, const CallbackData& cb, SolverSet* set) {
     if (set->A != nullptr) set->LS = SUNLinSol_KLU(tmpl, set->A, ctx);
   }
   N_VDestroy(tmpl);
-  return set->M != nullptr && set->A != nullptr && set->LS != nullptr;
+  const bool need_m = cb.mass.kind != MassSpec::kNone;
+  return (set->M != nullptr || !need_m) && set->A != nullptr && set->LS != nullptr;
 }
 
 }  // namespace
@@ -140,13 +141,15 @@ int MassFn(sunrealtype t, N_Vector x, SUNMatrix M, void* user_data, N_Vector t1,
 }
 
 int AttachSolvers(void* mem, SUNContext ctx, const CallbackData& cb, SolverSet* set) {
-  if (cb.mass.kind == MassSpec::kNone) return CEodeSetMassFn(mem, nullptr, nullptr, SUNFALSE);
+  const bool none = cb.mass.kind == MassSpec::kNone;
+  if (none && !cb.dense_solver) return CEodeSetMassFn(mem, nullptr, nullptr, SUNFALSE);
   SolverSet fresh;
   if (!CreateSolvers(ctx, cb, &fresh)) {
     fresh.Free();
     return CE_MEM_FAIL;
   }
-  int flag = CEodeSetMassFn(mem, MassFn, fresh.M, cb.mass.constant ? SUNTRUE : SUNFALSE);
+  int flag = none ? CEodeSetMassFn(mem, nullptr, nullptr, SUNFALSE)
+                  : CEodeSetMassFn(mem, MassFn, fresh.M, cb.mass.constant ? SUNTRUE : SUNFALSE);
   if (flag >= 0) flag = CEodeSetLinearSolver(mem, fresh.LS, fresh.A);
   if (flag < 0) {
     CEodeSetMassFn(mem, nullptr, nullptr, SUNFALSE);  // CEODE keeps no pointer to them

@@ -37,6 +37,8 @@ void DefineOptions(py::class_<Integrator>& c) {
       .def("set_mass", &Integrator::SetMass, py::arg("M"), py::arg("constant") = py::none())
       .def("set_constraints", &Integrator::SetConstraints, py::arg("phi"), py::arg("G"),
            py::arg("nc"))
+      .def("set_linear_solver", &Integrator::SetLinearSolver, py::arg("kind") = "dense")
+      .def("set_implicit_mode", &Integrator::SetImplicitMode, py::arg("mode"))
       .def("set_zero_start", &Integrator::SetZeroStart, py::arg("flag"))
       .def("set_stop_time", &Integrator::SetStopTime, py::arg("tstop"))
       .def("set_max_num_steps", &Integrator::SetMaxNumSteps, py::arg("mxsteps"))

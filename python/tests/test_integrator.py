@@ -185,3 +185,32 @@ def test_roots_stop_evolve_at_the_event_time():
     assert s.last_flag == 2  # CE_ROOT_RETURN
     assert list(s.root_info()) == [-1]
     assert abs(t - math.sqrt(2 / 9.81)) < 1e-12 and abs(x[0]) < 1e-12
+
+
+def test_newton_with_a_dense_linear_solver_takes_jacobians_and_the_same_solution():
+    # x'' = -x - 0.2 x' on the implicit path: Newton with SUNLinSol_Dense (difference-quotient
+    # Jacobians) and fixed point without a solver converge to the same step to their
+    # tolerances; both lie within the method's error (G4_A34, h = 1e-2: 1e-6) of the exact one.
+    z = 0.1
+    wd = math.sqrt(1 - z * z)
+
+    def f(t, x, v, out):
+        out[0] = -x[0] - 2 * z * v[0]
+
+    runs = []
+    for solver in (True, False):
+        s = ceode.Integrator(f, 0.0, [1.0], [0.0])
+        s.set_fixed_step(1e-2)
+        s.set_velocity_dependence(True)
+        s.set_implicit_mode("newton")
+        if solver:
+            s.set_linear_solver("dense")
+        t, x, _ = s.evolve(10.0)
+        runs.append((x[0], s.stats()))
+    exact = math.exp(-z * 10.0) * (math.cos(wd * 10.0) + z / wd * math.sin(wd * 10.0))
+    (xn, newton), (xf, fixed) = runs
+    assert newton["jac_evals"] > 0 and newton["lin_setups"] > 0 and fixed["jac_evals"] == 0
+    assert newton["nls_steps"] == fixed["nls_steps"] == 1000
+    assert abs(xn - exact) < 1e-6 and abs(xf - exact) < 1e-6
+    with pytest.raises(ValueError):
+        s.set_implicit_mode("sometimes")
