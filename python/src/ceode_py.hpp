@@ -88,6 +88,7 @@ class LinearStructure {
   const std::vector<sunrealtype>& lumped_mass() const { return mass_; }
   const Csr& sparse_mass() const { return sparse_mass_; }
   const Csr& damping() const { return C_; }
+  const Csr& stiffness() const { return K_; }
   // out = M^{-1} (force - K x - C v) for a lumped M, force - K x - C v otherwise.
   void Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const;
   const py::object& force() const { return force_; }

@@ -3,7 +3,9 @@
 #include "integrator.hpp"
 
 #include <nvector/nvector_serial.h>
+#include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace ceode_py {
@@ -171,6 +173,32 @@ double Integrator::GetStableStep(double safety) {
   }
   Check(flag);
   return h;
+}
+
+// Gershgorin's guaranteed bound on omega_max of a LinearStructure (CEodeGetFrequencyBound):
+// K as a CSR SUNSparseMatrix, the lumped masses (or M = I for a sparse M's structure: refused).
+double Integrator::GetFrequencyBound() {
+  mem();
+  if (!cb_->structure || !cb_->structure->lumped()) {
+    throw py::value_error("get_frequency_bound needs a LinearStructure with lumped masses.");
+  }
+  const Csr& K = cb_->structure->stiffness();
+  SUNMatrix Km =
+      SUNSparseMatrix(K.rows, K.cols, std::max<sunindextype>(1, K.val.size()), CSR_MAT, ctx_);
+  N_Vector m = N_VNew_Serial(cb_->n, ctx_);
+  if (Km == nullptr || m == nullptr || CopyCsr(K, Km) != 0) {
+    if (Km != nullptr) SUNMatDestroy(Km);
+    if (m != nullptr) N_VDestroy(m);
+    throw std::bad_alloc();
+  }
+  const std::vector<sunrealtype>& mass = cb_->structure->lumped_mass();
+  std::copy(mass.begin(), mass.end(), N_VGetArrayPointer(m));
+  sunrealtype omega = 0.0;
+  const int flag = CEodeGetFrequencyBound(mem_, Km, m, &omega);
+  SUNMatDestroy(Km);
+  N_VDestroy(m);
+  Check(flag);
+  return omega;
 }
 
 void Integrator::SetMass(py::handle M, py::handle constant) {

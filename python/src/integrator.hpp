@@ -25,6 +25,7 @@ class Integrator {
   void SetVelocityDependence(bool depends);
   void SetStabilityGuard(const std::string& mode, py::handle omega_max, long every);
   double GetStableStep(double safety);
+  double GetFrequencyBound();
   void SetMass(py::handle M, py::handle constant);
   void SetConstraints(py::object phi, py::object G, long nc);
   void SetLinearSolver(const std::string& kind);

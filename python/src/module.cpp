@@ -34,6 +34,7 @@ void DefineOptions(py::class_<Integrator>& c) {
       .def("set_stability_guard", &Integrator::SetStabilityGuard, py::arg("mode") = "warn",
            py::arg("omega_max") = py::none(), py::arg("every") = 0)
       .def("get_stable_step", &Integrator::GetStableStep, py::arg("safety") = 0.0)
+      .def("get_frequency_bound", &Integrator::GetFrequencyBound)
       .def("set_mass", &Integrator::SetMass, py::arg("M"), py::arg("constant") = py::none())
       .def("set_constraints", &Integrator::SetConstraints, py::arg("phi"), py::arg("G"),
            py::arg("nc"))

@@ -116,3 +116,21 @@ def test_stable_step_of_a_lumped_structure_bounds_the_chains_frequency():
     exact = 0.99 * 2.0 / omega
     # The guard's Lanczos bound in the M inner product: omega_max at most 0.1 % high.
     assert exact * (1 - 1e-3) <= h <= exact * (1 + 1e-9)
+
+
+def test_frequency_bound_is_never_below_omega_max_and_makes_a_stable_step_without_f():
+    # Gershgorin on M^{-1} K: an upper bound of the exact omega_max (Eigen-free check with
+    # numpy here); given to the guard it makes get_stable_step need no f evaluation.
+    m, K, _ = chain_matrices(N)
+    x0, v0 = start()
+    s = ceode.Integrator(ceode.LinearStructure(m, K), 0.0, x0, v0, method="G3_CD")
+    s.set_fixed_step(H)
+    omega = np.sqrt(np.max(np.linalg.eigvals(np.diag(1 / m) @ K.toarray()).real))
+    bound = s.get_frequency_bound()
+    assert omega <= bound <= 2.0 * omega  # row sums of a chain: within a factor 2
+    s.set_stability_guard("warn", omega_max=bound)
+    assert s.get_stable_step() == 0.99 * ceode.stability_limit("G3_CD") / bound
+    assert s.stats()["guard_rhs_evals"] == 0
+    sparse_m = ceode.Integrator(ceode.LinearStructure(sp.diags(m, format="csr"), K), 0.0, x0, v0)
+    with pytest.raises(ValueError, match="lumped"):
+        sparse_m.get_frequency_bound()
