@@ -64,7 +64,9 @@ int FillMatrix(const Csr& A, SUNMatrix M) {
 
 sunindextype SaddleNnz(const CallbackData& cb) {
   const sunindextype n = cb.n, nc = cb.constr.nc, N = n + nc;
-  sunindextype nnz = static_cast<sunindextype>(cb.mass.sparse.val.size()) + n + 2 * nc * n;
+  // G's room as CEODE sizes a sparse G; CEODE grows A when the saddle needs more.
+  const sunindextype g_nnz = std::min(nc * n, 4 * (n + nc) + 16);
+  sunindextype nnz = static_cast<sunindextype>(cb.mass.sparse.val.size()) + n + 2 * g_nnz;
   if (cb.structure) nnz += static_cast<sunindextype>(cb.structure->damping().val.size());
   return std::min(nnz, N * N);
 }
