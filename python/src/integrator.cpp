@@ -221,6 +221,12 @@ void Integrator::SetConstraints(py::object phi, py::object G, long nc) {
     throw py::type_error("phi and G must be callables phi(t, x, out) and G(t, x, out).");
   }
   if (nc < 1) throw py::value_error("nc (the number of constraints) must be >= 1.");
+  if (cb_->structure && cb_->structure->lumped()) {
+    // f returns M^{-1} force there, and the constraint forces G^T lambda need M itself
+    throw py::value_error(
+        "constraints with a LinearStructure need M as a sparse matrix (scipy.sparse.diags(m)), "
+        "not lumped masses.");
+  }
   N_Vector tmpl = N_VNew_Serial(nc, ctx_);
   if (tmpl == nullptr) throw std::bad_alloc();
   const int flag = CEodeSetConstraints(mem(), tmpl, PhiFn, PhiJacFn);

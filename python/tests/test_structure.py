@@ -134,3 +134,11 @@ def test_frequency_bound_is_never_below_omega_max_and_makes_a_stable_step_withou
     sparse_m = ceode.Integrator(ceode.LinearStructure(sp.diags(m, format="csr"), K), 0.0, x0, v0)
     with pytest.raises(ValueError, match="lumped"):
         sparse_m.get_frequency_bound()
+
+
+def test_constraints_on_a_lumped_structure_are_refused_with_the_remedy():
+    m, K, _ = chain_matrices(N)
+    x0, v0 = start()
+    s = ceode.Integrator(ceode.LinearStructure(m, K), 0.0, x0, v0)
+    with pytest.raises(ValueError, match="sparse"):
+        s.set_constraints(lambda t, x, out: None, lambda t, x, out: None, 1)
