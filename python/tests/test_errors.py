@@ -78,6 +78,8 @@ def test_a_ceode_error_carries_flag_name_and_ceodes_message():
     with pytest.raises(ceode.CEodeError) as info:
         s.evolve(1.0)  # no step size and no tolerances
     assert "CEodeSetFixedStep" in str(info.value)
+    assert ceode.flag_name(info.value.flag) == info.value.flag_name
+    assert ceode.flag_name(-16) == "CE_UNSTABLE"
 
 
 def test_a_callback_exception_reaches_the_caller_as_itself_and_the_integrator_recovers():
