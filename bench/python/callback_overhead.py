@@ -11,6 +11,7 @@ solve_ivp evaluation (also beyond its first-order wrapper alone, the line's last
 Writes <out>/python_callback.csv and prints the table.
 
 Usage: callback_overhead.py [--out DIR] [--quick]
+--quick: fewer direct calls of f to time it alone.
 """
 import argparse
 import csv
@@ -54,8 +55,9 @@ def main():
     p = problem_pendulum.Problem()
     H.reference(p)
     x, v, out = np.array([0.3]), np.zeros(1), np.zeros(1)
-    f_ns = call_ns(p.f2, (0.0, x, v, out))
-    wrap_ns = call_ns(p.f1, (0.0, np.array([0.3, 0.0])))
+    calls = 5000 if args.quick else 20000
+    f_ns = call_ns(p.f2, (0.0, x, v, out), calls)
+    wrap_ns = call_ns(p.f1, (0.0, np.array([0.3, 0.0])), calls)
     lines = []
     for method, h in (("G4_A34", 1e-3), ("G8_O8", 1e-2)):
         sec, _, o = H.time_median(lambda: H.ceode_run(ceode, p, method, h=h))
