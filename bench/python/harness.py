@@ -68,6 +68,7 @@ class Outcome:
 
     def __init__(self, X, V, steps, rhs_evals):
         self.X, self.V, self.steps, self.rhs_evals = X, V, int(steps), int(rhs_evals)
+        self.python_calls = self.rhs_evals
 
 
 def ceode_run(ceode, p, method, h=None, tol=None):
@@ -86,7 +87,11 @@ def ceode_run(ceode, p, method, h=None, tol=None):
     for k, t in enumerate(p.t_out):
         _, X[k], V[k] = s.evolve(t)
     st = s.stats()
-    return Outcome(X, V, st["steps"], st["rhs_evals"])
+    # Every f evaluation, as the C scenes count them: the steps', difference quotients', guard's.
+    evals = st["rhs_evals"] + st.get("rhs_evals_jac_dq", 0) + st.get("guard_rhs_evals", 0)
+    out = Outcome(X, V, st["steps"], evals)
+    out.python_calls = st.get("python_calls", evals)  # f's calls from C++, probes included
+    return out
 
 
 def scipy_run(p, method, rtol, t_eval=True):
