@@ -1,0 +1,76 @@
+// ceode.Integrator: one CEODE memory, its SUNContext and its vectors, owned by the object and
+// freed by close() or when the object is collected.
+#ifndef CEODE_PYTHON_INTEGRATOR_HPP_
+#define CEODE_PYTHON_INTEGRATOR_HPP_
+
+#include <string>
+#include <vector>
+
+#include "ceode_py.hpp"
+
+namespace ceode_py {
+
+class Integrator {
+ public:
+  Integrator(py::object f, double t0, py::handle x0, py::handle v0, py::handle method);
+  ~Integrator() { Close(); }
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+  void Close();
+
+  // integrator.cpp: options
+  void SetMethod(py::handle method);
+  void SetFixedStep(double h);
+  void SetTolerances(double rtol, py::handle atol);
+  void SetVelocityDependence(bool depends);
+  void SetStabilityGuard(const std::string& mode, py::handle omega_max, long every);
+  double GetStableStep(double safety);
+  void SetMass(py::handle M, py::handle constant);
+  void SetConstraints(py::object phi, py::object G, long nc);
+  void SetZeroStart(bool on);
+  void SetStopTime(double tstop);
+  void SetMaxNumSteps(long mxsteps);
+  py::dict Stats();
+  sunindextype size() const { return cb_->n; }
+  double time() const { return t_; }
+
+  // integrator_run.cpp: solving
+  py::tuple Evolve(double tout, bool one_step);
+  py::tuple EvolveMany(py::handle times);
+  void Reinit(double t0, py::handle x0, py::handle v0);
+  py::array_t<sunrealtype> Accel();
+  py::array_t<sunrealtype> Multipliers();
+  // Raises CEodeError for flag < 0 and a callback's exception (chained to it) first.
+  void Check(int flag);
+  void* mem();  // CEodeError(CE_MEM_NULL) once closed
+
+  // The GC's view of the Python objects held (tp_traverse, tp_clear).
+  int Traverse(visitproc visit, void* arg);
+  void ClearReferences();
+
+ private:
+  friend void ErrHandler(int, const char*, const char*, char*, void*);
+  void Create(py::object f, double t0, py::handle x0, py::handle v0);
+  void AttachStructure();
+  void Prepare();
+  std::string Message();
+  [[noreturn]] void RaisePending(int flag);
+  int EvolveOnce(double tout, int itask);
+  bool PythonFree() const;
+
+  SUNContext ctx_ = nullptr;
+  void* mem_ = nullptr;
+  N_Vector x_ = nullptr, v_ = nullptr;
+  std::unique_ptr<CallbackData> cb_;  // user_data: its address stays fixed
+  SolverSet solvers_;
+  bool solvers_dirty_ = false;
+  double t_ = 0.0;
+  std::vector<std::string> warnings_;
+  std::string last_error_;
+};
+
+void ErrHandler(int code, const char* module, const char* function, char* msg, void* data);
+
+}  // namespace ceode_py
+
+#endif  // CEODE_PYTHON_INTEGRATOR_HPP_
