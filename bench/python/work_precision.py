@@ -135,7 +135,7 @@ def main():
     print("\nequal error (time_to_reach, log-log): ratio = CEODE time / solve_ivp time "
           "(< 1: CEODE faster)")
     for r in rows:
-        print(f"{r['scene']:<18} {r['error_level']:>6}  CEODE {r['ceode_best']:<26} "
+        print(f"{r['scene']:<18} {r['error_level']:>6}  {r['ceode_best']:<26} "
               f"{r['ceode_seconds']:>10}  RK45 {r['rk45_seconds']:>10} ratio "
               f"{r['ratio_ceode_over_rk45'] or '-':>6}  DOP853 {r['dop853_seconds']:>10} ratio "
               f"{r['ratio_ceode_over_dop853'] or '-':>6}")
