@@ -4,7 +4,7 @@ The classes and functions are those of the extension ceode._ceode (docs/python.m
 
     Integrator(f, t0, x0, v0, method="G4_A34")   the integrator over CEODE's C API
     LinearStructure(M, K, C=None, force=None)   M a = force(t) - K x - C v, evaluated in C++
-    methods(), method_order(method), stability_limit(method, xi=0.0),
+    methods(), method_order(method), method_params(method), stability_limit(method, xi=0.0),
     spectral_radius(method, Omega, xi=0.0), version()
     CEodeError, CEodeWarning
 """
@@ -13,6 +13,7 @@ from ._ceode import (
     Integrator,
     LinearStructure,
     method_order,
+    method_params,
     methods,
     spectral_radius,
     stability_limit,
@@ -27,6 +28,7 @@ __all__ = [
     "Integrator",
     "LinearStructure",
     "method_order",
+    "method_params",
     "methods",
     "spectral_radius",
     "stability_limit",

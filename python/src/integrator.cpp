@@ -220,6 +220,11 @@ py::dict Integrator::Stats() {
   d["guard_rhs_evals"] = gf;
   d["guard_mass_evals"] = gm;
   d["guard_lin_setups"] = gl;
+  long npc = 0, nnls = 0, ncoupling = 0;
+  sunrealtype coupling = 0.0;
+  Check(CEodeGetImplicitStats(mem(), &npc, &nnls, &ncoupling, &coupling));
+  d["nls_steps"] = nnls;
+  d["coupling_rhs_evals"] = ncoupling;
   d["python_calls"] = cb_->python_calls;
   d["time"] = t_;
   return d;

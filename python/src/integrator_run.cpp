@@ -36,8 +36,12 @@ void Integrator::Check(int flag) {
     EmitWarnings(&warnings_);
     return;
   }
-  warnings_.clear();
-  RaiseCEodeError(flag, Message());
+  std::string msg = Message();
+  try {  // the warnings that led up to the failure explain it
+    EmitWarnings(&warnings_);
+  } catch (py::error_already_set&) {  // warnings raised as errors: the CEodeError is the one
+  }
+  RaiseCEodeError(flag, msg);
 }
 
 bool Integrator::PythonFree() const {

@@ -3,6 +3,7 @@
 // here name the cause.
 #include <ceode/ceode.h>
 #include <ceode/ceode_stability.h>
+#include <pybind11/stl.h>
 
 #include <string>
 
@@ -75,6 +76,11 @@ py::object SpectralRadius(py::handle method, py::handle Omega, double xi) {
   return std::move(rho);
 }
 
+py::tuple MethodParams(py::handle method) {
+  const MethodSpec s = ParseMethod(method);
+  return py::make_tuple(s.degree, py::cast(s.params));
+}
+
 std::string Version() {
   char buf[64];
   CEodeGetVersion(buf, sizeof(buf));
@@ -106,6 +112,8 @@ void RegisterMethods(py::module_& m) {
         "Omega_max: the largest omega*h with spectral radius <= 1 (0: unstable for every step).");
   m.def("spectral_radius", &SpectralRadius, py::arg("method"), py::arg("Omega"),
         py::arg("xi") = 0.0, "Spectral radius of the amplification matrix at Omega = omega*h.");
+  m.def("method_params", &MethodParams, py::arg("method"),
+        "(degree, [alpha, beta, ...]): a set's degree and its degree - 1 parameters.");
   m.def("version", &Version, "The library's version string (CEodeGetVersion).");
 }
 
