@@ -7,8 +7,9 @@ program integrates the same plate through the C API with CEODE's f = -M^{-1} K x
 steps, so they differ only in how the acceleration's round-off falls (the C scene multiplies by
 1/m, the structure's evaluation may divide by m): the states agree to a few ulps a step.
 
-The C program is found through the environment variable CEODE_FE_PLATE_C_SCENE or beside the
-module in the build tree (<build>/bench/fe_plate_c_scene, built with -DCEODE_BUILD_BENCHMARKS=ON).
+The C program is found through the environment variable CEODE_FE_PLATE_C_SCENE or in the build
+tree of the module: <build>/bench/fe_plate_c_scene (benchmarks on) or
+<build>/python/tests/fe_plate_c_scene (python/tests/CMakeLists.txt builds it when they are off).
 """
 import os
 import pathlib
@@ -35,11 +36,12 @@ def c_scene():
     if env:
         return env
     build = pathlib.Path(ceode.__file__).resolve().parents[2]
-    exe = build / "bench" / "fe_plate_c_scene"
-    if not exe.exists():
-        pytest.skip(f"{exe} not built (configure with -DCEODE_BUILD_BENCHMARKS=ON, build "
-                    "fe_plate_c_scene, or set CEODE_FE_PLATE_C_SCENE)")
-    return str(exe)
+    # bench/ with the benchmarks on, python/tests/ (python/tests/CMakeLists.txt) with them off
+    for exe in (build / "bench" / "fe_plate_c_scene", build / "python" / "tests" / "fe_plate_c_scene"):
+        if exe.exists():
+            return str(exe)
+    pytest.skip(f"fe_plate_c_scene not built in {build} (build the target fe_plate_c_scene, or "
+                "set CEODE_FE_PLATE_C_SCENE)")
 
 
 @pytest.fixture(scope="module")
