@@ -9,10 +9,12 @@ program's own guard figure is printed beside it). Both sides integrate from the 
 start with the guard off and f velocity-independent, one untimed chunk of steps first, then
 chunks timed on the process CPU clock (each side its own process); rounds alternate Python and
 C, set by set, so that a burst of load falls on both. Reported: the median seconds per step over
-every chunk of every round, the spread (max/min - 1) and the ratio Python / C.
+every chunk of every round and the spread (max/min - 1) of each side, and the ratio Python / C as
+the median over the rounds of each round's ratio of medians (with its range), and the fastest
+chunk's over the fastest chunk's (load only adds time: the least disturbed figure of each side).
 Writes <out>/python_structural.csv.
 
-Usage: structural_cost.py --c-scene PATH [--out DIR] [--ny 112] [--rounds 3] [--quick]
+Usage: structural_cost.py --c-scene PATH [--out DIR] [--ny 112] [--rounds 5] [--quick]
 """
 import argparse
 import csv
@@ -27,7 +29,7 @@ import problem_plate
 
 SETS = (("G3_CD", 0.9), ("G4_A34", 0.8 * 0.9))  # wp_fe_plate: kScaleFrac x 0.9 x G3_CD's step
 FIELDS = ["set", "dof", "h", "python_s_per_step", "python_spread", "c_s_per_step", "c_spread",
-          "ratio_python_over_c", "chunks"]
+          "ratio_python_over_c", "ratio_min", "ratio_max", "ratio_of_best", "chunks"]
 
 
 def py_chunks(ceode, model, plate, method, h, chunk, reps):
@@ -51,12 +53,29 @@ def spread(v):
     return max(v) / min(v) - 1
 
 
+def report(method, h, dof, py, c, ratios):
+    """One CSV row: medians and spreads of each side; the ratio is the median over the rounds of
+    each round's ratio (Python and C measured seconds apart, so a change of load between rounds
+    falls on both)."""
+    mp, mc, r = statistics.median(py), statistics.median(c), statistics.median(ratios)
+    print(f"{method:<7} h = {h:.4g}: Python {1e3 * mp:.3f} ms/step (spread {100 * spread(py):.0f} "
+          f"%), C {1e3 * mc:.3f} ms/step (spread {100 * spread(c):.0f} %); ratio Python / C: "
+          f"{r:.3f} (median of the rounds' {', '.join(f'{x:.2f}' for x in ratios)}); "
+          f"best chunk over best chunk {min(py) / min(c):.3f}")
+    return {"set": method, "dof": dof, "h": f"{h:.6e}", "python_s_per_step": f"{mp:.6e}",
+            "python_spread": f"{spread(py):.3f}", "c_s_per_step": f"{mc:.6e}",
+            "c_spread": f"{spread(c):.3f}", "ratio_python_over_c": f"{r:.3f}",
+            "ratio_min": f"{min(ratios):.3f}", "ratio_max": f"{max(ratios):.3f}",
+            "ratio_of_best": f"{min(py) / min(c):.3f}",
+            "chunks": len(py)}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--c-scene", required=True)
     ap.add_argument("--out", default=".")
     ap.add_argument("--ny", type=int, default=112)
-    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     import ceode
@@ -72,24 +91,16 @@ def main():
     print(f"Q4 plate {nx} x {ny}: {plate.n} DOF, {plate.K.nnz} nonzeros (K checked against the "
           f"C product); G3_CD stable step: Python get_stable_step {h_cd:.6g}, C guard at safety "
           f"1 {c_stable:.6g}; {args.rounds} rounds x {reps} chunks of {chunk} steps a side")
-    times = {m: ([], []) for m, _ in SETS}
+    times = {m: ([], [], []) for m, _ in SETS}  # Python chunks, C chunks, ratio of each round
     for _ in range(args.rounds):
         for method, frac in SETS:
             h = frac * h_cd
-            times[method][0].extend(py_chunks(ceode, model, plate, method, h, chunk, reps))
-            times[method][1].extend(
-                problem_plate.c_time(args.c_scene, nx, ny, method, h, chunk, reps)[0])
-    rows = []
-    for method, frac in SETS:
-        py, c = times[method]
-        mp, mc = statistics.median(py), statistics.median(c)
-        rows.append({"set": method, "dof": plate.n, "h": f"{frac * h_cd:.6e}",
-                     "python_s_per_step": f"{mp:.6e}", "python_spread": f"{spread(py):.3f}",
-                     "c_s_per_step": f"{mc:.6e}", "c_spread": f"{spread(c):.3f}",
-                     "ratio_python_over_c": f"{mp / mc:.3f}", "chunks": len(py)})
-        print(f"{method:<7} h = {frac * h_cd:.4g}: Python {1e3 * mp:.3f} ms/step (spread "
-              f"{100 * spread(py):.0f} %), C {1e3 * mc:.3f} ms/step (spread {100 * spread(c):.0f} "
-              f"%), ratio Python / C {mp / mc:.3f}")
+            py = py_chunks(ceode, model, plate, method, h, chunk, reps)
+            c = problem_plate.c_time(args.c_scene, nx, ny, method, h, chunk, reps)[0]
+            times[method][0].extend(py)
+            times[method][1].extend(c)
+            times[method][2].append(statistics.median(py) / statistics.median(c))
+    rows = [report(method, frac * h_cd, plate.n, *times[method]) for method, frac in SETS]
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "python_structural.csv")
     with open(path, "w", newline="") as f:
