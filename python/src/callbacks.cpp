@@ -22,10 +22,8 @@ int StructureRhs(CallbackData* cb, sunrealtype t, N_Vector x, N_Vector v, N_Vect
       s.force()(t, cb->out.Vector(out, cb->n));
     });
     if (r != 0) return r;
-  } else {
-    std::fill(out, out + cb->n, 0.0);
   }
-  s.Evaluate(N_VGetArrayPointer(x), N_VGetArrayPointer(v), out);
+  s.Evaluate(N_VGetArrayPointer(x), N_VGetArrayPointer(v), out, s.has_force());
   return 0;
 }
 

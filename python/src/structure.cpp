@@ -1,7 +1,10 @@
 // LinearStructure: M a = force(t) - K x - C v with K, C (and a sparse M) copied to CSR
 // arrays at construction, so the right-hand side runs in C++; force(t, out) is the only
 // Python call per evaluation, and there is none without a force.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <string>
 
 #include "ceode_py.hpp"
@@ -105,6 +108,10 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
     sparse_mass_ = ToCsr(M, "M");
     CheckSquare(sparse_mass_, n_, "M");
   }
+  if (!mass_.empty() && n_ < std::numeric_limits<int32_t>::max()) {
+    kcol_.assign(K_.idx.begin(), K_.idx.end());
+    for (sunrealtype mi : mass_) inv_mass_.push_back(1.0 / mi);
+  }
   if (!C.is_none()) {
     C_ = ToCsr(C, "C");
     CheckSquare(C_, n_, "C");
@@ -114,8 +121,26 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
   }
 }
 
-void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const {
+void LinearStructure::EvaluateLumped(const sunrealtype* x, sunrealtype* out, bool add_force) const {
+  const sunindextype* ptr = K_.ptr.data();
+  const int32_t* col = kcol_.data();
+  const sunrealtype* val = K_.val.data();
+  const sunrealtype* inv = inv_mass_.data();
+  for (sunindextype i = 0; i < n_; ++i) {
+    sunrealtype s = 0.0;
+    for (sunindextype k = ptr[i]; k < ptr[i + 1]; ++k) s += val[k] * x[col[k]];
+    out[i] = ((add_force ? out[i] : 0.0) - s) * inv[i];
+  }
+}
+
+void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out,
+                               bool add_force) const {
   const bool damped = C_.rows > 0, lumped = mass_.size() > 0;
+  if (!damped && !kcol_.empty()) {
+    EvaluateLumped(x, out, add_force);
+    return;
+  }
+  if (!add_force) std::fill(out, out + n_, 0.0);
   for (sunindextype i = 0; i < n_; ++i) {
     sunrealtype s = out[i] - RowProduct(K_, i, x);
     if (damped) s -= RowProduct(C_, i, v);
