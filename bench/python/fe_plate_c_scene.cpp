@@ -16,6 +16,9 @@
 //       chunks each to t + CHUNK H (CE_NORMAL); prints one line per chunk:
 //       "chunk <steps> <cpu seconds per step>" (process CPU clock), and the guard's stable step
 //       of SET at safety 1 as "stable_step <h>".
+//   fe_plate_c_scene serve NX NY SET H CHUNK
+//       the same after the untimed chunk, one timed chunk for each line read on stdin (the
+//       Python benchmark alternates its chunks with these, chunk by chunk).
 // Exit code 0 when every CEODE call succeeded, 2 on bad arguments.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode.h>
@@ -151,34 +154,62 @@ int RunSteps(fe::Plate* p, const char* set, double h, long steps, const char* pa
   return ok ? 0 : 1;
 }
 
-int Time(fe::Plate* p, const char* set, double h, long chunk, int reps) {
-  Run r;
+// One chunk: CE_NORMAL to t + chunk h; *per_step gets the CPU seconds per step taken.
+bool Chunk(const Run& r, double h, long chunk, double* t, double* per_step) {
+  const long s0 = r.Steps();
+  const double c0 = CpuNow();
+  if (Failed(CEodeEvolve(r.mem, *t + static_cast<double>(chunk) * h, r.x, r.v, t, CE_NORMAL),
+             "CEodeEvolve")) {
+    return false;
+  }
+  *per_step = (CpuNow() - c0) / static_cast<double>(r.Steps() - s0);
+  return true;
+}
+
+bool StartTimed(fe::Plate* p, const char* set, double h, long chunk, Run* r, double* t) {
   sunrealtype hstab = 0;
-  if (!r.Start(p, set, h) || Failed(CEodeGetStableStep(r.mem, 1.0, &hstab), "CEodeGetStableStep") ||
-      Failed(CEodeSetStabilityGuard(r.mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard")) {
-    return 1;
+  double per_step = 0;
+  if (!r->Start(p, set, h) ||
+      Failed(CEodeGetStableStep(r->mem, 1.0, &hstab), "CEodeGetStableStep") ||
+      Failed(CEodeSetStabilityGuard(r->mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard")) {
+    return false;
   }
   std::printf("stable_step %.17g\n", hstab);
-  double t = 0;
-  for (int k = 0; k <= reps; ++k) {
-    const long s0 = r.Steps();
-    const double c0 = CpuNow();
-    if (Failed(CEodeEvolve(r.mem, t + static_cast<double>(chunk) * h, r.x, r.v, &t, CE_NORMAL),
-               "CEodeEvolve")) {
-      return 1;
-    }
-    const double secs = CpuNow() - c0;
-    const long done = r.Steps() - s0;
-    if (k > 0) std::printf("chunk %ld %.6e\n", done, secs / static_cast<double>(done));
+  return Chunk(*r, h, chunk, t, &per_step);  // untimed: the start, caches warm
+}
+
+int Time(fe::Plate* p, const char* set, double h, long chunk, int reps) {
+  Run r;
+  double t = 0, per_step = 0;
+  if (!StartTimed(p, set, h, chunk, &r, &t)) return 1;
+  for (int k = 0; k < reps; ++k) {
+    if (!Chunk(r, h, chunk, &t, &per_step)) return 1;
+    std::printf("chunk %ld %.6e\n", chunk, per_step);
   }
   std::fflush(stdout);
+  return 0;
+}
+
+// One timed chunk for every line read on stdin, until its end: the caller interleaves these
+// chunks with its own, each side idle while the other runs.
+int Serve(fe::Plate* p, const char* set, double h, long chunk) {
+  Run r;
+  double t = 0, per_step = 0;
+  if (!StartTimed(p, set, h, chunk, &r, &t)) return 1;
+  std::fflush(stdout);
+  char line[64];
+  while (std::fgets(line, sizeof line, stdin) != nullptr) {
+    if (!Chunk(r, h, chunk, &t, &per_step)) return 1;
+    std::printf("chunk %ld %.6e\n", chunk, per_step);
+    std::fflush(stdout);
+  }
   return 0;
 }
 
 int Usage(const char* prog) {
   std::fprintf(stderr,
                "usage: %s export NX NY FILE | run NX NY SET H STEPS FILE | "
-               "time NX NY SET H CHUNK REPS\n",
+               "time NX NY SET H CHUNK REPS | serve NX NY SET H CHUNK\n",
                prog);
   return 2;
 }
@@ -192,10 +223,11 @@ int main(int argc, char** argv) {
   if (nx < 1 || ny < 1) return Usage(argv[0]);
   fe::Plate p = fe::MakePlate(nx, ny);
   if (mode == "export" && argc == 5) return Export(p, argv[4]);
-  if (argc != 8) return Usage(argv[0]);
+  if (argc != 8 && !(mode == "serve" && argc == 7)) return Usage(argv[0]);
   const double h = std::atof(argv[5]);
   const long count = std::atol(argv[6]);
   if (!(h > 0) || count < 1) return Usage(argv[0]);
+  if (mode == "serve") return Serve(&p, argv[4], h, count);
   if (mode == "run") return RunSteps(&p, argv[4], h, count, argv[7]);
   if (mode == "time") return Time(&p, argv[4], h, count, std::atoi(argv[7]));
   return Usage(argv[0]);
