@@ -520,6 +520,11 @@ def python_lines(page):
         lines.append("")
         for scene in dict.fromkeys(r["scene"] for r in eq):
             lines += image(page, f"{scene}.png", f"{scene} work-precision")
+        lines.append("")
+    if page.exists("python_plate_tip.png"):
+        lines += ["The example `examples/python/plate_tip.py` (its checked run of this job, "
+                  "`python_example.txt`):", ""] + image(page, "python_plate_tip.png",
+                                                       "plate tip displacement")
     return lines
 
 
