@@ -4,7 +4,8 @@
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libsundials-dev libeigen3-dev libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev openmpi-bin
-      libgsl-dev libboost-dev gnuplot-nox python3 python3-matplotlib python3-numpy valgrind)
+      libgsl-dev libboost-dev gnuplot-nox python3 python3-matplotlib python3-numpy valgrind
+      pybind11-dev python3-dev python3-scipy python3-pytest)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

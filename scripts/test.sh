@@ -6,11 +6,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 jobs=$(nproc)
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON
+# The Release leg also builds and tests the Python module (Debian's python3, label python).
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON \
+  -DCEODE_BUILD_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
 cmake --build build -j"$jobs"
 (cd build && ctest --output-on-failure -j"$jobs")
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCEODE_SANITIZE=ON -DCEODE_BUILD_TESTS=ON \
-  -DCEODE_BUILD_BENCHMARKS=OFF
+  -DCEODE_BUILD_BENCHMARKS=OFF -DCEODE_BUILD_PYTHON=OFF
 cmake --build build-asan -j"$jobs"
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
    ctest --output-on-failure -j"$jobs" -LE slow)

@@ -29,7 +29,7 @@ if [ ! -f "$prefix/lib/cmake/sundials/SUNDIALSConfig.cmake" ]; then
 fi
 echo "=== CEODE against SUNDIALS 7.5.0 ($prefix)"
 cmake -S . -B build-s7 -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
-  -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON
+  -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON -DCEODE_BUILD_PYTHON=OFF
 # The build must use this prefix, not a SUNDIALS installed elsewhere on the machine.
 found=$(sed -n 's/^SUNDIALS_DIR:PATH=//p' build-s7/CMakeCache.txt)
 if [ "$(realpath "$found")" != "$(realpath "$prefix/lib/cmake/sundials")" ]; then

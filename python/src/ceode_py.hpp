@@ -8,6 +8,7 @@
 #include <sundials/sundials_linearsolver.h>
 #include <sundials/sundials_matrix.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -71,6 +72,11 @@ struct Csr {
   std::vector<sunrealtype> val;
 };
 Csr ToCsr(py::handle matrix, const char* what);
+// The arrays the right-hand side loops over: 32-bit indices move less memory per entry.
+struct Csr32 {
+  std::vector<int32_t> ptr, idx;
+  std::vector<sunrealtype> val;
+};
 bool IsSparse(py::handle obj);
 class LinearStructure {
  public:
@@ -82,22 +88,15 @@ class LinearStructure {
   const std::vector<sunrealtype>& lumped_mass() const { return mass_; }
   const Csr& sparse_mass() const { return sparse_mass_; }
   const Csr& damping() const { return C_; }
-  // out = M^{-1} (force - K x - C v) for a lumped M, force - K x - C v otherwise; with
-  // add_force false, out's input is not read (no force: a zero load).
-  void Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out,
-                bool add_force = true) const;
+  // out = M^{-1} (force - K x - C v) for a lumped M, force - K x - C v otherwise.
+  void Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const;
   const py::object& force() const { return force_; }
 
  private:
-  // K x for a lumped, undamped structure: the explicit structural path's whole f, so it reads
-  // K's columns as 32-bit indices (a third less memory traffic than sunindextype at 10^5 DOF and
-  // more) and multiplies by 1/m, as a hand-written C loop does.
-  void EvaluateLumped(const sunrealtype* x, sunrealtype* out, bool add_force) const;
-
   sunindextype n_ = 0;
   std::vector<sunrealtype> mass_, inv_mass_;
-  std::vector<int32_t> kcol_;  // K_.idx as 32-bit indices (empty when n_ >= 2^31)
   Csr sparse_mass_, K_, C_;
+  Csr32 k32_, c32_;
   py::object force_;
 };
 void RegisterStructure(py::module_& m);
@@ -120,6 +119,8 @@ struct CallbackData {
   std::shared_ptr<LinearStructure> structure;  // or the right-hand side in C++
   MassSpec mass;
   ConstraintSpec constr;
+  py::object roots = py::none();  // g(t, x, v, gout), or None
+  int nroots = 0;
   ViewCache in{false}, out{true};
   long python_calls = 0;
   // The first exception a callback raised; CEODE is stopped by the failing return.
@@ -151,6 +152,9 @@ int AttachSolvers(void* mem, SUNContext ctx, const CallbackData& cb, SolverSet* 
 // ---- constraints.cpp -------------------------------------------------------------------
 int PhiFn(sunrealtype t, N_Vector x, N_Vector phi, void* user_data);
 int PhiJacFn(sunrealtype t, N_Vector x, SUNMatrix G, void* user_data);
+
+// ---- roots.cpp -------------------------------------------------------------------------
+int RootFn(sunrealtype t, N_Vector x, N_Vector v, sunrealtype* gout, void* user_data);
 
 // ---- integrator.cpp, integrator_run.cpp ------------------------------------------------
 void RegisterIntegrator(py::module_& m);

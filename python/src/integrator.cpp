@@ -99,6 +99,7 @@ void Integrator::AttachStructure() {
 }
 
 void Integrator::Close() {
+  if (busy_) throw std::runtime_error("close() cannot be called from the integrator's callbacks.");
   if (mem_ != nullptr) CEodeFree(&mem_);
   solvers_.Free();
   if (x_ != nullptr) N_VDestroy(x_);
@@ -114,6 +115,9 @@ void Integrator::Close() {
 
 void* Integrator::mem() {
   if (mem_ == nullptr) RaiseCEodeError(CE_MEM_NULL, "The integrator is closed.");
+  if (busy_) {
+    throw std::runtime_error("The integrator is running: its callbacks cannot call its methods.");
+  }
   return mem_;
 }
 
@@ -154,11 +158,17 @@ void Integrator::SetStabilityGuard(const std::string& mode, py::handle omega_max
 double Integrator::GetStableStep(double safety) {
   Prepare();
   sunrealtype h = 0.0;
-  Check(CEodeGetStableStep(mem(), safety, &h));
+  int flag = 0;
+  {
+    BusyScope busy(this);  // the estimate evaluates f
+    flag = CEodeGetStableStep(mem_, safety, &h);
+  }
+  Check(flag);
   return h;
 }
 
 void Integrator::SetMass(py::handle M, py::handle constant) {
+  mem();
   if (cb_->structure) throw py::value_error("a LinearStructure brings its own mass matrix.");
   MassSpec spec = ParseMass(M, constant, cb_->n, t_, CopyVector(x_));
   cb_->mass = std::move(spec);
@@ -166,6 +176,7 @@ void Integrator::SetMass(py::handle M, py::handle constant) {
 }
 
 void Integrator::SetConstraints(py::object phi, py::object G, long nc) {
+  mem();
   if (phi.is_none() && G.is_none()) {
     Check(CEodeSetConstraints(mem(), nullptr, nullptr, nullptr));
     cb_->constr = ConstraintSpec();

@@ -31,6 +31,10 @@ class Integrator {
   void SetStopTime(double tstop);
   void SetMaxNumSteps(long mxsteps);
   py::dict Stats();
+  // roots.cpp: events
+  void SetRoots(py::object g, int nrtfn, py::handle direction);
+  py::array_t<int> RootInfo();
+  int last_flag() const { return last_flag_; }
   sunindextype size() const { return cb_->n; }
   double time() const { return t_; }
 
@@ -42,7 +46,9 @@ class Integrator {
   py::array_t<sunrealtype> Multipliers();
   // Raises CEodeError for flag < 0 and a callback's exception (chained to it) first.
   void Check(int flag);
-  void* mem();  // CEodeError(CE_MEM_NULL) once closed
+  // CEodeError(CE_MEM_NULL) once closed; RuntimeError from inside the integrator's own
+  // callbacks (CEODE's calls are not re-entrant).
+  void* mem();
 
   // The GC's view of the Python objects held (tp_traverse, tp_clear).
   int Traverse(visitproc visit, void* arg);
@@ -50,6 +56,7 @@ class Integrator {
 
  private:
   friend void ErrHandler(int, const char*, const char*, char*, void*);
+  friend class BusyScope;
   void Create(py::object f, double t0, py::handle x0, py::handle v0);
   void AttachStructure();
   void Prepare();
@@ -65,8 +72,22 @@ class Integrator {
   SolverSet solvers_;
   bool solvers_dirty_ = false;
   double t_ = 0.0;
+  int last_flag_ = 0;
+  bool busy_ = false;  // inside a C call that runs callbacks
   std::vector<std::string> warnings_;
   std::string last_error_;
+};
+
+// Marks the integrator busy while CEODE runs its callbacks.
+class BusyScope {
+ public:
+  explicit BusyScope(Integrator* self) : self_(self) { self_->busy_ = true; }
+  ~BusyScope() { self_->busy_ = false; }
+  BusyScope(const BusyScope&) = delete;
+  BusyScope& operator=(const BusyScope&) = delete;
+
+ private:
+  Integrator* self_;
 };
 
 void ErrHandler(int code, const char* module, const char* function, char* msg, void* data);

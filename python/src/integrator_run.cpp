@@ -59,6 +59,7 @@ void Integrator::Prepare() {
 int Integrator::EvolveOnce(double tout, int itask) {
   sunrealtype tret = t_;
   int flag = 0;
+  BusyScope busy(this);
   if (PythonFree()) {
     py::gil_scoped_release nogil;  // no Python is called: other threads may run
     flag = CEodeEvolve(mem_, tout, x_, v_, &tret, itask);
@@ -66,6 +67,7 @@ int Integrator::EvolveOnce(double tout, int itask) {
     flag = CEodeEvolve(mem_, tout, x_, v_, &tret, itask);
   }
   t_ = tret;
+  last_flag_ = flag;
   return flag;
 }
 
@@ -137,11 +139,13 @@ int Integrator::Traverse(visitproc visit, void* arg) {
   Py_VISIT(cb_->mass.callable.ptr());
   Py_VISIT(cb_->constr.phi.ptr());
   Py_VISIT(cb_->constr.jac.ptr());
+  Py_VISIT(cb_->roots.ptr());
   return 0;
 }
 
 void Integrator::ClearReferences() {
   if (!cb_) return;
+  cb_->roots = py::none();
   cb_->rhs = py::none();
   cb_->mass.callable = py::none();
   cb_->constr.phi = py::none();

@@ -39,7 +39,9 @@ void DefineOptions(py::class_<Integrator>& c) {
            py::arg("nc"))
       .def("set_zero_start", &Integrator::SetZeroStart, py::arg("flag"))
       .def("set_stop_time", &Integrator::SetStopTime, py::arg("tstop"))
-      .def("set_max_num_steps", &Integrator::SetMaxNumSteps, py::arg("mxsteps"));
+      .def("set_max_num_steps", &Integrator::SetMaxNumSteps, py::arg("mxsteps"))
+      .def("set_roots", &Integrator::SetRoots, py::arg("g"), py::arg("nrtfn"),
+           py::arg("direction") = py::none());
 }
 
 void DefineSolving(py::class_<Integrator>& c) {
@@ -53,6 +55,8 @@ void DefineSolving(py::class_<Integrator>& c) {
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](Integrator& self, py::args) { self.Close(); })
       .def_property_readonly("n", &Integrator::size)
+      .def("root_info", &Integrator::RootInfo)
+      .def_property_readonly("last_flag", &Integrator::last_flag)
       .def_property_readonly("t", &Integrator::time);
 }
 

@@ -1,10 +1,7 @@
 // LinearStructure: M a = force(t) - K x - C v with K, C (and a sparse M) copied to CSR
 // arrays at construction, so the right-hand side runs in C++; force(t, out) is the only
 // Python call per evaluation, and there is none without a force.
-#include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <limits>
 #include <string>
 
 #include "ceode_py.hpp"
@@ -74,10 +71,22 @@ void CheckSquare(const Csr& A, sunindextype n, const char* what) {
   CheckFinite(A.val, what);
 }
 
-// y_i -= sum_k A_ik x_k for row i.
-inline sunrealtype RowProduct(const Csr& A, sunindextype i, const sunrealtype* x) {
+Csr32 Narrow(const Csr& A, const char* what) {
+  if (A.val.size() > static_cast<size_t>(INT32_MAX)) {
+    throw py::value_error(std::string(what) + " has more than 2^31 - 1 nonzeros.");
+  }
+  Csr32 out;
+  out.ptr.assign(A.ptr.begin(), A.ptr.end());
+  out.idx.assign(A.idx.begin(), A.idx.end());
+  out.val = A.val;
+  return out;
+}
+
+// sum_k A_ik x_k for row i.
+inline sunrealtype RowProduct(const int32_t* ptr, const int32_t* idx, const sunrealtype* val,
+                              sunindextype i, const sunrealtype* x) {
   sunrealtype s = 0.0;
-  for (sunindextype k = A.ptr[i]; k < A.ptr[i + 1]; ++k) s += A.val[k] * x[A.idx[k]];
+  for (int32_t k = ptr[i]; k < ptr[i + 1]; ++k) s += val[k] * x[idx[k]];
   return s;
 }
 
@@ -103,48 +112,34 @@ LinearStructure::LinearStructure(py::object M, py::object K, py::object C, py::o
       if (!(mi > 0.0) || !std::isfinite(mi)) {
         throw py::value_error("M (lumped masses) must be positive and finite.");
       }
+      inv_mass_.push_back(1.0 / mi);
     }
   } else {
     sparse_mass_ = ToCsr(M, "M");
     CheckSquare(sparse_mass_, n_, "M");
   }
-  if (!mass_.empty() && n_ < std::numeric_limits<int32_t>::max()) {
-    kcol_.assign(K_.idx.begin(), K_.idx.end());
-    for (sunrealtype mi : mass_) inv_mass_.push_back(1.0 / mi);
-  }
   if (!C.is_none()) {
     C_ = ToCsr(C, "C");
     CheckSquare(C_, n_, "C");
   }
+  k32_ = Narrow(K_, "K");
+  if (C_.rows > 0) c32_ = Narrow(C_, "C");
   if (!force_.is_none() && !PyCallable_Check(force_.ptr())) {
     throw py::type_error("force must be a callable force(t, out) or None.");
   }
 }
 
-void LinearStructure::EvaluateLumped(const sunrealtype* x, sunrealtype* out, bool add_force) const {
-  const sunindextype* ptr = K_.ptr.data();
-  const int32_t* col = kcol_.data();
-  const sunrealtype* val = K_.val.data();
-  const sunrealtype* inv = inv_mass_.data();
+void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out) const {
+  const int32_t *kp = k32_.ptr.data(), *ki = k32_.idx.data();
+  const sunrealtype* kv = k32_.val.data();
+  const int32_t *cp = c32_.ptr.data(), *ci = c32_.idx.data();
+  const sunrealtype* cv = c32_.val.data();
+  const sunrealtype* im = inv_mass_.data();
+  const bool damped = C_.rows > 0, lumped = !inv_mass_.empty();
   for (sunindextype i = 0; i < n_; ++i) {
-    sunrealtype s = 0.0;
-    for (sunindextype k = ptr[i]; k < ptr[i + 1]; ++k) s += val[k] * x[col[k]];
-    out[i] = ((add_force ? out[i] : 0.0) - s) * inv[i];
-  }
-}
-
-void LinearStructure::Evaluate(const sunrealtype* x, const sunrealtype* v, sunrealtype* out,
-                               bool add_force) const {
-  const bool damped = C_.rows > 0, lumped = mass_.size() > 0;
-  if (!damped && !kcol_.empty()) {
-    EvaluateLumped(x, out, add_force);
-    return;
-  }
-  if (!add_force) std::fill(out, out + n_, 0.0);
-  for (sunindextype i = 0; i < n_; ++i) {
-    sunrealtype s = out[i] - RowProduct(K_, i, x);
-    if (damped) s -= RowProduct(C_, i, v);
-    out[i] = lumped ? s / mass_[i] : s;
+    sunrealtype s = out[i] - RowProduct(kp, ki, kv, i, x);
+    if (damped) s -= RowProduct(cp, ci, cv, i, v);
+    out[i] = lumped ? s * im[i] : s;  // a product: a division costs several
   }
 }
 

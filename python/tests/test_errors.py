@@ -227,3 +227,23 @@ def test_a_cycle_through_the_right_hand_side_is_collected():
     del model
     gc.collect()
     assert ref() is None
+
+
+def test_callbacks_cannot_reenter_or_close_their_integrator():
+    def f(t, x, v, out):
+        s.close()
+
+    s = ceode.Integrator(f, 0.0, [1.0], [0.0])
+    s.set_fixed_step(1e-2)
+    with pytest.raises(RuntimeError, match="callbacks"):
+        s.evolve(1.0)
+
+    def g(t, x, v, out):
+        s2.evolve(2.0)
+
+    s2 = ceode.Integrator(g, 0.0, [1.0], [0.0])
+    s2.set_fixed_step(1e-2)
+    with pytest.raises(RuntimeError, match="running"):
+        s2.evolve(1.0)
+    s.reinit(0.0, [1.0], [0.0])  # both are still usable
+    s2.close()

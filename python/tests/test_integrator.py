@@ -173,3 +173,15 @@ def test_close_frees_the_memory_and_later_calls_raise():
         s.evolve(0.2)
     assert info.value.flag_name == "CE_MEM_NULL"
     s.close()  # a second close is harmless
+
+
+def test_roots_stop_evolve_at_the_event_time():
+    # A ball dropped from 1 m hits x = 0 at sqrt(2 / g); the root is located on the dense
+    # output of a third-order set, exact here (the solution is a parabola) to round-off.
+    s = ceode.Integrator(lambda t, x, v, out: out.__setitem__(0, -9.81), 0.0, [1.0], [0.0])
+    s.set_fixed_step(1e-2)
+    s.set_roots(lambda t, x, v, gout: gout.__setitem__(0, x[0]), 1, direction=[-1])
+    t, x, v = s.evolve(5.0)
+    assert s.last_flag == 2  # CE_ROOT_RETURN
+    assert list(s.root_info()) == [-1]
+    assert abs(t - math.sqrt(2 / 9.81)) < 1e-12 and abs(x[0]) < 1e-12
