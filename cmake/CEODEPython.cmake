@@ -6,9 +6,9 @@ set(CEODE_PYTHON_MISSING "")
 if(NOT DEFINED CEODE_BUILD_PYTHON OR CEODE_BUILD_PYTHON)
   find_package(Python3 3.7 COMPONENTS Interpreter Development.Module NumPy QUIET)
   if(NOT Python3_FOUND)
-    set(CEODE_PYTHON_MISSING
-        "no Python 3 with development headers and NumPy (interpreter: '${Python3_EXECUTABLE}'; "
-        "Debian: python3-dev python3-numpy, or -DPython3_EXECUTABLE=/usr/bin/python3)")
+    string(CONCAT CEODE_PYTHON_MISSING
+           "no Python 3 with development headers and NumPy (interpreter: '${Python3_EXECUTABLE}'; "
+           "Debian: python3-dev python3-numpy, or -DPython3_EXECUTABLE=/usr/bin/python3)")
   else()
     set(PYBIND11_FINDPYTHON ON)  # pybind11 takes the Python3 found above
     find_package(pybind11 CONFIG QUIET)

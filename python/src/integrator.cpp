@@ -100,6 +100,10 @@ void Integrator::AttachStructure() {
 
 void Integrator::Close() {
   if (busy_) throw std::runtime_error("close() cannot be called from the integrator's callbacks.");
+  FreeAll();
+}
+
+void Integrator::FreeAll() noexcept {
   if (mem_ != nullptr) CEodeFree(&mem_);
   solvers_.Free();
   if (x_ != nullptr) N_VDestroy(x_);
@@ -133,8 +137,10 @@ void Integrator::SetMethod(py::handle method) {
 void Integrator::SetFixedStep(double h) { Check(CEodeSetFixedStep(mem(), h)); }
 
 void Integrator::SetTolerances(double rtol, py::handle atol) {
-  if (PyFloat_Check(atol.ptr()) || PyLong_Check(atol.ptr())) {
-    Check(CEodeSStolerances(mem(), rtol, atol.cast<double>()));
+  py::array scalar = py::array::ensure(atol);
+  if (scalar && scalar.ndim() == 0) {  // a Python or numpy number
+    Check(CEodeSStolerances(mem(), rtol,
+                            py::float_(py::reinterpret_borrow<py::object>(atol)).cast<double>()));
     return;
   }
   RealArray a = AsVector(atol, "atol", cb_->n);

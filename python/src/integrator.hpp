@@ -13,7 +13,7 @@ namespace ceode_py {
 class Integrator {
  public:
   Integrator(py::object f, double t0, py::handle x0, py::handle v0, py::handle method);
-  ~Integrator() { Close(); }
+  ~Integrator() { FreeAll(); }
   Integrator(const Integrator&) = delete;
   Integrator& operator=(const Integrator&) = delete;
   void Close();
@@ -59,6 +59,7 @@ class Integrator {
   friend class BusyScope;
   void Create(py::object f, double t0, py::handle x0, py::handle v0);
   void AttachStructure();
+  void FreeAll() noexcept;
   void Prepare();
   std::string Message();
   [[noreturn]] void RaisePending(int flag);

@@ -135,11 +135,11 @@ py::array_t<sunrealtype> Integrator::Multipliers() {
 
 int Integrator::Traverse(visitproc visit, void* arg) {
   if (!cb_) return 0;
-  Py_VISIT(cb_->rhs.ptr());
-  Py_VISIT(cb_->mass.callable.ptr());
-  Py_VISIT(cb_->constr.phi.ptr());
-  Py_VISIT(cb_->constr.jac.ptr());
-  Py_VISIT(cb_->roots.ptr());
+  for (PyObject* o : {cb_->rhs.ptr(), cb_->mass.callable.ptr(), cb_->constr.phi.ptr(),
+                      cb_->constr.jac.ptr(), cb_->roots.ptr()}) {
+    const int r = o != nullptr ? visit(o, arg) : 0;
+    if (r != 0) return r;
+  }
   return 0;
 }
 
