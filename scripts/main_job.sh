@@ -21,6 +21,8 @@
 # built -O3 (scripts/build_sundials.sh, prefix ./build/sundials-6.4.1-O3), with
 # CEODE rebuilt on it in ./build/o3: outputs docs/results/<scene>_o3.*, and
 # ratios.csv gets one row per build (sundials_build column).
+# Then, when the Python module is configured (pybind11 found), the Python benchmarks of
+# bench/python/ and examples/python/plate_tip.py: docs/results/python_*.{csv,txt,png}.
 # Exit code: 0 when every step and every scene's own checks passed.
 # Environment: JOBS (build parallelism, default 2), PYTHON (needs matplotlib),
 # SUNDIALS_O3_PREFIX (an existing -O3 SUNDIALS 6.4.1 install, e.g. /opt/sundials-6.4.1-O3).
@@ -53,8 +55,10 @@ fi
 step "python: $PYTHON"
 
 step "configure Release in ./build"
+# Python3_EXECUTABLE: the Python module (when pybind11 is found) is built for the interpreter
+# that runs the plots and the Python benchmarks.
 cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCEODE_BUILD_TESTS=ON -DCEODE_BUILD_BENCHMARKS=ON \
-  > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
+  -DPython3_EXECUTABLE="$(command -v "$PYTHON")" > "$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
 rm -f "$BUILD.configure.log"
 
 # Only what the job runs: the bench programs (the unit tests and the examples
@@ -236,6 +240,45 @@ mri_inner_cost() {  # build dir, suffix
 mri_inner_cost "$BUILD" ""
 if [ -f "$O3_BUILD/CMakeCache.txt" ]; then mri_inner_cost "$O3_BUILD" _o3; fi
 # ---- end MRI inner cost ----------------------------------------------------------------------
+
+# ---- Python (bench/python/README.md) ---------------------------------------------------------
+# When ./build has the Python module (CEODE_BUILD_PYTHON: on when pybind11 and NumPy are found):
+# the structural path against the C scene on the same plate at ~10^5 DOF
+# (bench/fe_plate_c_scene), a Python right-hand side's overhead against solve_ivp's, work-precision
+# against solve_ivp RK45 and DOP853 on the pendulum and the FPU chain, and the example
+# examples/python/plate_tip.py (its own check). Outputs docs/results/python_*.{csv,txt,png};
+# about two minutes. Not run (and not a failure) when the module is not configured.
+py_run() {  # name, script and arguments
+  local name=$1 t1
+  shift
+  t1=$(date +%s)
+  step "python $name ..."
+  if PYTHONPATH=$BUILD/python "$PYTHON" "$@" > "$OUT/python_$name.txt" 2>&1; then
+    step "python $name done in $(( $(date +%s) - t1 )) s"
+  else
+    step "python $name FAILED after $(( $(date +%s) - t1 )) s; see $OUT/python_$name.txt"
+    status=1
+  fi
+}
+python_benches() {
+  if ! grep -q '^CEODE_BUILD_PYTHON:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null; then
+    step "python: the module is not configured (pybind11 or NumPy missing), benchmarks not run"
+    return
+  fi
+  if ! cmake --build "$BUILD" -j"$JOBS" --target ceode_python fe_plate_c_scene \
+      > "$BUILD/main_job_python.log" 2>&1 ||
+      ! PYTHONPATH=$BUILD/python "$PYTHON" -c 'import ceode, scipy' >> "$BUILD/main_job_python.log" 2>&1; then
+    step "python: module build or import FAILED (log: $BUILD/main_job_python.log)"
+    status=1
+    return
+  fi
+  py_run structural bench/python/structural_cost.py --c-scene "$BUILD/bench/fe_plate_c_scene" --out "$OUT"
+  py_run callback bench/python/callback_overhead.py --out "$OUT"
+  py_run work_precision bench/python/work_precision.py --out "$OUT"
+  py_run example examples/python/plate_tip.py --out "$OUT/python_plate_tip.png"
+}
+python_benches
+# ---- end Python ------------------------------------------------------------------------------
 
 step "plots"
 mine=()

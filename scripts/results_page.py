@@ -3,8 +3,8 @@
 
 Nothing in the page is typed by hand: the numbers come from ratios.csv (equal-error ratios,
 scripts/ratios.py), the scene CSVs (figures, scripts/plot_results.py draws a missing one),
-bench_step[_o3].json (per-step cost), mpi_*.csv, mri_inner_cost[_o3].csv, chain_dae[_o3].csv
-and run_info.json (how the run was made: commit, date, machine, compiler and flags, SUNDIALS
+bench_step[_o3].json (per-step cost), mpi_*.csv, mri_inner_cost[_o3].csv, chain_dae[_o3].csv,
+python_*.csv (the Python module's benchmarks, bench/python/) and run_info.json (how the run was made: commit, date, machine, compiler and flags, SUNDIALS
 builds, command; written by the last step of scripts/main_job.sh). The one-sentence problem
 statements are the SCENES table below. The -O3 SUNDIALS half is the headline wherever it
 exists; a scene whose CSVs are missing gets a line saying it was not run.
@@ -471,6 +471,63 @@ def mri_lines(mri_name, mri_best):
     return lines + ["", f"From `{mri_name}`."]
 
 
+def read_csv(page, name):
+    """The rows of docs/results/<name>, [] when it is absent."""
+    if not page.exists(name):
+        return []
+    with open(page.path(name), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def python_lines(page):
+    """The Python module's benchmarks (bench/python/): python_structural.csv, python_callback.csv,
+    python_ratios.csv and the work-precision figures python_<problem>.png."""
+    lines = []
+    st = read_csv(page, "python_structural.csv")
+    if st:
+        dof = f"{int(st[0]['dof']):,}".replace(",", " ")
+        lines += [f"Structural path: `ceode.LinearStructure` against the C scene on the identical "
+                  f"Q4 plate ({dof} DOF, K and M exported by the C assembly), time per step; the "
+                  f"ratio is the median over {st[0]['pairs']} pairs of chunks run alternately "
+                  "(quartiles beside it), then the fastest chunk's over the fastest chunk's "
+                  "(`python_structural.csv`):", "",
+                  "| set | h | Python ms/step (spread) | C ms/step (spread) | Python / C "
+                  "(quartiles) | fastest / fastest |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['set']} | {fmt(float(r['h']))} | {fmt(1e3 * float(r['python_s_per_step']))} "
+                  f"({100 * float(r['python_spread']):.0f} %) | {fmt(1e3 * float(r['c_s_per_step']))} "
+                  f"({100 * float(r['c_spread']):.0f} %) | **{r['ratio_python_over_c']}** "
+                  f"({r['ratio_q1']} – {r['ratio_q3']}) | {r['ratio_of_best']} |" for r in st]
+        lines.append("")
+    cb = read_csv(page, "python_callback.csv")
+    if cb:
+        lines += [f"Python right-hand side (the pendulum: f's arithmetic {cb[0]['f_ns']} ns, the "
+                  f"bare Python call {cb[0]['call_ns']} ns): the ns beyond f's arithmetic per "
+                  "CEODE step and per solve_ivp evaluation (`python_callback.csv`):", "",
+                  "| solver | configuration | steps | f evaluations | ns per step | ns per evaluation |",
+                  "|---|---|---|---|---|---|"]
+        lines += [f"| {r['solver']} | {r['config']} | {r['steps']} | {r['rhs_evals']} | "
+                  f"{r['overhead_ns_per_step']} | **{r['overhead_ns_per_eval']}** |" for r in cb]
+        lines.append("")
+    eq = read_csv(page, "python_ratios.csv")
+    if eq:
+        lines += ["At equal error, CEODE's fastest curve (Python f) against solve_ivp on the same f, "
+                  "interpolated in log-log (`python_ratios.csv`):", "",
+                  "| problem | error | CEODE best | s | CEODE / RK45 | CEODE / DOP853 |",
+                  "|---|---|---|---|---|---|"]
+        lines += [f"| {r['scene']} | {r['error_level']} | {r['ceode_best']} | "
+                  f"{r['ceode_seconds'] or '–'} | **{r['ratio_ceode_over_rk45'] or '–'}** | "
+                  f"**{r['ratio_ceode_over_dop853'] or '–'}** |" for r in eq]
+        lines.append("")
+        for scene in dict.fromkeys(r["scene"] for r in eq):
+            lines += image(page, f"{scene}.png", f"{scene} work-precision")
+        lines.append("")
+    if page.exists("python_plate_tip.png"):
+        lines += ["The example `examples/python/plate_tip.py` (its checked run of this job, "
+                  "`python_example.txt`):", ""] + image(page, "python_plate_tip.png",
+                                                       "plate tip displacement")
+    return lines
+
+
 def write(results, out_path):
     page = Page(results)
     ratios_path = page.path("ratios.csv")
@@ -547,11 +604,18 @@ def write(results, out_path):
             "Fast evaluations CEODE needs to match the MRI error of an almost exact inner solve, "
             "over RK4's, for each slow step H (largest first); counts, not timings.",
             mri_lines(mri_name, mri_best))
+    section(page, "## Python (`ceode` module, `bench/python/`)",
+            "The Python module on the C scenes' models: the structural path's time per step against "
+            "the C scene, the overhead of a Python right-hand side against solve_ivp's, and "
+            "work-precision against scipy's solve_ivp RK45 and DOP853 on the same f "
+            "([bench/python/README.md](../bench/python/README.md)).",
+            python_lines(page), "Not run in this job (the module was not built).")
     page.add("## Files", "",
              "`docs/results/<scene>.csv` (schema `scene,solver,config,h_or_tol,error,drift,steps,"
              "rhs_evals,seconds`) and `<scene>.txt` for the unoptimised SUNDIALS, `<scene>_o3.*` for "
              "the `-O3` build; `ratios.csv`; `bench_step[_o3].json`; `mpi_*`, `mri_inner_cost*`; "
-             "`run_info.json`; the charts `summary_ratios.png` (scripts/plot_summary.py), "
+             "`run_info.json`; `python_*.csv`, `.txt`, `.png` (bench/python/); the charts "
+             "`summary_ratios.png` (scripts/plot_summary.py), "
              "`which_set.png` (scripts/plot_which_set.py), `long_run_energy.png` "
              "(scripts/plot_long_run.py) and `<scene>[_o3]_drift.png` (scripts/plot_dae.py). "
              "Regenerate this page with "
