@@ -17,6 +17,7 @@ namespace ceode {
 
 // Degree d carries D_0 .. D_{d-1}; d = 3 .. kMaxDegree.
 constexpr int kMaxDegree = 8;
+constexpr int kCompWork = 9;  // scratch vectors of the reference's error-free compensated sums
 constexpr int kMinDegree = 3;
 
 // One named parameter set of docs/theory.md section 5 (table in ceode_method.cpp).
@@ -297,6 +298,7 @@ struct CEodeMemRec {
   // index 0 is x(tcur + h), index k the derivative D_k; double-buffered like D.
   N_Vector comp[ceode::kMaxDegree] = {};
   N_Vector compnew[ceode::kMaxDegree] = {};
+  N_Vector compwork[ceode::kCompWork] = {};  // the reference's error-free increments (kernels)
   N_Vector D[ceode::kMaxDegree] = {};
   N_Vector Dnew[ceode::kMaxDegree] = {};
 

@@ -60,12 +60,14 @@ struct FusedPlan {
 };
 
 // Compensation vectors of the accumulated quantities (index = Combo::level), and the scratch
-// vector the reference needs when compensating.
+// vectors the reference needs when compensating: tmp, and kCompWork (ceode_impl.hpp) more for
+// the error-free increments on vectors without host data (CompensatedSumByOps).
 struct Compensation {
   bool on = false;
   N_Vector* comp = nullptr;
   N_Vector* compnew = nullptr;
   N_Vector tmp = nullptr;
+  N_Vector* work = nullptr;
 };
 
 // ---- Reference backend: N_Vector operations (ceode_kernels_ref.cpp) ----

@@ -20,6 +20,55 @@ void Combine(int m, const sunrealtype* c, N_Vector* X, N_Vector z) {
 
 namespace {
 
+// The exact rounding error of the products p = a x (a scalar, x a vector) into out, by Dekker's
+// product of the halves of a and x (bh, bl scratch): the operations ProductError makes on each
+// entry, one N_Vector operation each, so that both give the same bits (the error is exact).
+void ProductErrorByOps(sunrealtype a, N_Vector x, N_Vector p, N_Vector bh, N_Vector bl,
+                       N_Vector out) {
+  constexpr sunrealtype kSplit = 134217729.0;  // 2^27 + 1
+  const sunrealtype ta = kSplit * a, ah = ta - (ta - a), al = a - ah;
+  N_VScale(kSplit, x, bh);            // tb
+  N_VLinearSum(1, bh, -1, x, bl);     // tb - x
+  N_VLinearSum(1, bh, -1, bl, bh);    // bh = tb - (tb - x)
+  N_VLinearSum(1, x, -1, bh, bl);     // bl = x - bh
+  N_VLinearSum(ah, bh, -1, p, out);   // ah bh - p
+  N_VLinearSum(1, out, ah, bl, out);  // + ah bl
+  N_VLinearSum(1, out, al, bh, out);  // + al bh
+  N_VLinearSum(1, out, al, bl, out);  // + al bl
+}
+
+// StoreCompensatedExact (ceode_kernels_serial.cpp) on vectors without host data: the increment
+// sum_j c_j X_j - comp as s + e (Dot2), then out = old + s and compnew = ((out - old) - s) - e,
+// one N_Vector operation per operation of the entry-wise form. False without scratch vectors.
+bool CompensatedSumByOps(const Combo& cb, const Compensation& cs) {
+  if (cs.work == nullptr || cs.work[kCompWork - 1] == nullptr) return false;
+  N_Vector s = cs.work[0], t = cs.work[1], e = cs.work[2], p = cs.work[3], bb = cs.work[4];
+  N_Vector bh = cs.work[5], bl = cs.work[6], q = cs.work[7], r = cs.work[8];
+  N_VScale(cb.c[0], cb.X[0], s);
+  ProductErrorByOps(cb.c[0], cb.X[0], s, bh, bl, e);
+  for (int j = 1; j <= cb.m; ++j) {
+    const sunrealtype c = j < cb.m ? cb.c[j] : -1;
+    N_Vector x = j < cb.m ? cb.X[j] : cs.comp[cb.level];
+    N_VScale(c, x, p);
+    N_VLinearSum(1, s, 1, p, t);    // t = s + p
+    N_VLinearSum(1, t, -1, s, bb);  // bb = t - s
+    ProductErrorByOps(c, x, p, bh, bl, q);
+    N_VLinearSum(1, t, -1, bb, r);   // t - bb
+    N_VLinearSum(1, s, -1, r, r);    // s - (t - bb)
+    N_VLinearSum(1, p, -1, bb, bb);  // p - bb
+    N_VLinearSum(1, r, 1, bb, r);    // the sum's error
+    N_VLinearSum(1, q, 1, r, q);     // the product's error and the sum's
+    N_VLinearSum(1, e, 1, q, e);
+    std::swap(s, t);
+  }
+  N_Vector comp_new = cs.compnew[cb.level];
+  N_VLinearSum(1, cb.old, 1, s, cb.out);
+  N_VLinearSum(1, cb.out, -1, cb.old, comp_new);
+  N_VLinearSum(1, comp_new, -1, s, comp_new);
+  N_VLinearSum(1, comp_new, -1, e, comp_new);
+  return true;
+}
+
 // The increment is summed first and the large accumulated term last, so that
 // quantity is rounded once per step; with compensated summation its rounding
 // error is carried forward in comp -> compnew (Kahan).
@@ -39,9 +88,10 @@ void RunCombo(const Combo& cb, const Compensation& cs) {
     Combine(m, c, X, cb.out);
     return;
   }
-  if (ExactIncrement(cb.level) && CompensatedSumOnData(cb, cs)) return;
-  // The higher derivatives, and vectors without host data: the rounded increment, compensated
-  // when it is added.
+  if (ExactIncrement(cb.level) && (CompensatedSumOnData(cb, cs) || CompensatedSumByOps(cb, cs))) {
+    return;
+  }
+  // The higher derivatives: the rounded increment, compensated when it is added.
   N_Vector y = cs.tmp;
   c[m] = -1;
   X[m++] = cs.comp[cb.level];

@@ -55,6 +55,10 @@ void FreeVectors(CEodeMemRec* ce) {
     if (ce->compnew[k] != nullptr) N_VDestroy(ce->compnew[k]);
     ce->D[k] = ce->Dnew[k] = ce->comp[k] = ce->compnew[k] = nullptr;
   }
+  for (N_Vector& w : ce->compwork) {
+    if (w != nullptr) N_VDestroy(w);
+    w = nullptr;
+  }
   ce->initialized = false;
 }
 
@@ -196,6 +200,9 @@ int AllocHistory(CEodeMemRec* ce, const char* func) {
   for (int k = 0; ce->compensated && k <= d - 2; ++k) {
     ok = ok && CloneIfMissing(&ce->comp[k], ce->xcur) && CloneIfMissing(&ce->compnew[k], ce->xcur);
     if (ok) N_VConst(0, ce->comp[k]);
+  }
+  for (int k = 0; ce->compensated && k < kCompWork; ++k) {
+    ok = ok && CloneIfMissing(&ce->compwork[k], ce->xcur);
   }
   return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
 }

@@ -68,7 +68,8 @@ UpdateResult UpdateOnMpi(CEodeMemRec* ce, const StepMem& sm) {  // the local par
   return GlobalL1(ce->xnew, sm.kernels[ip](sm.fused_plans[ip], sm.len));
 }
 UpdateResult UpdateOnReference(CEodeMemRec* ce, const StepMem& sm) {
-  UpdateReference(sm.plans[sm.plan_ix], {ce->compensated, ce->comp, ce->compnew, ce->tmp1});
+  UpdateReference(sm.plans[sm.plan_ix],
+                  {ce->compensated, ce->comp, ce->compnew, ce->tmp1, ce->compwork});
   return {CE_SUCCESS, N_VL1Norm(ce->xnew)};
 }
 
