@@ -314,7 +314,7 @@ class RandomStepRatios : public ::testing::TestWithParam<const char*> {};
 
 // x'' = cos t over 10^4 steps whose ratios are drawn in [1/w, w], w = 1.2 and 1.5: the error
 // stays within a hundred times that of fixed steps of the schedule's largest step, 0.02 (measured:
-// 1x to 33x). The sets of degree 6 and more refresh their history at every change of step
+// 0.06x to 35x). The sets of degree 6 and more refresh their history at every change of step
 // (docs/theory.md 12.5); with the remap alone G7_O7 and G8_O8 grow to 1e13 at w = 1.2, G6_O5 at
 // w = 1.5.
 TEST_P(RandomStepRatios, ForcedMotionStaysAsAccurateAsTheLargestStep) {
