@@ -484,7 +484,13 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
                                static_cast<double>(ce->tcur + hi));
   }
   ceode::Interpolate(ce, s, k, dky);
-  return CE_SUCCESS;
+  if (ceode::IsFinite(dky)) return CE_SUCCESS;
+  return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                             "The derivative %d at t = %.17g is not finite: the step (%g) is too "
+                             "small for it, or the last step failed (start again with "
+                             "CEodeReInit).",
+                             k, static_cast<double>(t),
+                             static_cast<double>(back ? ce->adapt->hlast : ce->h));
 }
 
 void CEodeFree(void** mem) {

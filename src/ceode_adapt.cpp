@@ -400,6 +400,19 @@ sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err) {
   return std::max(ce->h * eta, am.hmin);
 }
 
+namespace {
+
+// The tests' hook (CEodeSetStepSchedule): its step instead of h, unless the step cannot take it
+// (not finite, not positive, too small to advance t or to divide by).
+sunrealtype ScheduledStep(const CEodeMemRec* ce, sunrealtype h) {
+  const AdaptMem& am = *ce->adapt;
+  if (am.schedule == nullptr) return h;
+  const sunrealtype given = am.schedule(ce->tcur, ce->nst, am.schedule_data);
+  return given > 0 && std::isfinite(1 / given) && ce->tcur + given > ce->tcur ? given : h;
+}
+
+}  // namespace
+
 sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
                           sunrealtype limit_t, bool* capped) {
   AdaptMem& am = *ce->adapt;
@@ -437,7 +450,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   eta = std::min(kEtaMax, std::max(kEtaMin, eta));
   const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
-  if (am.schedule != nullptr) h = am.schedule(ce->tcur, ce->nst, am.schedule_data);
+  h = ScheduledStep(ce, h);
   if (am.hmax > 0) h = std::min(h, am.hmax);
   const sunrealtype hs = AdaptStableStep(ce);
   *capped = h > hs;
@@ -703,7 +716,8 @@ int CEodeGetActualInitStep(void* mem, sunrealtype* hinused) {
 
 namespace {
 
-int CopyAdaptVector(void* mem, const char* func, N_Vector out, N_Vector AdaptMem::*field) {
+int CopyAdaptVector(void* mem, const char* func, N_Vector out, N_Vector AdaptMem::*field,
+                    const char* what) {
   CEodeMemRec* ce = nullptr;
   int flag = Access(mem, func, &ce, true);
   if (flag != CE_SUCCESS) return flag;
@@ -717,7 +731,16 @@ int CopyAdaptVector(void* mem, const char* func, N_Vector out, N_Vector AdaptMem
                         "No error control in this run: set tolerances (CEodeSStolerances) and "
                         "call CEodeEvolve first.");
   }
-  N_VScale(1, ce->adapt.get()->*field, out);
+  N_Vector v = ce->adapt.get()->*field;
+  if (!ceode::IsFinite(v)) {
+    // Zero tolerances where x_i = 0 make infinite weights; a failed step leaves its estimate.
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "The %s at t = %.17g are not finite: a weight is infinite where x_i = 0 "
+                        "and abstol = 0, or the last step failed. Give abstol > 0, or start again "
+                        "with CEodeReInit.",
+                        what, static_cast<double>(ce->tcur));
+  }
+  N_VScale(1, v, out);
   return CE_SUCCESS;
 }
 
@@ -737,11 +760,11 @@ int GetAdaptCounter(void* mem, const char* func, long int* out, long int AdaptMe
 }  // namespace
 
 int CEodeGetErrWeights(void* mem, N_Vector eweight) {
-  return CopyAdaptVector(mem, __func__, eweight, &AdaptMem::ewt);
+  return CopyAdaptVector(mem, __func__, eweight, &AdaptMem::ewt, "error weights");
 }
 
 int CEodeGetEstLocalErrors(void* mem, N_Vector ele) {
-  return CopyAdaptVector(mem, __func__, ele, &AdaptMem::ele);
+  return CopyAdaptVector(mem, __func__, ele, &AdaptMem::ele, "local error estimates");
 }
 
 int CEodeGetNumErrTestFails(void* mem, long int* netfails) {

@@ -79,6 +79,9 @@ int Newton(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, bool setup) {
       rv = NlsLinearSetup(jbad ? SUNTRUE : SUNFALSE, &cur, ce);
       jcur = cur != SUNFALSE;
     }
+    // A failing first residual or setup ends the solve, as in SUNNonlinSol_Newton: retrying it
+    // with a fresh matrix would evaluate the same f at the same point again, without end.
+    if (rv != 0) return rv;
     for (int m = 0; rv == 0;) {
       rv = Iterate(ce, r, own_lu, m);
       if (rv == SUN_NLS_SUCCESS) {

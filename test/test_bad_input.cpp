@@ -32,15 +32,19 @@ using NonlinearSolver = std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver
 
 // x'' = -x - c x' on every component (generic vector operations, any length); its exact solution
 // from x0 = 1, v0 = 0.5 is known for c = 0. With nan_after, f returns NaN values from that time
-// on; with nan_before, before it; with poison_x, f also overwrites its input x with NaN.
+// on; with nan_before, before it; with poison_x, f also overwrites its input x with NaN; from
+// fail_after on it returns fail_retval.
 struct Oscillator {
   sunrealtype c = 0;
   sunrealtype nan_after = INFINITY;
   sunrealtype nan_before = -INFINITY;
   bool poison_x = false;
   int jac_retval = 0;
+  sunrealtype fail_after = INFINITY;
+  int fail_retval = 0;
   static int F(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
     const auto* p = static_cast<const Oscillator*>(data);
+    if (t >= p->fail_after) return p->fail_retval;
     N_VLinearSum(-1, x, -p->c, v, f);
     if (t >= p->nan_after || t < p->nan_before) {
       N_VConst(NAN, f);
@@ -899,6 +903,56 @@ TEST_F(HostileInput, ADenormalFrequencyGivesTheLargestStableStepNotInfinity) {
   ASSERT_EQ(CEodeGetStableStep(mem(), 0, &hmax), CE_SUCCESS);
   EXPECT_TRUE(std::isfinite(hmax));
   EXPECT_EQ(hmax, SUN_BIG_REAL);
+  ExpectCorrectRunAfterReInit();
+}
+
+// A right-hand side that keeps failing recoverably (returns 1) inside the implicit step's Newton
+// solve ends that solve with CE_RHSFUNC_FAIL: the retry with a fresh matrix is made only after a
+// failure inside the iteration, not when the first residual fails (it would evaluate the same f
+// at the same point without end).
+TEST_F(HostileInput, ARightHandSideThatKeepsFailingEndsTheImplicitSolveInsteadOfRetryingIt) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  osc_.c = 1;
+  osc_.fail_after = SUN_RCONST(0.5);
+  osc_.fail_retval = 1;
+  Matrix A(SUNDenseMatrix(2, 2, ctx_));
+  LinearSolver LS(SUNLinSol_Dense(x_.get(), A.get(), ctx_));
+  ASSERT_EQ(CEodeSetVelocityDependence(mem(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem(), CE_IMPLICIT_NEWTON), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem(), LS.get(), A.get()), CE_SUCCESS);
+  sunrealtype t = -1;
+  EXPECT_EQ(Evolve(1, &t), CE_RHSFUNC_FAIL);
+  EXPECT_TRUE(Contains(Message(), "returned 1")) << Message();
+  EXPECT_LE(t, SUN_RCONST(0.5));
+  EXPECT_TRUE(Finite());
+  ExpectCorrectRunAfterReInit();
+}
+
+// The highest derivatives of the interpolant over a first step of 1e-300 (error control, the
+// step given by CEodeSetInitStep) overflow: CEodeGetDky says so with a flag instead of returning
+// infinities or NaN with success.
+TEST_F(HostileInput, AnInterpolantDerivativeThatOverflowsIsRefusedNotReturned) {
+  ASSERT_EQ(Start(), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMethodByName(mem(), "G3_CD"), CE_SUCCESS);
+  ASSERT_EQ(CEodeSStolerances(mem(), 1e-6, 1e-6), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetInitStep(mem(), SUN_RCONST(1e-300)), CE_SUCCESS);
+  const int d = 3;
+  sunrealtype t = -1;
+  ASSERT_EQ(CEodeEvolve(mem(), 1, x_.get(), v_.get(), &t, CE_ONE_STEP), CE_SUCCESS) << Message();
+  Vector dky = SerialVector(2, ctx_, 0);
+  int refused = 0;
+  for (int k = 0; k <= d; ++k) {
+    const int flag = CEodeGetDky(mem(), t, k, dky.get());
+    if (flag == CE_SUCCESS) {
+      EXPECT_TRUE(AllFinite(dky.get())) << "k = " << k;
+    } else {
+      EXPECT_EQ(flag, CE_ILL_INPUT);
+      EXPECT_TRUE(Contains(Message(), "not finite")) << Message();
+      ++refused;
+    }
+  }
+  EXPECT_GT(refused, 0);  // at least the top derivative, of size 1 / h^(d-1)
+  ASSERT_EQ(CEodeSetInitStep(mem(), 0), CE_SUCCESS);  // the start chooses its own again
   ExpectCorrectRunAfterReInit();
 }
 
