@@ -415,6 +415,7 @@ TEST(ReturnFlagName, NamesEveryFlagAndNothingElse) {
   const std::vector<std::pair<long int, const char*>> flags = {
       {CE_SUCCESS, "CE_SUCCESS"},
       {CE_TSTOP_RETURN, "CE_TSTOP_RETURN"},
+      {CE_ROOT_RETURN, "CE_ROOT_RETURN"},
       {CE_WARNING, "CE_WARNING"},
       {CE_MEM_NULL, "CE_MEM_NULL"},
       {CE_ILL_INPUT, "CE_ILL_INPUT"},
@@ -437,10 +438,13 @@ TEST(ReturnFlagName, NamesEveryFlagAndNothingElse) {
       {CE_VECTOROP_ERR, "CE_VECTOROP_ERR"},
       {CE_ERR_FAILURE, "CE_ERR_FAILURE"},
       {CE_INCONSISTENT_IC, "CE_INCONSISTENT_IC"},
+      {CE_RTFUNC_FAIL, "CE_RTFUNC_FAIL"},
   };
   for (const auto& f : flags) EXPECT_EQ(FlagName(f.first), f.second);
   EXPECT_EQ(FlagName(-12345), "NONE");
   EXPECT_EQ(FlagName(42), "NONE");
+  EXPECT_EQ(FlagName(CE_RTFUNC_FAIL - 1), "NONE");  // the first code past the last flag
+  EXPECT_EQ(FlagName(CE_ROOT_RETURN + 1), "NONE");
 }
 
 }  // namespace
