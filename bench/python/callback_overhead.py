@@ -16,7 +16,6 @@ Usage: callback_overhead.py [--out DIR] [--quick]
 --quick: fewer direct calls of f to time it alone.
 """
 import argparse
-import csv
 import os
 import sys
 
@@ -76,12 +75,8 @@ def main():
             sec, _, o = H.time_median(lambda: H.scipy_run(p, method, rtol)[0])
             o.steps = H.scipy_steps(p, method, rtol)
             lines.append(line("scipy solve_ivp", f"{method} rtol={rtol:g}", o, sec, ns))
-    os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "python_callback.csv")
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        w.writeheader()
-        w.writerows(lines)
+    H.write_csv(path, lines, FIELDS)
     print(f"pendulum f: {ns['f']:.0f} ns of arithmetic beyond a {ns['call']:.0f} ns call from a "
           f"Python loop; its first-order wrapper for solve_ivp (f inside): {ns['wrapper']:.0f} ns")
     print(f"{'solver':<16} {'config':<18} {'steps':>7} {'f evals':>8} {'ns/step':>9} "

@@ -116,9 +116,11 @@ def row(p, solver, config, h_or_tol, out, seconds):
             "rhs_evals": out.rhs_evals, "seconds": f"{seconds:.6e}"}
 
 
-def write_csv(path, rows):
+def write_csv(path, rows, fields=FIELDS):
+    """Rows (dicts) to a CSV file with the columns `fields` (default: the work-precision columns)."""
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
+        w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()
         w.writerows(rows)
 

@@ -18,7 +18,6 @@ only adds time: the least disturbed figure of each side). Writes <out>/python_st
 Usage: structural_cost.py --c-scene PATH [--out DIR] [--ny 112] [--pairs 15] [--quick]
 """
 import argparse
-import csv
 import os
 import statistics
 import subprocess
@@ -137,12 +136,8 @@ def main():
             print(f"(the C guard's G3_CD stable step at safety 1: {c.stable_step:.6g})")
         rows.append(report(method, h, plate.n, *measure(py, c, args.pairs)))
         c.close()
-    os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "python_structural.csv")
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        w.writeheader()
-        w.writerows(rows)
+    H.write_csv(path, rows, FIELDS)
     print(f"wrote {path}")
     return 0
 

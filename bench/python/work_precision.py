@@ -14,7 +14,6 @@ Usage: work_precision.py [--out DIR] [--quick] [--problem pendulum|chain]...
 Exit code 0 when every run succeeded (timings decide nothing).
 """
 import argparse
-import csv
 import os
 import sys
 
@@ -128,10 +127,7 @@ def main():
     for name in args.problem or ["pendulum", "chain"]:
         rows += run_problem(ceode, name, args.out, args.quick)
     path = os.path.join(args.out, "python_ratios.csv")
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    H.write_csv(path, rows, list(rows[0].keys()))
     print("\nequal error (time_to_reach, log-log): ratio = CEODE time / solve_ivp time "
           "(< 1: CEODE faster)")
     for r in rows:
