@@ -254,6 +254,12 @@ SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
  * here (after CEodeInit; NULL clears) and the guard's Lanczos works in that product, so its
  * estimate is again an upper bound within 0.1 %. Ignored when CEodeSetMassFn is used. */
 SUNDIALS_EXPORT int CEodeSetGuardMass(void* mem, N_Vector mass);
+/* SUNTRUE declares that a restart (CEodeReInit, CEodeReset) keeps the problem's top frequency:
+ * the same f and masses, and a new state whose omega_max is not higher (a linear problem, or a
+ * nonlinear one started where it is no stiffer). The first check of the next run then takes the
+ * last run's estimate and evaluates nothing; later checks (every, the stable-step refresh)
+ * estimate again. CEodeInit and CEodeSetGuardMass drop the kept estimate. Default SUNFALSE. */
+SUNDIALS_EXPORT int CEodeSetGuardReuse(void* mem, sunbooleantype reuse);
 
 /* Error reporting */
 SUNDIALS_EXPORT int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data);
