@@ -488,16 +488,16 @@ int BaseForce(CEodeMemRec* ce, GuardWork* g, const char* func) {
 // given, else Lanczos; 0 when there is nothing to estimate (constraints, a mass
 // matrix type without a guard solver, f independent of x).
 int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
+  if (ce->guard.omega_user > 0) {
+    *omega = ce->guard.omega_user;
+    return CE_SUCCESS;
+  }
   if (ce->guard.carried) {  // CEodeSetGuardReuse: the last run's estimate, once
     ce->guard.carried = false;
     *omega = ce->guard.omega_est;
     return CE_SUCCESS;
   }
   *omega = 0;
-  if (ce->guard.omega_user > 0) {
-    *omega = ce->guard.omega_user;
-    return CE_SUCCESS;
-  }
   if (HasConstraints(ce)) return CE_SUCCESS;  // constrained frequencies need the user's value
   // The mass matrix may be of another size than a CEodeInit made the problem since.
   int flag = ValidateMassMatrix(ce, func, ce->ls.M);
@@ -669,7 +669,8 @@ void GuardReset(CEodeMemRec* ce, bool counters) {
   GuardMem& g = ce->guard;
   if (g.work != nullptr) Work(ce)->mass_ready = false;
   g.accel = false;
-  g.carried = g.reuse && g.omega_est > 0 && std::isfinite(g.omega_est);
+  // The user's frequency, when set, is not an estimate to carry.
+  g.carried = g.reuse && !(g.omega_user > 0) && g.omega_est > 0 && std::isfinite(g.omega_est);
   if (!counters) return;
   g.warned = false;
   g.nfe = g.nme = g.nsetups = 0;
