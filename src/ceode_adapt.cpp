@@ -322,7 +322,8 @@ int MethodCoefficients(CEodeMemRec* ce, const char* func) {
 
 }  // namespace
 
-int AdaptStart(CEodeMemRec* ce, const char* func) {
+int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
+  *accel = false;
   AdaptMem& am = *ce->adapt;
   int flag = MethodCoefficients(ce, func);
   if (flag != CE_SUCCESS) return flag;
@@ -357,6 +358,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func) {
       N_VConst(0, ce->D[2]);
     } else {
       flag = EvalAccel(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2], func);
+      *accel = flag == CE_SUCCESS;
     }
     if (flag != CE_SUCCESS) return flag;
     const sunrealtype span = std::fabs(am.tout_hint - ce->tcur);

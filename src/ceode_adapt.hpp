@@ -113,8 +113,9 @@ struct AdaptMem {
 
 // ceode_adapt.cpp
 // At the start: the method's coefficients, the vectors, and the first step (the user's or
-// one from the initial data, which costs one f); clears the run's state.
-int AdaptStart(CEodeMemRec* ce, const char* func);
+// one from the initial data, which costs one f); clears the run's state. *accel: D_2 holds
+// M^{-1} f(t0, x0, v0) from that f, which the start then does not evaluate again.
+int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel);
 // After the start's history exists: the divided differences at t0 from the start's derivatives.
 void AdaptStartHistory(CEodeMemRec* ce);
 // The error weights from x (the tolerances or the user's function).

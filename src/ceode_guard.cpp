@@ -26,10 +26,15 @@ namespace {
 // Lanczos on the symmetric pencil (K, M), K = -df/dx, in the M inner product.
 constexpr int kMaxLanczos = 150;
 constexpr int kMinLanczos = 5;
+// The Ritz values are looked at after every step up to kEveryStepChecks steps (a check costs
+// O(k^3) on the k x k tridiagonal, next to f's O(n)), then every kCheckEvery steps.
+constexpr int kEveryStepChecks = 20;
 constexpr int kCheckEvery = 5;
-// Stop once the top Ritz pair's residual is below this fraction of its value:
-// the estimate theta + residual is then at most 0.1 % above omega_max^2.
-constexpr sunrealtype kLanczosTol = 1e-3;
+// Stop once the top Ritz pair's residual is below this fraction of its value: the estimate
+// theta + residual is then at most 0.2 % above theta <= omega_max^2, and its square root, the
+// frequency, at most 0.1 % above sqrt(theta). The step caps carry their own margin (0.99 and
+// 0.9 of the limit); 0.1 % of the step costs 0.1 % more steps.
+constexpr sunrealtype kLanczosTol = 2e-3;
 // Is the pencil symmetric? In exact arithmetic <q_{j-1}, K q_j> = beta_{j-1} for a symmetric one.
 // Two things move the computed coefficient c off beta_{j-1} when it is symmetric: the rounding of
 // the difference quotients (eps |f| / sig per entry, bounded per step with kDqNoise), and the
@@ -41,7 +46,9 @@ constexpr sunrealtype kLanczosTol = 1e-3;
 // kSymmetryTol sits between (docs/theory.md, the runtime guard).
 constexpr sunrealtype kSymmetryTol = 1e-4;
 constexpr sunrealtype kDqNoise = 10;  // safety factor on the Cauchy-Schwarz bound of the rounding
-// Arnoldi (non-symmetric K): basis vectors per cycle before an explicit restart.
+// Arnoldi (non-symmetric K): the residual and the change of theta that end it (the residual
+// bounds nothing there), and the basis vectors per cycle before an explicit restart.
+constexpr sunrealtype kArnoldiTol = 1e-3;
 constexpr int kArnoldiDim = 20;
 // Recommended steps and CEodeGetStableStep's default: this fraction of the limit,
 // so that a step at the recommendation stays stable even at a Jordan-block edge.
@@ -357,8 +364,8 @@ int ArnoldiTop(CEodeMemRec* ce, GuardWork* g, bool mass, int k, sunrealtype beta
     const ArnoldiRitz r = TopArnoldiRitz(g, k, beta);
     const sunrealtype scale = g->H.topLeftCorner(k + 1, k).cwiseAbs().maxCoeff();
     const bool breakdown = !(beta > 1e-9 * (scale + SUN_UNIT_ROUNDOFF));
-    const bool settled = r.found && r.res <= kLanczosTol * r.theta &&
-                         std::fabs(r.theta - theta_prev) <= kLanczosTol * r.theta;
+    const bool settled = r.found && r.res <= kArnoldiTol * r.theta &&
+                         std::fabs(r.theta - theta_prev) <= kArnoldiTol * r.theta;
     *lam_hat = r.theta + r.res;
     if (!std::isfinite(*lam_hat) || breakdown || budget == 0 || settled) return CE_SUCCESS;
     theta_prev = r.theta;
@@ -438,8 +445,9 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
     }
     // beta ~ 0: the Krylov space is invariant (e.g. n is small), theta is exact.
     const bool breakdown = !(beta > 1e-9 * (amax + SUN_UNIT_ROUNDOFF));
-    // The Ritz values are only looked at every kCheckEvery steps: cheap next to f.
-    if (breakdown || j + 1 == kMaxLanczos || (j + 1 >= kMinLanczos && (j + 1) % kCheckEvery == 0)) {
+    const bool check =
+        j + 1 >= kMinLanczos && (j + 1 <= kEveryStepChecks || (j + 1) % kCheckEvery == 0);
+    if (breakdown || j + 1 == kMaxLanczos || check) {
       TopRitz(g, beta, &theta, &res);
       if (!std::isfinite(theta) || !std::isfinite(beta)) break;
       if (breakdown || res <= kLanczosTol * (std::fabs(theta) + SUN_UNIT_ROUNDOFF)) {
@@ -457,15 +465,39 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
   return CE_SUCCESS;
 }
 
+// f(tcur, xcur, D_1) into g->f0: the start's D_2 when it is that (just after a start without a
+// mass matrix, where D_2 = M^{-1} f = f), else one evaluation.
+int BaseForce(CEodeMemRec* ce, GuardWork* g, const char* func) {
+  const bool start_accel = ce->guard.accel && ce->started && ce->nst == ce->guard.accel_nst &&
+                           ce->ls.M == nullptr && ce->ls.mfn == nullptr;
+  if (start_accel) {
+    N_VScale(1, ce->D[2], g->f0);
+    return CE_SUCCESS;
+  }
+  const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], g->f0);
+  ++ce->guard.nfe;
+  if (rv != 0) {
+    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
+                        "f failed (returned %d) in the stability guard at t = %.17g.", rv,
+                        static_cast<double>(ce->tcur));
+  }
+  return CE_SUCCESS;
+}
+
 // The guard's estimate of omega_max at (tcur, xcur, D_1): the user's value when
 // given, else Lanczos; 0 when there is nothing to estimate (constraints, a mass
 // matrix type without a guard solver, f independent of x).
 int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
-  *omega = 0;
   if (ce->guard.omega_user > 0) {
     *omega = ce->guard.omega_user;
     return CE_SUCCESS;
   }
+  if (ce->guard.carried) {  // CEodeSetGuardReuse: the last run's estimate, once
+    ce->guard.carried = false;
+    *omega = ce->guard.omega_est;
+    return CE_SUCCESS;
+  }
+  *omega = 0;
   if (HasConstraints(ce)) return CE_SUCCESS;  // constrained frequencies need the user's value
   // The mass matrix may be of another size than a CEodeInit made the problem since.
   int flag = ValidateMassMatrix(ce, func, ce->ls.M);
@@ -474,13 +506,7 @@ int Estimate(CEodeMemRec* ce, const char* func, sunrealtype* omega) {
   bool usable = true;
   if (flag == CE_SUCCESS) flag = GuardMass(ce, g, func, &usable);
   if (flag != CE_SUCCESS || !usable) return flag;
-  const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], g->f0);
-  ++ce->guard.nfe;
-  if (rv != 0) {
-    return ProcessError(ce, CE_RHSFUNC_FAIL, func,
-                        "f failed (returned %d) in the stability guard at t = %.17g.", rv,
-                        static_cast<double>(ce->tcur));
-  }
+  if ((flag = BaseForce(ce, g, func)) != CE_SUCCESS) return flag;
   g->f0_norm = std::sqrt(N_VDotProd(g->f0, g->f0));
   g->arnoldi = false;
   sunrealtype lam = 0;
@@ -626,6 +652,8 @@ int CheckGuardMass(CEodeMemRec* ce, const char* func, N_Vector mass) {
 }  // namespace
 
 void GuardFree(CEodeMemRec* ce) {
+  ce->guard.omega_est = 0;  // a new problem (or none): nothing to carry over
+  ce->guard.carried = false;
   GuardWork* g = Work(ce);
   if (g == nullptr) return;
   for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0, g->wts}) {
@@ -640,6 +668,9 @@ void GuardFree(CEodeMemRec* ce) {
 void GuardReset(CEodeMemRec* ce, bool counters) {
   GuardMem& g = ce->guard;
   if (g.work != nullptr) Work(ce)->mass_ready = false;
+  g.accel = false;
+  // The user's frequency, when set, is not an estimate to carry.
+  g.carried = g.reuse && !(g.omega_user > 0) && g.omega_est > 0 && std::isfinite(g.omega_est);
   if (!counters) return;
   g.warned = false;
   g.nfe = g.nme = g.nsetups = 0;
@@ -648,6 +679,11 @@ void GuardReset(CEodeMemRec* ce, bool counters) {
 void GuardMethodChanged(CEodeMemRec* ce) { ce->guard.omega_limit = 0; }
 
 void GuardRequestCheck(CEodeMemRec* ce) { ce->guard.pending = true; }
+
+void GuardStartAccel(CEodeMemRec* ce) {
+  ce->guard.accel = true;
+  ce->guard.accel_nst = ce->nst;
+}
 
 sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety) {
   const sunrealtype omega = ce->guard.omega_est;
@@ -755,7 +791,17 @@ int CEodeSetGuardMass(void* mem, N_Vector mass) {
     N_VScale(1, mass, g->wts);
   }
   ce->guard.warned = false;
-  ce->guard.pending = true;  // checked again at the next CEodeEvolve
+  ce->guard.carried = false;  // other masses, other frequencies
+  ce->guard.pending = true;   // checked again at the next CEodeEvolve
+  return CE_SUCCESS;
+}
+
+int CEodeSetGuardReuse(void* mem, sunbooleantype reuse) {
+  CEodeMemRec* ce = nullptr;
+  const int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ce->guard.reuse = reuse != SUNFALSE;
+  if (!ce->guard.reuse) ce->guard.carried = false;
   return CE_SUCCESS;
 }
 

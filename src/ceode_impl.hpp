@@ -226,6 +226,12 @@ struct GuardMem {
   long int nme = 0;      // mass evaluations into its own copy of M
   long int nsetups = 0;  // factorisations of its own copy of M
   void* work = nullptr;  // scratch, M copy and solver
+  // CEodeSetGuardReuse: the last run's estimate stands for the first check after a restart
+  bool reuse = false;
+  bool carried = false;  // omega_est is the last run's, not yet used by this one
+  // D_2 = f(tcur, xcur, D_1) from the start (no mass matrix), valid at step accel_nst
+  bool accel = false;
+  long int accel_nst = 0;
 };
 
 // Index-3 constraints (ceode_constraints.cpp).
@@ -541,8 +547,9 @@ void GuardFree(CEodeMemRec* ce);  // its workspace (at CEodeInit and CEodeFree)
 // Its copy of M is re-evaluated; with counters (CEodeReInit), its warning may be given again and
 // its counters are zeroed (a Reset keeps both: one warning per run, not per restart).
 void GuardReset(CEodeMemRec* ce, bool counters);
-void GuardMethodChanged(CEodeMemRec* ce);                  // Omega_max is looked up again
-void GuardRequestCheck(CEodeMemRec* ce);                   // at the next CEodeEvolve (a start)
+void GuardMethodChanged(CEodeMemRec* ce);  // Omega_max is looked up again
+void GuardRequestCheck(CEodeMemRec* ce);   // at the next CEodeEvolve (a start)
+void GuardStartAccel(CEodeMemRec* ce);     // the start left f(tcur, xcur, D_1) in D_2: f0 for free
 int GuardCheckPending(CEodeMemRec* ce, const char* func);  // the requested check, once
 // safety * Omega_max / omega_max from the last estimate; SUN_BIG_REAL when none is known.
 sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety);

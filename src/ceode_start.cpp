@@ -66,16 +66,23 @@ namespace {
 
 // Half width R of the stencil: the q-th derivative of the acceleration on 2R + 1 nodes
 // spaced h errs by O(h^(2R+1-q)), so D_k = a^(k-2) errs by O(h^(2R+3-k)); an order-p set
-// keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p. Orders reach d (never d + 1).
-int HalfWidth(int d) { return d / 2; }
-
-// Sweeps until only the stencil's truncation is left (see StartDerivativesHigh): d - 3 when f
-// reads the velocity (the samples lose one power of s to it); when it does not, the samples are
-// as accurate as the polynomial and a sweep gains two powers (x'' = a), so R sweeps reach the
-// same O(h^(2R+3-k)) (docs/theory.md section 6.3).
-int Sweeps(int d, bool vel_dependent) {
-  return vel_dependent ? d - 3 : std::min(d - 3, HalfWidth(d));
+// keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p, and the stencil must reach the
+// derivative d - 3 (2R >= d - 3). p is a named set's order, else d (orders reach d, never d + 1):
+// R = 2 at degree 6, 3 at degrees 7 and 8.
+int HalfWidth(const CEodeMemRec* ce) {
+  const int d = ce->degree;
+  const MethodSet* m = NamedSetWithParams(d, ce->params);
+  const int p = m != nullptr ? m->order_x : d;
+  return std::max((p - 1) / 2, (d - 2) / 2);
 }
+
+// Sweeps until only the stencil's truncation is left (see StartDerivativesHigh). From D_0..D_2
+// exact and D_3.. = 0 the polynomial is right to O(s^3). When f reads the velocity a sweep gains
+// one power (the samples lose one to the velocity): d - 3 sweeps. When it does not, the samples
+// are as accurate as the polynomial and a sweep gains two (x'' = a): the polynomial is right to
+// O(s^(3 + 2i)) after i sweeps, and O(s^d) (every D_k) takes ceil((d - 3) / 2) sweeps
+// (docs/theory.md section 6.3).
+int Sweeps(int d, bool vel_dependent) { return vel_dependent ? d - 3 : (d - 2) / 2; }
 
 // The Taylor curve at s: xs = sum_{i<d} D_i s^i/i! (D_0 = x), vs its derivative (the same
 // weights, shifted).
@@ -109,7 +116,7 @@ int StartDerivativesHigh(
     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
   const int d = ce->degree;
   const sunrealtype h = ce->h;
-  const int R = HalfWidth(d);
+  const int R = HalfWidth(ce);
   const int npts = 2 * R + 1;
   sunrealtype nodes[2 * kMaxDegree + 1] = {};
   sunrealtype wts[kMaxDegree][2 * kMaxDegree + 1];  // wts[q]: the q-th derivative
@@ -209,13 +216,13 @@ int AllocHistory(CEodeMemRec* ce, const char* func) {
 
 // The unconstrained start: a0 = M^{-1} f(t0, x0, v0), the higher derivatives (consistent start)
 // or zeros (the paper's zero start), then the first position step: the Taylor polynomial of
-// every derivative known at t0.
-int OdeStart(CEodeMemRec* ce, const char* func) {
+// every derivative known at t0. accel: D_2 holds a0 already (error control's first step took it).
+int OdeStart(CEodeMemRec* ce, const char* func, bool accel) {
   const int d = ce->degree;
   const sunrealtype t = ce->tcur;
   const bool preset = ce->adapters.history_preset;  // from Reset (an adapter's restart)
   ce->adapters.history_preset = false;
-  int flag = preset ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
+  int flag = preset || accel ? CE_SUCCESS : EvalAccel(ce, t, ce->xcur, ce->D[1], ce->D[2], func);
   if (flag == CE_SUCCESS && !IsFinite(ce->D[2])) {
     flag = ProcessError(ce, CE_FIRST_RHSFUNC_ERR, func,
                         "The initial acceleration is NaN or Inf: f (or the mass solve) returned "
@@ -229,6 +236,7 @@ int OdeStart(CEodeMemRec* ce, const char* func) {
                             });
   }
   if (flag != CE_SUCCESS) return flag;
+  if (!preset) GuardStartAccel(ce);  // D_2 = M^{-1} f(t0, x0, v0), evaluated here
   for (int k = 3; ce->zero_start && k < d; ++k) N_VConst(0, ce->D[k]);
   sunrealtype cw[kMaxDegree];
   N_Vector vw[kMaxDegree];
@@ -247,14 +255,15 @@ int StartMethod(CEodeMemRec* ce) {
   if (flag != CE_SUCCESS) return flag;
   const long int nfe0 = ce->nfe;
   const bool adapt = AdaptOn(ce);
-  if (adapt) flag = AdaptStart(ce, func);  // the first step (and its evaluation)
+  bool accel = false;  // a0 in D_2 from error control's first step
+  if (adapt) flag = AdaptStart(ce, func, &accel);
   if (flag != CE_SUCCESS) return flag;
   ComputeStepCoeffs(ce->degree, ce->params, ce->h, &ce->co);
   ce->t_start_h = ce->tcur;
   ce->nsteps_h = 0;
   ce->guard.pending = true;
   ce->xl1_start = N_VL1Norm(ce->xcur);
-  flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func);
+  flag = HasConstraints(ce) ? ConstrStart(ce, func) : OdeStart(ce, func, accel);
   ce->nfe_start += ce->nfe - nfe0;  // the start's evaluations, reported apart from the steps'
   if (flag == CE_SUCCESS && adapt) AdaptStartHistory(ce);
   if (flag == CE_SUCCESS) flag = ChooseImplicitSolve(ce, func);  // PC, Newton or AUTO

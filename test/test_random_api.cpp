@@ -810,7 +810,7 @@ void Sequence::InitialConditions() {
 
 void Sequence::Guard() {
   void* m = MemArg();
-  switch (Int(0, 5)) {
+  switch (Int(0, 6)) {
     case 0:
       Call("CEodeSetStabilityGuard", m, [&] {
         return CEodeSetStabilityGuard(
@@ -834,6 +834,9 @@ void Sequence::Guard() {
       Finite(flag, "hmax", h);
       break;
     }
+    case 5:
+      Call("CEodeSetGuardReuse", m, [&] { return CEodeSetGuardReuse(m, Bool()); });
+      break;
     case 4: {
       sunrealtype w = NAN;
       Finite(Call("CEodeGetMaxFrequencyEstimate", m,
@@ -1231,6 +1234,7 @@ void Sequence::Canonical() {
     CEodeSetStabilityGuard(m, CE_GUARD_OFF, 0),
     CEodeSetMaxFrequency(m, 0),
     CEodeSetGuardMass(m, nullptr),
+    CEodeSetGuardReuse(m, SUNFALSE),
     CEodeClearStopTime(m),
     CEodeSetMaxNumSteps(m, 5000),
     CEodeSetZeroStart(m, SUNFALSE),

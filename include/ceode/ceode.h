@@ -240,13 +240,12 @@ SUNDIALS_EXPORT int CEodeGetConsistentIC(void* mem, N_Vector x0, N_Vector v0);
  * omega_max is CEodeSetMaxFrequency's value when one is given, otherwise an estimate
  * at the current state by Lanczos on M^{-1} df/dx (directional differences of f):
  * the top Ritz value plus its residual norm, an upper bound of omega_max^2 for a
- * symmetric stiffness (at most 0.1 % above it). When df/dx is not symmetric in that
- * product (tested at every Lanczos step, at no extra evaluation) the guard continues
- * by Arnoldi: omega_max^2 is then the largest |Ritz value| with a positive real part
- * (the spectral radius of M^{-1} df/dx when converged), an estimate and not a bound;
- * the warning names the estimator. The guard's f and mass evaluations and the
- * factorisations of its own copy of M are counted apart from the integration's
- * (CEodeGetGuardStats) and reset by CEodeReInit. */
+ * symmetric stiffness (at most 0.2 % above it: omega_max at most 0.1 %). When df/dx is not
+ * symmetric in that product (tested at every Lanczos step, at no extra evaluation) the guard
+ * continues by Arnoldi: omega_max^2 is then the largest |Ritz value| with a positive real part (the
+ * spectral radius of M^{-1} df/dx when converged), an estimate and not a bound; the warning names
+ * the estimator. The guard's f and mass evaluations and the factorisations of its own copy of M are
+ * counted apart from the integration's (CEodeGetGuardStats) and reset by CEodeReInit. */
 SUNDIALS_EXPORT int CEodeSetStabilityGuard(void* mem, int mode, long int every);
 SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
 /* When f returns accelerations M^{-1} force with a lumped (diagonal) M and no mass matrix
@@ -254,6 +253,12 @@ SUNDIALS_EXPORT int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max);
  * here (after CEodeInit; NULL clears) and the guard's Lanczos works in that product, so its
  * estimate is again an upper bound within 0.1 %. Ignored when CEodeSetMassFn is used. */
 SUNDIALS_EXPORT int CEodeSetGuardMass(void* mem, N_Vector mass);
+/* SUNTRUE declares that a restart (CEodeReInit, CEodeReset) keeps the problem's top frequency:
+ * the same f and masses, and a new state whose omega_max is not higher (a linear problem, or a
+ * nonlinear one started where it is no stiffer). The first check of the next run then takes the
+ * last run's estimate and evaluates nothing; later checks (every, the stable-step refresh)
+ * estimate again. CEodeInit and CEodeSetGuardMass drop the kept estimate. Default SUNFALSE. */
+SUNDIALS_EXPORT int CEodeSetGuardReuse(void* mem, sunbooleantype reuse);
 
 /* Error reporting */
 SUNDIALS_EXPORT int CEodeSetErrHandlerFn(void* mem, CEodeErrHandlerFn ehfun, void* eh_data);
