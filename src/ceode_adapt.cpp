@@ -413,37 +413,52 @@ sunrealtype ScheduledStep(const CEodeMemRec* ce, sunrealtype h) {
 
 }  // namespace
 
+namespace {
+
+// The controller's ratio from the error norm err of the last accepted step of hbase.
+sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
+  // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
+  // step (the test itself uses the estimate).
+  if (am.err_prev > 0) {
+    sunrealtype grow = 1;  // eta_prev^(p+1)
+    if (am.eta_prev != 1) {
+      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+    }
+    err = std::max(err, kEnvelope * am.err_prev * grow);
+  }
+  if (err == 0) {
+    // An estimate of exactly 0 (x'' = 0, a solution polynomial of degree below p + 1): no error
+    // to aim at, so the step grows by the largest ratio, as CVODE's eta = etamax.
+    return kEtaMax;
+  }
+  // In logarithms: one log and one exp a step instead of two pow calls; the last step's
+  // logarithm is kept.
+  const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
+  const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
+  sunrealtype eta = 1;
+  if (SunControllerRatio(ce, err, hbase, &eta)) {
+    // the user's SUNAdaptController chose
+  } else if (am.controller == CE_ADAPT_PI) {
+    eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
+  } else {
+    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+    eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
+  }
+  am.err_prev = err;
+  am.lerr_prev = le;
+  return eta;
+}
+
+}  // namespace
+
 sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
                           sunrealtype limit_t, bool* capped) {
   AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
-  sunrealtype eta = 1;
-  if (err > 0) {
-    // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
-    // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
-    // step (the test itself uses the estimate).
-    if (am.err_prev > 0) {
-      sunrealtype grow = 1;  // eta_prev^(p+1)
-      if (am.eta_prev != 1) {
-        for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
-      }
-      err = std::max(err, kEnvelope * am.err_prev * grow);
-    }
-    // In logarithms: one log and one exp a step instead of two pow calls; the last step's
-    // logarithm is kept.
-    const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
-    const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
-    if (SunControllerRatio(ce, err, hbase, &eta)) {
-      // the user's SUNAdaptController chose
-    } else if (am.controller == CE_ADAPT_PI) {
-      eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
-    } else {
-      const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
-      eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
-    }
-    am.err_prev = err;
-    am.lerr_prev = le;
-  }
+  // Without an estimate (the history is still too short) the step stays.
+  sunrealtype eta = AdaptEstimated(am) ? ControllerRatio(ce, err, hbase) : 1;
   // Small changes are not made: a step kept costs no new coefficients, plans or remap, and
   // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5).
   if (eta > kHoldLow && eta < kHoldHigh) eta = 1;

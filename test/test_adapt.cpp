@@ -542,6 +542,54 @@ TEST(ErrorControl, ASundialsControllerChoosesTheSteps) {
 #endif
 }
 
+int Free(sunrealtype, N_Vector, N_Vector, N_Vector f, void*) {
+  N_VConst(0, f);  // x = 1 + t: every estimate is exactly 0
+  return 0;
+}
+
+// The steps of a free particle (x'' = 0, x = 1 + t, tolerances 1e-8) in CE_ONE_STEP mode: every
+// error estimate is exactly 0, so each step that has one doubles the step (the largest ratio, 2),
+// up to hmax when one is given, and the position stays exact.
+std::vector<double> FreeParticleSteps(const char* set, double hmax, int nsteps) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx, 1);
+  Vector v = SerialVector(1, ctx, 1);
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), Free, 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
+  EXPECT_EQ(CEodeSStolerances(mem.get(), 1e-8, 1e-8), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMaxStep(mem.get(), hmax), CE_SUCCESS);
+  std::vector<double> h;
+  sunrealtype t = 0;
+  for (int i = 0; i < nsteps; ++i) {
+    EXPECT_EQ(CEodeEvolve(mem.get(), 1e30, x.get(), v.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+    sunrealtype hl = 0;
+    CEodeGetLastStep(mem.get(), &hl);
+    h.push_back(hl);
+  }
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0), 1 + t, 1e-13 * (1 + t)) << set;
+  return h;
+}
+
+// CVODE's rule for an estimate of exactly 0: the step grows by the largest ratio. Every named set
+// doubles its step once its first estimate exists (after at most d - 1 steps of the start's size)
+// until hmax = 1 holds it (first steps 2.3e-4 for G3_CD to 0.13 for G8_O8; 30 steps later 1e5
+// to 7e7).
+TEST(ErrorControl, AZeroErrorEstimateLetsTheStepGrowToItsBound) {
+  for (const char* set : kSets) {
+    const std::vector<double> free = FreeParticleSteps(set, 0, 30);
+    int doublings = 0;
+    for (size_t i = 1; i < free.size(); ++i) {
+      EXPECT_TRUE(free[i] == free[i - 1] || free[i] == 2 * free[i - 1]) << set << " step " << i;
+      doublings += free[i] == 2 * free[i - 1] ? 1 : 0;
+    }
+    std::printf("%s: first step %.3e, step %zu %.3e\n", set, free[0], free.size(), free.back());
+    EXPECT_GE(doublings, 30 - 8) << set;
+    const std::vector<double> bounded = FreeParticleSteps(set, 1, 40);
+    EXPECT_EQ(bounded.back(), 1) << set;
+  }
+}
+
 // A fixed step after tolerances takes the run back to fixed steps: the numbers of a run that
 // never had tolerances, bit for bit.
 TEST(ErrorControl, FixedStepAfterTolerancesGivesTheFixedRunsBits) {
