@@ -299,7 +299,6 @@ void ClearRun(CEodeMemRec* ce) {
   am->after.atol = am->pos.atol = am->atol;
   am->after.atolv = am->pos.atolv = am->atol_vec;
   am->first = true;
-  am->est_prev = false;
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
   am->cw_h = am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new

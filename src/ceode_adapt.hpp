@@ -70,17 +70,8 @@ struct AdaptMem {
   sunrealtype hprev = 0;  // t_n - t_{n-1} (0 at the start)
   sunrealtype hmap = 0;   // the step the node's history is remapped for
   sunrealtype hlast = 0;  // the last accepted step
-  // est holds the estimate of the node before (the step of h_est_prev) until the next step's
-  // estimate overwrites it: the remap's y^(d) is extrapolated with it (RemapRate).
-  bool est_prev = false;
-  sunrealtype h_est_prev = 0;
-  // The remap's terms of the top derivative on the accelerations' rates (RemapTerms), which the
-  // position takes out again as it takes out the yd term (PositionWeights).
-  int ntop_rate = 0;
-  sunrealtype top_rate_c[2] = {};
-  N_Vector top_rate_Y[2] = {};
-  sunrealtype h0 = 0;   // the first step of the run
-  sunrealtype err = 0;  // the last accepted step's error norm (0: none estimated)
+  sunrealtype h0 = 0;     // the first step of the run
+  sunrealtype err = 0;    // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
   sunrealtype lerr_prev = 0;  // log(err_prev / the controller's target)
   sunrealtype eta_prev = 1;   // the last accepted ratio (the filter's memory)

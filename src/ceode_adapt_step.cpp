@@ -25,98 +25,28 @@ sunrealtype IntPow(sunrealtype x, int j) {
   return r;
 }
 
-// y^(d) and y^(d+1) at t_n for the remap of the derivatives below the top one, each a
-// combination of the node's estimate ele and the estimate of the node before (still in est
-// until the next step's estimate): yhat = ele / (C h^(p+1)) is the top difference (p-1)!
-// a[t_n .. t_{n-p+1}] of the accelerations, which carry no parasitic component of the history.
-// It belongs to the middle of its nodes; the interpolant through one more acceleration takes it
-// to t_n and gives the next derivative. That is what the sets of order d - 1 (G3_CD .. G6_O5) have
-// once the table is full (docs/theory.md 12.2); otherwise (the first steps, a retried step,
-// constraints, whose solve is affine in the history and a but not in the differences) false.
-struct RemapRates {
-  N_Vector Y[2];
-  sunrealtype yd[2];   // y^(d) = yd[0] Y[0] + yd[1] Y[1]
-  sunrealtype yd1[2];  // y^(d+1)
-};
-bool RemapRate(const CEodeMemRec* ce, const AdaptMem& am, RemapRates* r) {
-  const int p = am.order;
-  if (ce->step->solve_kind == SolveKind::kConstrained || ce->degree != p + 1 || !am.est_prev ||
-      am.ndata < p + 1 || ce->degree + 3 > kMaxDegree + 2) {
-    return false;
-  }
-  const sunrealtype s0 = am.cerr * IntPow(am.hlast, p + 1);  // ele = s0 yhat_n
-  const sunrealtype s1 = am.cerr * IntPow(am.h_est_prev, p + 1);
-  const sunrealtype span = am.tnode[0] - am.tnode[p];
-  if (!std::isfinite(1 / s0) || !std::isfinite(1 / s1) || !(span > 0)) return false;
-  // y^(p+1)(t_n) = yhat_n + sum_{0<i<p} (t_n - t_{n-i}) (yhat_n - yhat_{n-1}) / span,
-  // y^(p+2) = p (yhat_n - yhat_{n-1}) / span
-  sunrealtype lever = 0;
-  for (int i = 1; i < p; ++i) lever += am.tnode[0] - am.tnode[i];
-  lever /= span;
-  r->Y[0] = am.ele;
-  r->Y[1] = am.est;
-  r->yd[0] = (1 + lever) / s0;
-  r->yd[1] = -lever / s1;
-  r->yd1[0] = p / (span * s0);
-  r->yd1[1] = -p / (span * s1);
-  return true;
-}
-
-// The remap terms from the accelerations' rates at t_n (RemapRate): gamma_kj (h^j - hmap^j) for
-// k + j = d (below the top derivative, whose term stays on yd) and k + j = d + 1.
-void AddRateTerms(CEodeMemRec* ce, AdaptMem* am, const RemapRates& rr, const sunrealtype* hp,
-                  const sunrealtype* mp, AdaptPosition* w) {
-  const int d = ce->degree;
-  for (int k = 1; k < d; ++k) {
-    if (k == 2) continue;
-    for (int j = std::max(1, d - k); j <= d + 1 - k; ++j) {
-      if (j >= kGammaTerms || (k == d - 1 && j == 1) || std::fabs(am->gamma[k][j]) <= 1e-10) {
-        continue;
-      }
-      const sunrealtype c = am->gamma[k][j] * (hp[j] - mp[j]);
-      const sunrealtype* f = k + j == d ? rr.yd : rr.yd1;
-      for (int m = 0; m < 2; ++m) {
-        w->rc[w->nremap] = c * f[m];
-        w->rY[w->nremap] = rr.Y[m];
-        w->rD[w->nremap++] = ce->D[k];
-        if (k == d - 1) {
-          am->top_rate_c[m] = c * f[m];
-          am->top_rate_Y[m] = rr.Y[m];
-          am->ntop_rate = 2;
-        }
-      }
-    }
-  }
-}
-
 // The remap terms that move the node's history from am.hmap to a next step of h (docs/theory.md
 // 12.2): the h-dependent part of the consistent history follows the step. None when the history
-// is refreshed instead (12.5). The top derivative's own term takes yd, which the position's blend
-// takes out again (PositionWeights); the terms below it take the accelerations' rates when
-// RemapRate has them.
+// is refreshed instead (12.5).
 void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) {
   w->nremap = 0;
-  am->ntop_rate = 0;
   if (h == am->hmap || RefreshHistory(ce, am, h)) return;
   const int d = ce->degree;
-  RemapRates rr;
-  const bool rates = RemapRate(ce, *am, &rr);
-  // h^j and hmap^j, j <= d + 1, by the multiplications IntPow makes (the same values)
-  sunrealtype hp[kMaxDegree + 2];
-  sunrealtype mp[kMaxDegree + 2];
+  // h^j and hmap^j, j <= d, by the multiplications IntPow makes (the same values)
+  sunrealtype hp[kMaxDegree + 1];
+  sunrealtype mp[kMaxDegree + 1];
   hp[0] = mp[0] = 1;
-  for (int j = 1; j <= d + 1; ++j) {
+  for (int j = 1; j <= d; ++j) {
     hp[j] = hp[j - 1] * h;
     mp[j] = mp[j - 1] * am->hmap;
   }
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    if (rates && r.k + r.j == d && r.k != d - 1) continue;  // AddRateTerms
-    w->rc[w->nremap] = r.gamma * (hp[r.j] - mp[r.j]);
-    w->rY[w->nremap] = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
-    w->rD[w->nremap++] = ce->D[r.k];
+    w->rc[i] = r.gamma * (hp[r.j] - mp[r.j]);
+    w->rY[i] = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
+    w->rD[i] = ce->D[r.k];
   }
-  if (rates) AddRateTerms(ce, am, rr, hp, mp, w);
+  w->nremap = am->nremap;
   am->hmap = h;
 }
 
@@ -125,8 +55,7 @@ void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) 
 // the node's own z_n (before the remap). Kept while h, hprev and hmap stay.
 void PositionWeights(CEodeMemRec* ce, AdaptMem* am) {
   const sunrealtype h = ce->h;
-  const bool same = h == am->pos_h && am->hprev == am->pos_hprev && am->hmap == am->pos_hmap;
-  if (same && am->ntop_rate == 0) return;
+  if (h == am->pos_h && am->hprev == am->pos_hprev && am->hmap == am->pos_hmap) return;
   const int d = ce->degree;
   const sunrealtype* tw = ce->co.tw;
   AdaptPosition& w = am->pos;
@@ -138,10 +67,8 @@ void PositionWeights(CEodeMemRec* ce, AdaptMem* am) {
   }
   const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * h);
   w.m = d;
-  if ((yd_coef != 0 && am->hprev > 0) || am->ntop_rate > 0) w.c[w.m++] = yd_coef;
-  // The top derivative's remap terms on the rates are taken out as well (its blend is z_n's).
-  for (int m = 0; m < am->ntop_rate; ++m) w.c[w.m++] = -tw[d - 1] * am->top_rate_c[m];
-  am->pos_h = am->ntop_rate > 0 ? 0 : h;  // the rates' weights change with every node
+  if (yd_coef != 0 && am->hprev > 0) w.c[w.m++] = yd_coef;
+  am->pos_h = h;
   am->pos_hprev = am->hprev;
   am->pos_hmap = am->hmap;
 }
@@ -162,7 +89,6 @@ sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   w.X[0] = ce->xcur;
   for (int i = 1; i < ce->degree; ++i) w.X[i] = ce->D[i];
   if (w.m > ce->degree) w.X[ce->degree] = am->yd;
-  for (int m = 0; m < am->ntop_rate; ++m) w.X[ce->degree + 1 + m] = am->top_rate_Y[m];
   w.out = ce->xnext;
   // The weights of the new position come with it, unless the constrained solve moves it.
   const bool moved = ce->step->solve_kind == SolveKind::kConstrained;
@@ -385,8 +311,6 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   ce->xnext = ce->xnew;
   ce->xnew = old;  // x(t_n): the dense output's left end
   std::swap(am->ele, am->est);
-  am->est_prev = AdaptEstimated(*am) && am->hlast > 0;  // est: the node before's estimate
-  am->h_est_prev = am->hlast;
   am->cur = 1 - am->cur;
   // The differences read tnode[0 .. p - 2]: t enters at the front, the others move back by one
   // (a rotation through a register, not a memmove call).
@@ -448,7 +372,6 @@ int RetryAfterFailure(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealty
   }
   if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
   if (nef >= am->maxnef || ce->h <= am->hmin) return ErrFailure(ce, func, t, err, nef);
-  am->est_prev = false;  // the failed step's estimate is in est now
   MoveTo(ce, am, AdaptRetryStep(ce, err));
   return CE_SUCCESS;
 }
