@@ -75,6 +75,7 @@ struct AdaptMem {
   sunrealtype err_prev = 0;
   sunrealtype lerr_prev = 0;  // log(err_prev / the controller's target)
   sunrealtype eta_prev = 1;   // the last accepted ratio (the filter's memory)
+  sunrealtype eta_grow = 2;   // the largest growth of a step the remap's coupling admits
   bool first = true;          // no step has passed an error test since the start
   bool capped_last = false;   // the stable step decided the last step
   long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
