@@ -290,8 +290,8 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
 // parasitic modes of the history: a step growing by r = 1 + eps feeds them back with a gain of
 // about c eps, c = sum_j j |gamma_kj|, while they lose only 2 % a step (modulus 0.98). The bound 1
 // + kCouplingMargin / c keeps that gain below the loss; without such terms (G3_CD, G4_A34) or with
-// the refresh (degree >= 6) it is kEtaMax. G5_O4 (gamma_32 = -3.2): 1.02.
-constexpr sunrealtype kCouplingMargin = 0.13;
+// the refresh (degree >= 6) it is kEtaMax. G5_O4 (gamma_32 = -3.2): 1.01.
+constexpr sunrealtype kCouplingMargin = 0.065;
 sunrealtype GrowthBound(int d, const RemapTerm* remap, int nremap) {
   sunrealtype c = 0;
   for (int i = 0; i < nremap; ++i) {

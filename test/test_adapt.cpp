@@ -240,14 +240,16 @@ void ExpectProportional(const char* set, const char* problem,
   }
   const double slope = Slope(tols, errs);
   std::printf("%s: %s slope %.3f\n", set, problem, slope);
-  EXPECT_GE(slope, 0.7) << set << " " << problem;
+  EXPECT_GE(slope, 0.8) << set << " " << problem;
   EXPECT_LE(slope, 1.35) << set << " " << problem;
   EXPECT_LT(errs.back(), 1e4 * tols.back()) << set << " " << problem;
 }
 
 // Global error against tolerance: slope 1 by design (the local error is held to tol^((p+1)/p),
-// docs/theory.md 12.3); asserted within 0.7 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
-// runs scatter by a factor of a few around the trend; the fitted slopes are 0.92 .. 1.32). The
+// docs/theory.md 12.3); asserted within 0.8 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
+// runs scatter by a factor of a few around the trend; the fitted slopes are 0.92 .. 1.32: G8_O8's
+// 1.32 is its global error, A h^8 + B h^9 with |B h| >> |A| at these steps and a change of sign
+// near 1e-10, docs/theory.md 12.3). The
 // pendulum starts at rest at the origin: the first step comes from a alone (12.3).
 TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   const double ref = PendulumReference();
@@ -271,7 +273,7 @@ class NoDivergence : public ::testing::TestWithParam<const char*> {};
 
 // The pendulum, the two-frequency oscillator and Kepler e = 0.6 (two orbits) at every tolerance
 // from 1e-3 to 1e-12: each run succeeds, errs by at most 1e3 tol (plus the oscillator's
-// stable-step floor; Kepler's measured ratio is at most 7.6e2) and takes fewer than 10^6 steps (no
+// stable-step floor; Kepler's measured ratio is at most 4.6e2) and takes fewer than 10^6 steps (no
 // collapse of the step). G3_CD, of second order, stops at 1e-9 (1e-11 would take more than 2e6
 // steps).
 TEST_P(NoDivergence, PendulumOscillatorAndKeplerAtEveryTolerance) {
@@ -298,7 +300,7 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, NoDivergence, ::testing::ValuesIn(kSets));
 // Kepler e = 0.6 (two orbits) at the loose tolerances 3e-2 .. 1e-3, node by node (a stop time at
 // the end): the orbit stays bound and near its size although its phase is lost (errors of order
 // 1). Asserted: the energy v^2/2 - 1/r at the end within [-2, -0.25] (exact -0.5) and the largest
-// radius below 2.4 (the apocentre is 1.6). Measured: energies -1.25 .. -0.37, radii at most 1.98.
+// radius below 2.4 (the apocentre is 1.6). Measured: energies -1.25 .. -0.45, radii at most 1.98.
 // Without the growth bound of the remap (docs/theory.md 12.5) G5_O4 left the orbit at 1e-2, 7e-3
 // and 3e-2 (energies 1.4, 115 and 1e8).
 TEST_P(NoDivergence, KeplerStaysOnItsOrbitAtLooseTolerances) {
