@@ -301,7 +301,7 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, NoDivergence, ::testing::ValuesIn(kSets));
 // the end): the orbit stays bound and near its size although its phase is lost (errors of order
 // 1). Asserted: the energy v^2/2 - 1/r at the end within [-2, -0.25] (exact -0.5) and the largest
 // radius below 2.4 (the apocentre is 1.6). Measured: energies -1.25 .. -0.45, radii at most 1.98.
-// Without the growth bound of the remap (docs/theory.md 12.5) G5_O4 left the orbit at 1e-2, 7e-3
+// Without the growth bound of the remap (docs/theory.md 12.5) G5_O4 leaves the orbit at 1e-2, 7e-3
 // and 3e-2 (energies 1.4, 115 and 1e8).
 TEST_P(NoDivergence, KeplerStaysOnItsOrbitAtLooseTolerances) {
   for (double tol : {3e-2, 1.5e-2, 1.2e-2, 1e-2, 8e-3, 7e-3, 6e-3, 5e-3, 4e-3, 3.6e-3, 3e-3, 2.5e-3,
