@@ -285,6 +285,21 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   return h;
 }
 
+// The largest growth of a step under the remap (docs/theory.md 12.5). The remap moves D_k,
+// 3 <= k <= d - 2, by gamma_kj (r^j - 1) h^j yd, and yd, the top derivative's rate, carries the
+// parasitic modes of the history: a step growing by r = 1 + eps feeds them back with a gain of
+// about c eps, c = sum_j j |gamma_kj|, while they lose only 2 % a step (modulus 0.98). The bound 1
+// + kCouplingMargin / c keeps that gain below the loss; without such terms (G3_CD, G4_A34) or with
+// the refresh (degree >= 6) it is kEtaMax. G5_O4 (gamma_32 = -3.2): 1.01.
+constexpr sunrealtype kCouplingMargin = 0.065;
+sunrealtype GrowthBound(int d, const RemapTerm* remap, int nremap) {
+  sunrealtype c = 0;
+  for (int i = 0; i < nremap; ++i) {
+    if (remap[i].k >= 3 && remap[i].k <= d - 2) c += remap[i].j * std::fabs(remap[i].gamma);
+  }
+  return c > 0 ? std::min(kEtaMax, 1 + kCouplingMargin / c) : kEtaMax;
+}
+
 // What a run keeps between steps: none of it carries over a start. The fields of the step's
 // passes that stay for the run are set here (ceode_adapt_step.cpp fills the others each step).
 void ClearRun(CEodeMemRec* ce) {
@@ -317,6 +332,7 @@ int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   }
   am.pfac = Factorial(am.order - 1);
   am.refresh = ce->degree >= 6 && !HasConstraints(ce);
+  am.eta_grow = am.refresh ? kEtaMax : GrowthBound(ce->degree, am.remap, am.nremap);
   return CE_SUCCESS;
 }
 
@@ -415,41 +431,59 @@ sunrealtype ScheduledStep(const CEodeMemRec* ce, sunrealtype h) {
 
 }  // namespace
 
+namespace {
+
+// The controller's ratio from the error norm err of the last accepted step of hbase.
+sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
+  // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
+  // step (the test itself uses the estimate).
+  if (am.err_prev > 0) {
+    sunrealtype grow = 1;  // eta_prev^(p+1)
+    if (am.eta_prev != 1) {
+      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+    }
+    err = std::max(err, kEnvelope * am.err_prev * grow);
+  }
+  if (err == 0) {
+    // An estimate of exactly 0 (x'' = 0, a solution polynomial of degree below p + 1): no error
+    // to aim at, so the step grows by the largest ratio, as CVODE's eta = etamax.
+    return kEtaMax;
+  }
+  // In logarithms: one log and one exp a step instead of two pow calls; the last step's
+  // logarithm is kept.
+  const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
+  const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
+  sunrealtype eta = 1;
+  if (SunControllerRatio(ce, err, hbase, &eta)) {
+    // the user's SUNAdaptController chose
+  } else if (am.controller == CE_ADAPT_PI) {
+    eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
+  } else {
+    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+    eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
+  }
+  am.err_prev = err;
+  am.lerr_prev = le;
+  return eta;
+}
+
+}  // namespace
+
 sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
                           sunrealtype limit_t, bool* capped) {
   AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
-  sunrealtype eta = 1;
-  if (err > 0) {
-    // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
-    // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
-    // step (the test itself uses the estimate).
-    if (am.err_prev > 0) {
-      sunrealtype grow = 1;  // eta_prev^(p+1)
-      if (am.eta_prev != 1) {
-        for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
-      }
-      err = std::max(err, kEnvelope * am.err_prev * grow);
-    }
-    // In logarithms: one log and one exp a step instead of two pow calls; the last step's
-    // logarithm is kept.
-    const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
-    const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
-    if (SunControllerRatio(ce, err, hbase, &eta)) {
-      // the user's SUNAdaptController chose
-    } else if (am.controller == CE_ADAPT_PI) {
-      eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
-    } else {
-      const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
-      eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
-    }
-    am.err_prev = err;
-    am.lerr_prev = le;
-  }
+  // Without an estimate (the history is still too short) the step stays.
+  sunrealtype eta = AdaptEstimated(am) ? ControllerRatio(ce, err, hbase) : 1;
   // Small changes are not made: a step kept costs no new coefficients, plans or remap, and
-  // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5).
-  if (eta > kHoldLow && eta < kHoldHigh) eta = 1;
-  eta = std::min(kEtaMax, std::max(kEtaMin, eta));
+  // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5). A step
+  // grows by at most the remap's bound (GrowthBound), unless the estimate is exactly 0 (nothing
+  // for the remap to carry).
+  const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
+  if (eta > kHoldLow && eta < std::min(kHoldHigh, grow)) eta = 1;
+  eta = std::min(grow, std::max(kEtaMin, eta));
   const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
   h = ScheduledStep(ce, h);

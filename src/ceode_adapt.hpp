@@ -75,6 +75,7 @@ struct AdaptMem {
   sunrealtype err_prev = 0;
   sunrealtype lerr_prev = 0;  // log(err_prev / the controller's target)
   sunrealtype eta_prev = 1;   // the last accepted ratio (the filter's memory)
+  sunrealtype eta_grow = 2;   // the largest growth of a step the remap's coupling admits
   bool first = true;          // no step has passed an error test since the start
   bool capped_last = false;   // the stable step decided the last step
   long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
@@ -111,6 +112,12 @@ struct AdaptMem {
   long int ncapped = 0;
 };
 
+// Whether the last step's error was estimated (then its norm may be exactly 0: a solution the
+// method integrates exactly); false while the history is too short for an estimate.
+inline bool AdaptEstimated(const AdaptMem& am) {
+  return am.after.est_kind != AdaptAfterF::kEstNone;
+}
+
 // ceode_adapt.cpp
 // At the start: the method's coefficients, the vectors, and the first step (the user's or
 // one from the initial data, which costs one f); clears the run's state. *accel: D_2 holds
@@ -123,9 +130,10 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func);
 // CE_SUCCESS when dmin, the smallest denominator of weights from the tolerances, is positive;
 // otherwise the error that names the cause.
 int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func);
-// The step after hbase (starting at tfrom) from the error norm err of the last accepted step (0:
-// none estimated): the controller's ratio applied to hbase, then hmax, the stable step and the
-// stop time limit_t.
+// The step after hbase (starting at tfrom) from the error norm err of the last accepted step
+// (AdaptEstimated says whether it has one; an estimate of exactly 0 grows the step by the largest
+// ratio): the controller's ratio applied to hbase, then hmax, the stable step and the stop time
+// limit_t.
 sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
                           sunrealtype limit_t, bool* capped);
 // The step to retry with after a failed error test.

@@ -319,7 +319,7 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
-  am->first = am->first && err == 0;  // until a step passes a test: the start is still on trial
+  am->first = am->first && !AdaptEstimated(*am);  // until a step passes a test: on trial
   ce->tcur = t;
   ++ce->nst;
   ++ce->nsteps_h;

@@ -240,14 +240,16 @@ void ExpectProportional(const char* set, const char* problem,
   }
   const double slope = Slope(tols, errs);
   std::printf("%s: %s slope %.3f\n", set, problem, slope);
-  EXPECT_GE(slope, 0.7) << set << " " << problem;
+  EXPECT_GE(slope, 0.8) << set << " " << problem;
   EXPECT_LE(slope, 1.35) << set << " " << problem;
   EXPECT_LT(errs.back(), 1e4 * tols.back()) << set << " " << problem;
 }
 
 // Global error against tolerance: slope 1 by design (the local error is held to tol^((p+1)/p),
-// docs/theory.md 12.3); asserted within 0.7 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
-// runs scatter by a factor of a few around the trend; the fitted slopes are 0.92 .. 1.32). The
+// docs/theory.md 12.3); asserted within 0.8 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
+// runs scatter by a factor of a few around the trend; the fitted slopes are 0.92 .. 1.32: G8_O8's
+// 1.32 is its global error, A h^8 + B h^9 with |B h| >> |A| at these steps and a change of sign
+// near 1e-10, docs/theory.md 12.3). The
 // pendulum starts at rest at the origin: the first step comes from a alone (12.3).
 TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   const double ref = PendulumReference();
@@ -271,7 +273,7 @@ class NoDivergence : public ::testing::TestWithParam<const char*> {};
 
 // The pendulum, the two-frequency oscillator and Kepler e = 0.6 (two orbits) at every tolerance
 // from 1e-3 to 1e-12: each run succeeds, errs by at most 1e3 tol (plus the oscillator's
-// stable-step floor; Kepler's measured ratio is at most 7.6e2) and takes fewer than 10^6 steps (no
+// stable-step floor; Kepler's measured ratio is at most 4.6e2) and takes fewer than 10^6 steps (no
 // collapse of the step). G3_CD, of second order, stops at 1e-9 (1e-11 would take more than 2e6
 // steps).
 TEST_P(NoDivergence, PendulumOscillatorAndKeplerAtEveryTolerance) {
@@ -294,6 +296,45 @@ TEST_P(NoDivergence, PendulumOscillatorAndKeplerAtEveryTolerance) {
 }
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, NoDivergence, ::testing::ValuesIn(kSets));
+
+// Kepler e = 0.6 (two orbits) at the loose tolerances 3e-2 .. 1e-3, node by node (a stop time at
+// the end): the orbit stays bound and near its size although its phase is lost (errors of order
+// 1). Asserted: the energy v^2/2 - 1/r at the end within [-2, -0.25] (exact -0.5) and the largest
+// radius below 2.4 (the apocentre is 1.6). Measured: energies -1.25 .. -0.45, radii at most 1.98.
+// Without the growth bound of the remap (docs/theory.md 12.5) G5_O4 leaves the orbit at 1e-2, 7e-3
+// and 3e-2 (energies 1.4, 115 and 1e8).
+TEST_P(NoDivergence, KeplerStaysOnItsOrbitAtLooseTolerances) {
+  for (double tol : {3e-2, 1.5e-2, 1.2e-2, 1e-2, 8e-3, 7e-3, 6e-3, 5e-3, 4e-3, 3.6e-3, 3e-3, 2.5e-3,
+                     2e-3, 1.5e-3, 1e-3}) {
+    Context ctx;
+    const auto s = KeplerSetup();
+    Vector x = SerialVector(2, ctx);
+    Vector v = SerialVector(2, ctx);
+    for (int i = 0; i < 2; ++i) {
+      NV_Ith_S(x.get(), i) = s.x0[i];
+      NV_Ith_S(v.get(), i) = s.v0[i];
+    }
+    Mem mem(CEodeCreate(ctx));
+    ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetMethodByName(mem.get(), GetParam()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSStolerances(mem.get(), tol, tol), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetStopTime(mem.get(), 4 * M_PI), CE_SUCCESS);
+    sunrealtype t = 0;
+    double rmax = 0;
+    int flag = CE_SUCCESS;
+    while (flag == CE_SUCCESS) {
+      flag = CEodeEvolve(mem.get(), 4 * M_PI, x.get(), v.get(), &t, CE_ONE_STEP);
+      rmax = std::max(rmax, std::hypot(NV_Ith_S(x.get(), 0), NV_Ith_S(x.get(), 1)));
+    }
+    ASSERT_EQ(flag, CE_TSTOP_RETURN) << GetParam() << " tol " << tol;
+    const double r = std::hypot(NV_Ith_S(x.get(), 0), NV_Ith_S(x.get(), 1));
+    const double v2 = std::pow(NV_Ith_S(v.get(), 0), 2) + std::pow(NV_Ith_S(v.get(), 1), 2);
+    const double energy = 0.5 * v2 - 1 / r;
+    EXPECT_GT(energy, -2) << GetParam() << " tol " << tol;
+    EXPECT_LT(energy, -0.25) << GetParam() << " tol " << tol;
+    EXPECT_LT(rmax, 2.4) << GetParam() << " tol " << tol;
+  }
+}
 
 // ---- random step ratios -----------------------------------------------------------------------
 
@@ -540,6 +581,54 @@ TEST(ErrorControl, ASundialsControllerChoosesTheSteps) {
 #else
   GTEST_SKIP() << "SUNAdaptController is SUNDIALS 7's";
 #endif
+}
+
+int Free(sunrealtype, N_Vector, N_Vector, N_Vector f, void*) {
+  N_VConst(0, f);  // x = 1 + t: every estimate is exactly 0
+  return 0;
+}
+
+// The steps of a free particle (x'' = 0, x = 1 + t, tolerances 1e-8) in CE_ONE_STEP mode: every
+// error estimate is exactly 0, so each step that has one doubles the step (the largest ratio, 2),
+// up to hmax when one is given, and the position stays exact.
+std::vector<double> FreeParticleSteps(const char* set, double hmax, int nsteps) {
+  Context ctx;
+  Vector x = SerialVector(1, ctx, 1);
+  Vector v = SerialVector(1, ctx, 1);
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), Free, 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
+  EXPECT_EQ(CEodeSStolerances(mem.get(), 1e-8, 1e-8), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMaxStep(mem.get(), hmax), CE_SUCCESS);
+  std::vector<double> h;
+  sunrealtype t = 0;
+  for (int i = 0; i < nsteps; ++i) {
+    EXPECT_EQ(CEodeEvolve(mem.get(), 1e30, x.get(), v.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+    sunrealtype hl = 0;
+    CEodeGetLastStep(mem.get(), &hl);
+    h.push_back(hl);
+  }
+  EXPECT_NEAR(NV_Ith_S(x.get(), 0), 1 + t, 1e-13 * (1 + t)) << set;
+  return h;
+}
+
+// CVODE's rule for an estimate of exactly 0: the step grows by the largest ratio. Every named set
+// doubles its step once its first estimate exists (after at most d - 1 steps of the start's size)
+// until hmax = 1 holds it (first steps 2.3e-4 for G3_CD to 0.13 for G8_O8; 30 steps later 1e5
+// to 7e7).
+TEST(ErrorControl, AZeroErrorEstimateLetsTheStepGrowToItsBound) {
+  for (const char* set : kSets) {
+    const std::vector<double> free = FreeParticleSteps(set, 0, 30);
+    int doublings = 0;
+    for (size_t i = 1; i < free.size(); ++i) {
+      EXPECT_TRUE(free[i] == free[i - 1] || free[i] == 2 * free[i - 1]) << set << " step " << i;
+      doublings += free[i] == 2 * free[i - 1] ? 1 : 0;
+    }
+    std::printf("%s: first step %.3e, step %zu %.3e\n", set, free[0], free.size(), free.back());
+    EXPECT_GE(doublings, 30 - 8) << set;
+    const std::vector<double> bounded = FreeParticleSteps(set, 1, 40);
+    EXPECT_EQ(bounded.back(), 1) << set;
+  }
 }
 
 // A fixed step after tolerances takes the run back to fixed steps: the numbers of a run that
