@@ -25,15 +25,29 @@ void NewtonBasis(const AdaptMem& am, int p, sunrealtype (*w)[kMaxDegree]) {
   }
 }
 
-// The m-th derivative of w_j at s.
+// i! / (i - m)!, m <= i < kMaxDegree: the weights of the derivatives' Horner sums, products of
+// integers (exact), formed once instead of in every sum.
+struct FallingFactorials {
+  sunrealtype f[kMaxDegree][kMaxDegree] = {};
+  constexpr FallingFactorials() {
+    for (int i = 0; i < kMaxDegree; ++i) {
+      for (int m = 0; m <= i; ++m) {
+        sunrealtype v = 1;
+        for (int q = i - m + 1; q <= i; ++q) v *= q;
+        f[i][m] = v;
+      }
+    }
+  }
+};
+constexpr FallingFactorials kFalling;
+
+// The m-th derivative of w_j at s; at s = 0 the one term m! w[j][m] (the Horner sum's value, up
+// to the sign of a zero).
 sunrealtype BasisDerivative(const sunrealtype (*w)[kMaxDegree], int p, int j, int m,
                             sunrealtype s) {
+  if (s == 0) return m < p ? kFalling.f[m][m] * w[j][m] : 0;
   sunrealtype r = 0;
-  for (int i = p - 1; i >= m; --i) {  // Horner in s over i!/(i-m)! w_i
-    sunrealtype f = 1;
-    for (int q = i - m + 1; q <= i; ++q) f *= q;
-    r = r * s + f * w[j][i];
-  }
+  for (int i = p - 1; i >= m; --i) r = r * s + kFalling.f[i][m] * w[j][i];  // Horner in s
   return r;
 }
 
