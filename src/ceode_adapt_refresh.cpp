@@ -61,7 +61,12 @@ void ConsistentWeights(const AdaptMem& am, const sunrealtype (*w)[kMaxDegree], i
   for (int l = 0; k + l - 2 <= p - 1 && l < kGammaTerms; ++l, hl *= h) {
     const sunrealtype g = am.gamma[k][l] * hl;
     if (g == 0) continue;
-    for (int j = 0; j < p; ++j) c[j] += g * BasisDerivative(w, p, j, k + l - 2, s);
+    const int m = k + l - 2;
+    if (s == 0) {  // BasisDerivative at 0, the loop over j without its tests
+      for (int j = 0; j < p; ++j) c[j] += g * (kFalling.f[m][m] * w[j][m]);
+      continue;
+    }
+    for (int j = 0; j < p; ++j) c[j] += g * BasisDerivative(w, p, j, m, s);
   }
 }
 
