@@ -59,6 +59,7 @@ struct AdaptMem {
   AdaptKernels kernels;         // the backend of its vector work, chosen at the start
   N_Vector ewt = nullptr;       // the node's weights: the test of the step from it
   N_Vector ewt_next = nullptr;  // those of the step's end, formed with its estimate
+  N_Vector ewt_spec = nullptr;  // those of the next position formed with the estimate (spec_*)
   N_Vector ele = nullptr;       // the last accepted step's local error estimate
   N_Vector est = nullptr;       // the estimate of the step under test
   N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
@@ -105,6 +106,14 @@ struct AdaptMem {
   sunrealtype dmin_next = 1;              // the smallest denominator of ewt_next's weights
   bool ewt_next_ready = false;            // ewt_next holds the weights of xnext (formed with it)
   int wkind = AdaptAfterF::kWeightsNone;  // the weights the tolerances give (AdaptAfterF)
+  // The next position at an unchanged step, formed with the step's pass (AdaptAfterF 7.): its
+  // terms for the step spec_h, whether the last pass formed it (in xnew and ewt_spec) and its
+  // L1 norm.
+  sunrealtype spec_h = 0;
+  int spec_m = 0;
+  sunrealtype spec_c[kMaxDegree + 2] = {};
+  bool spec_ready = false;
+  sunrealtype spec_l1 = 0;
 
   // Counters
   long int netf = 0;
