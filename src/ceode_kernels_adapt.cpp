@@ -31,6 +31,18 @@ void AdaptKernels::Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) c
   }
 }
 
+void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
+                           N_Vector* out) const {
+  if (!serial || m < 3) {  // Lin's special case of two terms
+    for (int k = 0; k < nout; ++k) Lin(m, c[k], X, out[k]);
+    return;
+  }
+  // Lin's CombineSerial with the inputs' data looked up once
+  const sunrealtype* x[kMaxDegree];
+  SerialDataOf(m, X, x);
+  for (int k = 0; k < nout; ++k) CombineSerial(n, m, c[k], x, NV_DATA_S(out[k]));
+}
+
 void AdaptKernels::Axpy(sunrealtype c, N_Vector y, N_Vector x) const {
   if (!serial) {
     N_VLinearSum(1, x, c, y, x);
