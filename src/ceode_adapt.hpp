@@ -54,6 +54,12 @@ struct AdaptMem {
   // constraints: the constrained solve's position weights follow the remap, 12.6).
   bool refresh = false;
   sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
+  // The refresh's last powers h^j (pow): the step it leaves is the one it came to last time.
+  static constexpr int kPowMemo = 4;
+  sunrealtype pow_x[kPowMemo] = {};
+  sunrealtype pow_r[kPowMemo] = {};
+  int pow_e[kPowMemo] = {};
+  int pow_next = 0;
 
   // The run
   AdaptKernels kernels;         // the backend of its vector work, chosen at the start

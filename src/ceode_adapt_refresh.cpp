@@ -69,6 +69,19 @@ void ConsistentWeights(const AdaptMem& am, const sunrealtype (*w)[kMaxDegree], i
   }
 }
 
+// std::pow(x, e) for x > 0, the value of an earlier call when it is at hand.
+sunrealtype PowOf(AdaptMem* am, sunrealtype x, int e) {
+  for (int i = 0; i < AdaptMem::kPowMemo; ++i) {
+    if (am->pow_e[i] == e && am->pow_x[i] == x && x > 0) return am->pow_r[i];
+  }
+  const sunrealtype r = std::pow(x, e);
+  am->pow_x[am->pow_next] = x;
+  am->pow_e[am->pow_next] = e;
+  am->pow_r[am->pow_next] = r;
+  am->pow_next = (am->pow_next + 1) % AdaptMem::kPowMemo;
+  return r;
+}
+
 }  // namespace
 
 bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
@@ -90,7 +103,7 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
     if (r.k != 1) continue;
-    const sunrealtype g = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
+    const sunrealtype g = r.gamma * (PowOf(am, h, r.j) - PowOf(am, am->hmap, r.j));
     am->kernels.Axpy(g, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
   // The top derivative one step of h back, for the position's blend: yd = (z_n - z(t_n - h)) / h.

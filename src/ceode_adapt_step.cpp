@@ -191,14 +191,18 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   }
 }
 
-// Most steps keep h (the controller's band): the serial pass forms the position of a next step
-// of the same h with the new history, as MoveTo would after the step is accepted, into xnew (the
-// last step's left end, which no one reads until the step is accepted and it becomes x(t_n)) and
-// its weights into ewt_spec (AdaptAfterF 7.); NextStep takes them when h stays.
+// Most steps keep h (the controller's band): on few unknowns the serial pass forms the position
+// of a next step of the same h with the new history, as MoveTo would after the step is accepted,
+// into xnew (the last step's left end, which no one reads until the step is accepted and it
+// becomes x(t_n)) and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes them when h
+// stays. There the second pass's set-up and calls are most of its cost; on many unknowns the
+// longer pass costs as many instructions per entry as the second pass it saves.
+constexpr sunindextype kNextPositionMaxN = 1000;
 void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   w->spec_m = 0;
   const bool weights_from_tolerances = am->wkind != AdaptAfterF::kWeightsNone && w->positive;
-  if (!am->kernels.serial || w->weights != AdaptAfterF::kWeightsNone || !weights_from_tolerances ||
+  if (!am->kernels.serial || am->kernels.n > kNextPositionMaxN ||
+      w->weights != AdaptAfterF::kWeightsNone || !weights_from_tolerances ||
       ce->step->solve_kind == SolveKind::kConstrained) {
     return;
   }

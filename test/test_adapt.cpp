@@ -489,8 +489,9 @@ BackendRun RunBackend(const char* set, bool fused, bool springs) {
 }
 
 // The adaptive step's vector work on raw arrays (serial vectors: one pass for the derivatives,
-// differences, estimate, norm and rate, one for the remap, position and weights) gives the
-// numbers of its N_Vector reference bit for bit, with vector and with scalar abstol.
+// differences, estimate, norm and rate, with the next position and its weights where the step
+// keeps its size; one for the remap, position and weights where it changes) gives the numbers of
+// its N_Vector reference bit for bit, with vector and with scalar abstol.
 TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
   for (bool springs : {false, true}) {
     const BackendRun ref = RunBackend(GetParam(), false, springs);
