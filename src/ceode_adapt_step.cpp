@@ -195,9 +195,10 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
 // of a next step of the same h with the new history, as MoveTo would after the step is accepted,
 // into xnew (the last step's left end, which no one reads until the step is accepted and it
 // becomes x(t_n)) and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes them when h
-// stays. There the second pass's set-up and calls are most of its cost; on many unknowns the
-// longer pass costs as many instructions per entry as the second pass it saves.
-constexpr sunindextype kNextPositionMaxN = 1000;
+// stays. There the second pass's set-up and calls are most of its cost; per entry the longer
+// pass costs slightly more than the second pass it saves (the wider loop runs out of registers),
+// and the two cross near 250 unknowns (bench_step's springs, G3_CD and G8_O8).
+constexpr sunindextype kNextPositionMaxN = 256;
 void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   w->spec_m = 0;
   const bool weights_from_tolerances = am->wkind != AdaptAfterF::kWeightsNone && w->positive;

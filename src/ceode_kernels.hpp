@@ -227,7 +227,8 @@ struct AdaptKernels {
   // pass only) its L1 norm in *l1.
   sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const;
   // Chooses AfterF's serial pass for w (kept in w while what it depends on stays); whether AfterF
-  // runs w in one serial pass (then w.kp is not read).
+  // runs w in one serial pass (then w.kp is not read). AfterF runs the choice of the last call:
+  // call it whenever w's fields change.
   bool AfterFIsFused(AdaptAfterF* w) const;
   // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
   // the smallest denominator of its weights in *dmin (1 without them).
