@@ -143,6 +143,9 @@ constexpr bool kPairs = false;
 using Pair = sunrealtype;
 #endif
 inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
+// The pair loops start at this many entries: below it splatting their coefficients costs more
+// than it saves (the L1 sums of n < 4 entries are the same either way).
+constexpr sunindextype kPairsFrom = 4;
 
 // The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
 template <int D, int ND>
@@ -311,7 +314,7 @@ sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin,
   sunrealtype sum = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
-    if (n >= 2) {
+    if (n >= kPairsFrom) {
       const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
       const SplatCo<D, ND, Pair> co{k};
       Pair l1p = Splat(0, Pair{});
@@ -477,7 +480,7 @@ sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunind
   sunrealtype l1 = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
-    if (n >= 2) {
+    if (n >= kPairsFrom) {
       constexpr int kR = kMaxDegree * kMaxDegree;
       Pair c[M];
       Pair rc[kR];
