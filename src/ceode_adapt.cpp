@@ -246,10 +246,11 @@ bool CloneOnce(N_Vector* v, N_Vector tmpl) {
 
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
+  const bool ahead = ce->n <= kNextPositionMaxN;  // the next position in the pass after f
   bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
-            CloneOnce(&am.ewt_spec, ce->xcur) && CloneOnce(&am.ele, ce->xcur) &&
-            CloneOnce(&am.est, ce->xcur) && CloneOnce(&am.yd, ce->xcur) &&
-            CloneOnce(&am.yd_next, ce->xcur);
+            (!ahead || (CloneOnce(&am.ewt_spec, ce->xcur) && CloneOnce(&am.xspec, ce->xcur))) &&
+            CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
+            CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
     for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j)
@@ -473,7 +474,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 void AdaptFree(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) return;
   AdaptMem& am = *ce->adapt;
-  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ewt_spec, &am.ele,
+  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ewt_spec, &am.xspec,   &am.ele,
                     &am.est, &am.yd,       &am.yd_next,  &am.atol_vec};
   for (N_Vector* v : vs) {
     if (*v != nullptr) N_VDestroy(*v);

@@ -191,20 +191,15 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   }
 }
 
-// Most steps keep h (the controller's band): on few unknowns the serial pass forms the position
-// of a next step of the same h with the new history, as MoveTo would after the step is accepted,
-// into xnew (the last step's left end, which no one reads until the step is accepted and it
-// becomes x(t_n)) and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes them when h
-// stays. There the second pass's set-up and calls are most of its cost; per entry the longer
-// pass costs slightly more than the second pass it saves (the wider loop runs out of registers),
-// and the two cross near 250 unknowns (bench_step's springs, G3_CD and G8_O8).
-constexpr sunindextype kNextPositionMaxN = 256;
+// Most steps keep h (the controller's band): on few unknowns (kNextPositionMaxN) the serial pass
+// forms the position of a next step of the same h with the new history, as MoveTo would after the
+// step is accepted, into xspec and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes
+// them when h stays. A failed test leaves the node's vectors and the last step's left end.
 void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   w->spec_m = 0;
   const bool weights_from_tolerances = am->wkind != AdaptAfterF::kWeightsNone && w->positive;
-  if (!am->kernels.serial || am->kernels.n > kNextPositionMaxN ||
-      w->weights != AdaptAfterF::kWeightsNone || !weights_from_tolerances ||
-      ce->step->solve_kind == SolveKind::kConstrained) {
+  if (!am->kernels.serial || am->xspec == nullptr || w->weights != AdaptAfterF::kWeightsNone ||
+      !weights_from_tolerances || ce->step->solve_kind == SolveKind::kConstrained) {
     return;
   }
   if (am->spec_h != ce->h) {  // after the step: hprev = hmap = h (CommitNode)
@@ -214,7 +209,7 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   w->spec_m = am->spec_m;
   std::copy(am->spec_c, am->spec_c + am->spec_m, w->spec_c);
   w->spec_weights = am->wkind;
-  w->spec_x = ce->xnew;
+  w->spec_x = am->xspec;
   w->spec_ewt = am->ewt_spec;
 }
 
@@ -441,7 +436,8 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
   am->capped_last = capped;
   if (am->spec_ready && h == ce->h && !constrained) {
     // MoveTo's result for an unchanged step (no remap, the same weights), made with the step's
-    // pass: CommitNode moved it into xnext.
+    // pass.
+    std::swap(ce->xnext, am->xspec);
     std::swap(am->ewt_next, am->ewt_spec);
     am->ewt_next_ready = true;
     am->dmin_next = 1;
