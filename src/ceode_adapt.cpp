@@ -246,7 +246,9 @@ bool CloneOnce(N_Vector* v, N_Vector tmpl) {
 
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
+  const bool ahead = ce->n <= kNextPositionMaxN;  // the next position in the pass after f
   bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
+            (!ahead || (CloneOnce(&am.ewt_spec, ce->xcur) && CloneOnce(&am.xspec, ce->xcur))) &&
             CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
             CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
@@ -316,8 +318,9 @@ void ClearRun(CEodeMemRec* ce) {
   am->first = true;
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
-  am->cw_h = am->est_h = am->pos_h = 0;  // the method or the start's coefficients may be new
-  am->after.fused_key = am->pos.fused_key = -1;  // and the backend (CEodeSetFusedKernel)
+  am->cw_h = am->est_h = am->pos_h = am->spec_h = 0;  // the method or the start's coefficients
+  am->spec_ready = false;                             // may be new
+  am->after.fused_key = am->pos.fused_key = -1;       // and the backend (CEodeSetFusedKernel)
   am->ewt_next_ready = false;
 }
 
@@ -507,7 +510,8 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 void AdaptFree(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) return;
   AdaptMem& am = *ce->adapt;
-  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ele, &am.est, &am.yd, &am.yd_next, &am.atol_vec};
+  N_Vector* vs[] = {&am.ewt, &am.ewt_next, &am.ewt_spec, &am.xspec,   &am.ele,
+                    &am.est, &am.yd,       &am.yd_next,  &am.atol_vec};
   for (N_Vector* v : vs) {
     if (*v != nullptr) N_VDestroy(*v);
     *v = nullptr;

@@ -22,6 +22,12 @@ struct RemapTerm {
 // Terms of the consistent history's series D_k = sum_l gamma_kl h^l y^(k+l) that the refresh uses.
 constexpr int kGammaTerms = kMaxDegree + 1;
 
+// Up to this many unknowns the pass after f also forms the position of a next step of the same
+// h (AdaptAfterF 7.). There the second pass's set-up and calls are most of its cost; per entry
+// the longer pass costs slightly more than the second pass it saves (the wider loop runs out of
+// registers), and the two cross near 250 unknowns (bench_step's springs, G3_CD and G8_O8).
+constexpr sunindextype kNextPositionMaxN = 256;
+
 struct AdaptMem {
   // Options
   bool on = false;   // tolerances given and no fixed step set after them
@@ -54,11 +60,19 @@ struct AdaptMem {
   // constraints: the constrained solve's position weights follow the remap, 12.6).
   bool refresh = false;
   sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
+  // The refresh's last powers h^j (pow): the step it leaves is the one it came to last time.
+  static constexpr int kPowMemo = 4;
+  sunrealtype pow_x[kPowMemo] = {};
+  sunrealtype pow_r[kPowMemo] = {};
+  int pow_e[kPowMemo] = {};
+  int pow_next = 0;
 
   // The run
   AdaptKernels kernels;         // the backend of its vector work, chosen at the start
   N_Vector ewt = nullptr;       // the node's weights: the test of the step from it
   N_Vector ewt_next = nullptr;  // those of the step's end, formed with its estimate
+  N_Vector ewt_spec = nullptr;  // those of the next position formed with the estimate (spec_*)
+  N_Vector xspec = nullptr;     // that position (only on few unknowns, as ewt_spec)
   N_Vector ele = nullptr;       // the last accepted step's local error estimate
   N_Vector est = nullptr;       // the estimate of the step under test
   N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
@@ -106,6 +120,14 @@ struct AdaptMem {
   sunrealtype dmin_next = 1;              // the smallest denominator of ewt_next's weights
   bool ewt_next_ready = false;            // ewt_next holds the weights of xnext (formed with it)
   int wkind = AdaptAfterF::kWeightsNone;  // the weights the tolerances give (AdaptAfterF)
+  // The next position at an unchanged step, formed with the step's pass (AdaptAfterF 7.): its
+  // terms for the step spec_h, whether the last pass formed it (in xspec and ewt_spec) and its
+  // L1 norm.
+  sunrealtype spec_h = 0;
+  int spec_m = 0;
+  sunrealtype spec_c[kMaxDegree + 2] = {};
+  bool spec_ready = false;
+  sunrealtype spec_l1 = 0;
 
   // Counters
   long int netf = 0;

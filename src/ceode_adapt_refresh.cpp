@@ -13,29 +13,34 @@ namespace ceode {
 namespace {
 
 // Coefficients of the Newton basis w_j(s) = prod_{i<j} (s - delta_i), delta_i = t_{n-i} - t_n,
-// in powers of s = t - t_n: w[j][i] is the coefficient of s^i (j, i < p).
+// in powers of s = t - t_n: w[i][j] is the coefficient of s^i in w_j (j, i < p; by power, so
+// that the sums over j below run along rows).
 void NewtonBasis(const AdaptMem& am, int p, sunrealtype (*w)[kMaxDegree]) {
-  for (int j = 0; j < p; ++j) std::fill(w[j], w[j] + kMaxDegree, SUN_RCONST(0.0));
+  for (int i = 0; i < kMaxDegree; ++i) std::fill(w[i], w[i] + kMaxDegree, SUN_RCONST(0.0));
   w[0][0] = 1;
   for (int j = 1; j < p; ++j) {
     const sunrealtype delta = am.tnode[j - 1] - am.tnode[0];
     for (int i = j; i >= 0; --i) {
-      w[j][i] = (i > 0 ? w[j - 1][i - 1] : 0) - delta * w[j - 1][i];
+      w[i][j] = (i > 0 ? w[i - 1][j - 1] : 0) - delta * w[i][j - 1];
     }
   }
 }
 
-// The m-th derivative of w_j at s.
-sunrealtype BasisDerivative(const sunrealtype (*w)[kMaxDegree], int p, int j, int m,
-                            sunrealtype s) {
-  sunrealtype r = 0;
-  for (int i = p - 1; i >= m; --i) {  // Horner in s over i!/(i-m)! w_i
-    sunrealtype f = 1;
-    for (int q = i - m + 1; q <= i; ++q) f *= q;
-    r = r * s + f * w[j][i];
+// i! / (i - m)!, m <= i < kMaxDegree: the weights of the derivatives' Horner sums, products of
+// integers (exact), formed once instead of in every sum.
+struct FallingFactorials {
+  sunrealtype f[kMaxDegree][kMaxDegree] = {};
+  constexpr FallingFactorials() {
+    for (int i = 0; i < kMaxDegree; ++i) {
+      for (int m = 0; m <= i; ++m) {
+        sunrealtype v = 1;
+        for (int q = i - m + 1; q <= i; ++q) v *= q;
+        f[i][m] = v;
+      }
+    }
   }
-  return r;
-}
+};
+constexpr FallingFactorials kFalling;
 
 // Weights over the divided differences of the consistent D_k at t_n + s for the step h:
 // sum_l gamma_kl h^l y^(k+l)(t_n + s), y^(m) = the interpolant's (m-2)-th derivative.
@@ -47,8 +52,34 @@ void ConsistentWeights(const AdaptMem& am, const sunrealtype (*w)[kMaxDegree], i
   for (int l = 0; k + l - 2 <= p - 1 && l < kGammaTerms; ++l, hl *= h) {
     const sunrealtype g = am.gamma[k][l] * hl;
     if (g == 0) continue;
-    for (int j = 0; j < p; ++j) c[j] += g * BasisDerivative(w, p, j, k + l - 2, s);
+    // the m-th derivatives of the w_j at s: Horner in s over i!/(i-m)! w[i][j], at s = 0 its
+    // one term m! w[m][j] (the same value, up to the sign of a zero)
+    const int m = k + l - 2;
+    if (s == 0) {
+      const sunrealtype f = kFalling.f[m][m];
+      for (int j = 0; j < p; ++j) c[j] += g * (f * w[m][j]);
+      continue;
+    }
+    sunrealtype r[kMaxDegree] = {};
+    for (int i = p - 1; i >= m; --i) {
+      const sunrealtype f = kFalling.f[i][m];
+      for (int j = 0; j < p; ++j) r[j] = r[j] * s + f * w[i][j];
+    }
+    for (int j = 0; j < p; ++j) c[j] += g * r[j];
   }
+}
+
+// std::pow(x, e) for x > 0, the value of an earlier call when it is at hand.
+sunrealtype PowOf(AdaptMem* am, sunrealtype x, int e) {
+  for (int i = 0; i < AdaptMem::kPowMemo; ++i) {
+    if (am->pow_e[i] == e && am->pow_x[i] == x && x > 0) return am->pow_r[i];
+  }
+  const sunrealtype r = std::pow(x, e);
+  am->pow_x[am->pow_next] = x;
+  am->pow_e[am->pow_next] = e;
+  am->pow_r[am->pow_next] = r;
+  am->pow_next = (am->pow_next + 1) % AdaptMem::kPowMemo;
+  return r;
 }
 
 }  // namespace
@@ -66,27 +97,32 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   X[p - 1] = am->ele;
   sunrealtype w[kMaxDegree][kMaxDegree];
   NewtonBasis(*am, p, w);
-  for (sunrealtype& wi : w[p - 1]) wi /= scale;
-  sunrealtype c[kMaxDegree + 1];
+  for (auto& wi : w) wi[p - 1] /= scale;
   // D_1 keeps its value (the velocity is no parasitic component) and moves its h-dependent part
   // from hmap to h with the remap's own terms, from the history before it is rebuilt.
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
     if (r.k != 1) continue;
-    const sunrealtype g = r.gamma * (std::pow(h, r.j) - std::pow(am->hmap, r.j));
+    const sunrealtype g = r.gamma * (PowOf(am, h, r.j) - PowOf(am, am->hmap, r.j));
     am->kernels.Axpy(g, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
   // The top derivative one step of h back, for the position's blend: yd = (z_n - z(t_n - h)) / h.
+  // D_3 .. D_{d-1} and yd (the last row of c), in one call.
+  sunrealtype c[kMaxDegree][kMaxDegree] = {};
+  N_Vector out[kMaxDegree];
+  int nout = 0;
   sunrealtype cz[kMaxDegree];
   ConsistentWeights(*am, w, d - 1, h, -h, cz);
   for (int k = 3; k < d; ++k) {
-    ConsistentWeights(*am, w, k, h, 0, c);
-    am->kernels.Lin(p, c, X, ce->D[k]);
+    ConsistentWeights(*am, w, k, h, 0, c[nout]);
+    out[nout++] = ce->D[k];
     if (k == d - 1) {
-      for (int j = 0; j < p; ++j) cz[j] = (c[j] - cz[j]) / h;
+      for (int j = 0; j < p; ++j) cz[j] = (c[nout - 1][j] - cz[j]) / h;
     }
   }
-  am->kernels.Lin(p, cz, X, am->yd);
+  std::copy(cz, cz + p, c[nout]);
+  out[nout++] = am->yd;
+  am->kernels.LinMany(nout, p, c, X, out);
   am->hmap = am->hprev = h;
   return true;
 }

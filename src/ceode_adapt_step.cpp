@@ -50,24 +50,30 @@ void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) 
   am->hmap = h;
 }
 
-// The position's weights over {x(t_n), D_1 .. D_{d-1} (remapped), yd} for the step ce->h: the
-// Taylor terms and the top derivative's blend over the new interval, z_n - (1 - p0) h yd with
-// the node's own z_n (before the remap). Kept while h, hprev and hmap stay.
+// The position's weights c[0 .. *m - 1] over {x(t_n), D_1 .. D_{d-1} (remapped), yd} for a
+// step of ce->h (ce->co's) from a node whose last step was hprev, with its history remapped for
+// hmap: the Taylor terms and the top derivative's blend over the new interval,
+// z_n - (1 - p0) h yd with the node's own z_n (before the remap).
+void PositionTerms(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hprev, sunrealtype hmap,
+                   sunrealtype* c, int* m) {
+  const int d = ce->degree;
+  const sunrealtype* tw = ce->co.tw;
+  c[0] = 1;
+  for (int i = 1; i < d; ++i) c[i] = tw[i];
+  sunrealtype top_shift = 0;  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap
+  for (int i = 0; i < am.nremap; ++i) {
+    if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (hmap - hprev);
+  }
+  const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * ce->h);
+  *m = d;
+  if (yd_coef != 0 && hprev > 0) c[(*m)++] = yd_coef;
+}
+
+// PositionTerms of the node for the step ce->h into am->pos, kept while h, hprev and hmap stay.
 void PositionWeights(CEodeMemRec* ce, AdaptMem* am) {
   const sunrealtype h = ce->h;
   if (h == am->pos_h && am->hprev == am->pos_hprev && am->hmap == am->pos_hmap) return;
-  const int d = ce->degree;
-  const sunrealtype* tw = ce->co.tw;
-  AdaptPosition& w = am->pos;
-  w.c[0] = 1;
-  for (int i = 1; i < d; ++i) w.c[i] = tw[i];
-  sunrealtype top_shift = 0;  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap
-  for (int i = 0; i < am->nremap; ++i) {
-    if (am->remap[i].k == d - 1) top_shift += am->remap[i].gamma * (am->hmap - am->hprev);
-  }
-  const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * h);
-  w.m = d;
-  if (yd_coef != 0 && am->hprev > 0) w.c[w.m++] = yd_coef;
+  PositionTerms(ce, *am, am->hprev, am->hmap, am->pos.c, &am->pos.m);
   am->pos_h = h;
   am->pos_hprev = am->hprev;
   am->pos_hmap = am->hmap;
@@ -185,10 +191,33 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   }
 }
 
+// Most steps keep h (the controller's band): on few unknowns (kNextPositionMaxN) the serial pass
+// forms the position of a next step of the same h with the new history, as MoveTo would after the
+// step is accepted, into xspec and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes
+// them when h stays. A failed test leaves the node's vectors and the last step's left end.
+void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
+  w->spec_m = 0;
+  const bool weights_from_tolerances = am->wkind != AdaptAfterF::kWeightsNone && w->positive;
+  if (!am->kernels.serial || am->xspec == nullptr || w->weights != AdaptAfterF::kWeightsNone ||
+      !weights_from_tolerances || ce->step->solve_kind == SolveKind::kConstrained) {
+    return;
+  }
+  if (am->spec_h != ce->h) {  // after the step: hprev = hmap = h (CommitNode)
+    PositionTerms(ce, *am, ce->h, ce->h, am->spec_c, &am->spec_m);
+    am->spec_h = ce->h;
+  }
+  w->spec_m = am->spec_m;
+  std::copy(am->spec_c, am->spec_c + am->spec_m, w->spec_c);
+  w->spec_weights = am->wkind;
+  w->spec_x = am->xspec;
+  w->spec_ewt = am->ewt_spec;
+}
+
 // The step's vector work once f is known at its end (AdaptAfterF): the derivatives there, the
 // divided differences, the local error estimate into est and its norm (scaled for tolerance
 // proportionality; 0 while none is estimated), yd over the step into yd_next and the weights of
-// the new position into ewt_next (their smallest denominator in *dmin).
+// the new position into ewt_next (their smallest denominator in *dmin); on the serial pass the
+// position of a next step of the same h (NextPositionTerms).
 sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
   DerivativeWeights(ce, am);
@@ -203,9 +232,11 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
+  NextPositionTerms(ce, am, &w);
   w.kp = am->kernels.AfterFIsFused(&w) ? nullptr : &DerivativePlan(ce, am);
+  am->spec_ready = w.spec_m > 0 && w.kp == nullptr;
   sunrealtype dmin = 1;
-  const sunrealtype norm = am->kernels.AfterF(w, &dmin);
+  const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
   return w.est_kind == AdaptAfterF::kEstNone ? 0 : norm * am->err_scale;
 }
@@ -403,6 +434,16 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
   }
   if (capped) ++am->ncapped;
   am->capped_last = capped;
+  if (am->spec_ready && h == ce->h && !constrained) {
+    // MoveTo's result for an unchanged step (no remap, the same weights), made with the step's
+    // pass.
+    std::swap(ce->xnext, am->xspec);
+    std::swap(am->ewt_next, am->ewt_spec);
+    am->ewt_next_ready = true;
+    am->dmin_next = 1;
+    am->spec_ready = false;
+    return CheckGrowth(ce, am->spec_l1, t, func);
+  }
   return CheckGrowth(ce, MoveTo(ce, am, h), t, func);
 }
 

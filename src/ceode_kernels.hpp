@@ -209,6 +209,9 @@ struct AdaptKernels {
   sunindextype n = 0;
   // out = sum_j c[j] X[j] (Combine's values; out is not an input).
   void Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) const;
+  // out[k] = sum_j c[k][j] X[j], k < nout (Lin's values; no out among the X), m <= kMaxDegree.
+  void LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
+               N_Vector* out) const;
   // x += c y (N_VLinearSum(1, x, c, y, x)).
   void Axpy(sunrealtype c, N_Vector y, N_Vector x) const;
   void Scale(sunrealtype c, N_Vector x) const;  // x *= c
@@ -220,10 +223,12 @@ struct AdaptKernels {
                       N_Vector ewt) const;
   // The whole vector work of a step once f is known at its end (AdaptAfterF); returns the
   // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
-  // of the new weights in *dmin (1 without them).
-  sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin) const;
+  // of the new weights in *dmin (1 without them); with the next position (spec_m > 0, serial
+  // pass only) its L1 norm in *l1.
+  sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const;
   // Chooses AfterF's serial pass for w (kept in w while what it depends on stays); whether AfterF
-  // runs w in one serial pass (then w.kp is not read).
+  // runs w in one serial pass (then w.kp is not read). AfterF runs the choice of the last call:
+  // call it whenever w's fields change.
   bool AfterFIsFused(AdaptAfterF* w) const;
   // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
   // the smallest denominator of its weights in *dmin (1 without them).
@@ -241,7 +246,11 @@ struct AdaptKernels {
 //  5. the top derivative's rate yd = yc (Dn[d-1] - D[d-1]);
 //  6. the weights of x = x(t_{n+1}) into ewt_next: 1 / (rtol |x| + atol) with a scalar atol
 //     (kWeightsScalar) or the vector atolv (kWeightsVector); none (kWeightsNone) with the
-//     user's weights or where the position's pass made them (AdaptPosition).
+//     user's weights or where the position's pass made them (AdaptPosition);
+//  7. with spec_m > 0 (the serial pass only, weights kWeightsNone): the position of a next step
+//     of the same h, AdaptPosition's sum and arithmetic over {x, Dn[1] .. Dn[d-1], yd} (the
+//     values this pass writes) with the weights spec_c[0 .. spec_m - 1] (spec_c[0] = 1), into
+//     spec_x, its weights (spec_weights, positive) into spec_ewt and its L1 norm as Position's.
 struct AdaptAfterF {
   enum { kEstLast, kEstCopy, kEstNone };
   enum { kWeightsScalar, kWeightsVector, kWeightsNone };
@@ -277,6 +286,11 @@ struct AdaptAfterF {
   sunrealtype atol = 0;
   N_Vector atolv = nullptr;
   N_Vector ewt_next = nullptr;
+  int spec_m = 0;
+  int spec_weights = kWeightsNone;
+  sunrealtype spec_c[kMaxDegree + 2] = {};
+  N_Vector spec_x = nullptr;
+  N_Vector spec_ewt = nullptr;
 };
 
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]

@@ -31,6 +31,18 @@ void AdaptKernels::Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) c
   }
 }
 
+void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
+                           N_Vector* out) const {
+  if (!serial || m < 3) {  // Lin's special case of two terms
+    for (int k = 0; k < nout; ++k) Lin(m, c[k], X, out[k]);
+    return;
+  }
+  // Lin's CombineSerial with the inputs' data looked up once
+  const sunrealtype* x[kMaxDegree];
+  SerialDataOf(m, X, x);
+  for (int k = 0; k < nout; ++k) CombineSerial(n, m, c[k], x, NV_DATA_S(out[k]));
+}
+
 void AdaptKernels::Axpy(sunrealtype c, N_Vector y, N_Vector x) const {
   if (!serial) {
     N_VLinearSum(1, x, c, y, x);
@@ -131,10 +143,15 @@ constexpr bool kPairs = false;
 using Pair = sunrealtype;
 #endif
 inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
+// The pair loops start at this many entries: below it splatting their coefficients costs more
+// than it saves (the L1 sums of n < 4 entries are the same either way).
+constexpr sunindextype kPairsFrom = 4;
 
 // The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
 template <int D, int ND>
 struct AfterFArrays {
+  sunrealtype* xs;  // the next position (spec_x) and its weights
+  sunrealtype* ewts;
   const sunrealtype* Do[D];  // the node's history, 1 .. D - 1
   sunrealtype* Dn[D];        // the new node's (Dn[2] = a)
   const sunrealtype* ddo[ND + 1];
@@ -159,6 +176,8 @@ struct AfterFArrays {
     x = NV_DATA_S(w.x);
     atolv = w.atolv != nullptr ? NV_DATA_S(w.atolv) : nullptr;
     ewt_next = w.weights != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt_next) : nullptr;
+    xs = w.spec_m > 0 ? NV_DATA_S(w.spec_x) : nullptr;
+    ewts = w.spec_m > 0 ? NV_DATA_S(w.spec_ewt) : nullptr;
   }
 };
 
@@ -167,6 +186,7 @@ template <int D, int ND, typename V>
 struct AfterFCoeffs {
   V c[D][D + 1];  // sum s (the plan's order), term j
   V r[ND];
+  V pc[D + 1];  // spec_c
   V scale, yc, rtol, atol;
   AfterFCoeffs(const AdaptAfterF& w, V tag) {
     const int nsum = D > 3 ? D - 2 : 1;
@@ -176,6 +196,7 @@ struct AfterFCoeffs {
       for (int j = 0; j < m; ++j) c[s][j] = Splat(w.cw[s][j], tag);
     }
     for (int j = 0; j < ND; ++j) r[j] = Splat(w.r[j], tag);
+    for (int j = 0; j < w.spec_m && j <= D; ++j) pc[j] = Splat(w.spec_c[j], tag);
     scale = Splat(w.scale, tag);
     yc = Splat(w.yc, tag);
     rtol = Splat(w.rtol, tag);
@@ -183,15 +204,34 @@ struct AfterFCoeffs {
   }
 };
 
+// 7. of AdaptAfterF: the next position of SM terms from x and the new history nw (its values
+// as written) and the rate yd, PositionEntry's arithmetic; its weights (SWK) follow.
+template <int D, int ND, int SM, int SWK, typename V, typename C>
+inline void NextPositionEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i,
+                              const V* nw, V yd, V* l1) {
+  const V tag{};
+  V acc = Load(p.x + i, tag);
+  for (int j = 1; j < (SM < D ? SM : D); ++j) acc += co.pc(j) * nw[j];
+  if constexpr (SM > D) acc += co.pc(D) * yd;
+  Store(p.xs + i, acc);
+  const V ax = Abs(acc);
+  *l1 += ax;
+  const V at = SWK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
+  Store(p.ewts + i, Splat(1, tag) / (co.rtol() * ax + at));
+}
+
 // One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
-// from the plan's sums) with ND differences; C yields the coefficients (V values).
-template <int D, int ND, int WK, typename V, typename C>
-inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i,
-                        sunrealtype* ssq) {
+// from the plan's sums) with ND differences; C yields the coefficients (V values). SM > 0: the
+// next position of SM terms (7.), its L1 norm summed into *l1.
+template <int D, int ND, int WK, int SM, int SWK, typename V, typename C>
+inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i, sunrealtype* ssq,
+                        V* l1) {
   const V tag{};
   const V a = Load(p.Dn[2] + i, tag);
   V old[D];
   for (int k = 1; k < D; ++k) old[k] = Load(p.Do[k] + i, tag);
+  V nw[D];  // the new history as written (7. reads it)
+  nw[2] = a;
   // 1. z (D > 3), then D_1, D_3 .. D_{D-2}: BuildUpdatePlan's terms in its order, the
   // accumulated value last (its weight 1 exactly: added, not multiplied).
   V z = a;
@@ -200,6 +240,7 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     z = co.c(0, 0) * a;
     for (int j = 2; j < D; ++j) z += co.c(0, j - 1) * old[j];
     Store(p.Dn[D - 1] + i, z);
+    nw[D - 1] = z;
     s = 1;
   }
   for (int k = 1; k <= D - 2; ++k) {
@@ -209,6 +250,7 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     acc += co.c(s, D - k - 1) * z;
     acc += old[k];
     Store(p.Dn[k] + i, acc);
+    nw[k] = acc;
     ++s;
   }
   // 2., 3. the differences, the last one scaled into the estimate
@@ -229,13 +271,15 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     }
   }
   // 5. the top derivative's rate
-  Store(p.yd + i, co.yc() * (z - old[D - 1]));
+  const V yd = co.yc() * (z - old[D - 1]);
+  Store(p.yd + i, yd);
   // 6. the new weights
   if constexpr (WK != AdaptAfterF::kWeightsNone) {
     const V at = WK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
     const V den = co.rtol() * Abs(Load(p.x + i, tag)) + at;
     Store(p.ewt_next + i, Splat(1, tag) / den);
   }
+  if constexpr (SM > 0) NextPositionEntry<D, ND, SM, SWK, V>(p, co, i, nw, yd, l1);
 }
 
 // Coefficient access for the entry: splatted values (pairs) or the plan's own (the tail, n = 1).
@@ -244,6 +288,7 @@ struct SplatCo {
   const AfterFCoeffs<D, ND, V>& k;
   V c(int s, int j) const { return k.c[s][j]; }
   V r(int j) const { return k.r[j]; }
+  V pc(int j) const { return k.pc[j]; }
   V scale() const { return k.scale; }
   V yc() const { return k.yc; }
   V rtol() const { return k.rtol; }
@@ -253,44 +298,66 @@ struct PlanCo {
   const AdaptAfterF& w;
   sunrealtype c(int s, int j) const { return w.cw[s][j]; }
   sunrealtype r(int j) const { return w.r[j]; }
+  sunrealtype pc(int j) const { return w.spec_c[j]; }
   sunrealtype scale() const { return w.scale; }
   sunrealtype yc() const { return w.yc; }
   sunrealtype rtol() const { return w.rtol; }
   sunrealtype atol() const { return w.atol; }
 };
 
-// The weights' denominators are positive (FusedAfterF): no smallest one to find.
-template <int D, int ND, int WK>
-sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin) {
+// The weights' denominators are positive (FusedAfterF): no smallest one to find. The next
+// position's L1 norm (SM > 0) is summed as PositionLoop sums it.
+template <int D, int ND, int WK, int SM, int SWK>
+sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
   const AfterFArrays<D, ND> p(w);
   sunrealtype ssq = 0;
+  sunrealtype sum = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
-    if (n >= 2) {
+    if (n >= kPairsFrom) {
       const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
       const SplatCo<D, ND, Pair> co{k};
+      Pair l1p = Splat(0, Pair{});
 #pragma GCC unroll 2
-      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK, Pair>(p, co, i, &ssq);
+      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK, SM, SWK, Pair>(p, co, i, &ssq, &l1p);
+      sum = l1p[0] + l1p[1];
     }
   }
   const PlanCo co{w};
-  for (; i < n; ++i) AfterFEntry<D, ND, WK, sunrealtype>(p, co, i, &ssq);
+  for (; i < n; ++i) AfterFEntry<D, ND, WK, SM, SWK, sunrealtype>(p, co, i, &ssq, &sum);
   *dmin = 1;
+  *l1 = sum;
   return std::sqrt(ssq / static_cast<sunrealtype>(n));
 }
 
-using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*);
+using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
+
+// With the next position: SM terms, its weights of kind SWK.
+template <int D, int ND, int SM>
+AfterFFn AfterFNextOf(int spec_weights) {
+  constexpr int kNone = AdaptAfterF::kWeightsNone;
+  if (spec_weights == AdaptAfterF::kWeightsVector) {
+    return &AfterFFused<D, ND, kNone, SM, AdaptAfterF::kWeightsVector>;
+  }
+  return &AfterFFused<D, ND, kNone, SM, AdaptAfterF::kWeightsScalar>;
+}
 
 // The named sets' shapes: (degree, differences = order - 1).
 template <int D, int ND>
-AfterFFn AfterFOf(int weights) {
-  switch (weights) {
+AfterFFn AfterFOf(const AdaptAfterF& w) {
+  constexpr int kNone = AdaptAfterF::kWeightsNone;
+  if (w.spec_m > 0) {  // the next position's sum has d or d + 1 terms (AdaptPosition)
+    if (w.weights != kNone || w.spec_weights == kNone || !w.positive) return nullptr;
+    if (w.spec_m == D) return AfterFNextOf<D, ND, D>(w.spec_weights);
+    return w.spec_m == D + 1 ? AfterFNextOf<D, ND, D + 1>(w.spec_weights) : nullptr;
+  }
+  switch (w.weights) {
     case AdaptAfterF::kWeightsScalar:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar>;
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar, 0, kNone>;
     case AdaptAfterF::kWeightsVector:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector>;
+      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector, 0, kNone>;
     default:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsNone>;
+      return &AfterFFused<D, ND, kNone, 0, kNone>;
   }
 }
 
@@ -301,17 +368,17 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
   const int key = 10 * d + w.ndiff;
   switch (key) {
     case 31:
-      return AfterFOf<3, 1>(w.weights);
+      return AfterFOf<3, 1>(w);
     case 42:
-      return AfterFOf<4, 2>(w.weights);
+      return AfterFOf<4, 2>(w);
     case 53:
-      return AfterFOf<5, 3>(w.weights);
+      return AfterFOf<5, 3>(w);
     case 64:
-      return AfterFOf<6, 4>(w.weights);
+      return AfterFOf<6, 4>(w);
     case 76:
-      return AfterFOf<7, 6>(w.weights);
+      return AfterFOf<7, 6>(w);
     case 87:
-      return AfterFOf<8, 7>(w.weights);
+      return AfterFOf<8, 7>(w);
     default:
       return nullptr;
   }
@@ -323,8 +390,10 @@ namespace {
 
 // What FusedAfterF's choice depends on.
 int AfterFKey(const AdaptAfterF& w) {
-  return ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
-         (w.positive ? 1 : 0);
+  const int shape =
+      ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
+      (w.positive ? 1 : 0);
+  return (shape * 16 + w.spec_m) * 4 + w.spec_weights;
 }
 
 }  // namespace
@@ -338,9 +407,10 @@ bool AdaptKernels::AfterFIsFused(AdaptAfterF* w) const {
   return w->fused != nullptr;
 }
 
-sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin) const {
-  if (w.fused != nullptr && w.fused_key == AfterFKey(w)) {
-    return reinterpret_cast<AfterFFn>(w.fused)(w, n, dmin);
+sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const {
+  *l1 = 0;
+  if (w.fused != nullptr) {  // AfterFIsFused's choice for these fields
+    return reinterpret_cast<AfterFFn>(w.fused)(w, n, dmin, l1);
   }
   RunPlan(*w.kp, n);
   for (int j = 0; j < w.ndiff; ++j) {
@@ -410,7 +480,7 @@ sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunind
   sunrealtype l1 = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
-    if (n >= 2) {
+    if (n >= kPairsFrom) {
       constexpr int kR = kMaxDegree * kMaxDegree;
       Pair c[M];
       Pair rc[kR];

@@ -530,8 +530,9 @@ BackendRun RunBackend(const char* set, bool fused, bool springs) {
 }
 
 // The adaptive step's vector work on raw arrays (serial vectors: one pass for the derivatives,
-// differences, estimate, norm and rate, one for the remap, position and weights) gives the
-// numbers of its N_Vector reference bit for bit, with vector and with scalar abstol.
+// differences, estimate, norm and rate, with the next position and its weights where the step
+// keeps its size; one for the remap, position and weights where it changes) gives the numbers of
+// its N_Vector reference bit for bit, with vector and with scalar abstol.
 TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
   for (bool springs : {false, true}) {
     const BackendRun ref = RunBackend(GetParam(), false, springs);
@@ -544,6 +545,53 @@ TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
 }
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, Backends, ::testing::ValuesIn(kSets));
+
+// A unit spring whose acceleration jumps by 1e8 after *jump_at (user data).
+int SpringWithJump(sunrealtype t, N_Vector x, N_Vector, N_Vector f, void* data) {
+  NV_Ith_S(f, 0) = -NV_Ith_S(x, 0) + (t > *static_cast<sunrealtype*>(data) ? 1e8 : 0);
+  return 0;
+}
+
+// A step that fails its error test leaves the last accepted step to the dense output: after 20
+// steps f jumps inside the next one, whose test then fails three times (three retries shrink the
+// step 125-fold at most, far from resolving a jump of 1e8 at tolerances 1e-6); after
+// CE_ERR_FAILURE the dense output in the middle of the last accepted step gives what it gave
+// before within the tolerance, on both backends. The retries remap the node's history for their
+// smaller steps, which moves the interpolant by up to 4e-9 here; a wrong left end of the step
+// would move it by the change of x over a step, 1e-5 or more.
+TEST(ErrorControl, AFailedTestLeavesTheLastStepsDenseOutput) {
+  for (const char* set : kSets) {
+    for (bool fused : {true, false}) {
+      Context ctx;
+      Vector x = SerialVector(1, ctx, 1.0);
+      Vector v = SerialVector(1, ctx, 0.0);
+      Vector before = SerialVector(1, ctx, 0.0);
+      Vector after = SerialVector(1, ctx, 0.0);
+      sunrealtype jump_at = SUN_BIG_REAL;
+      Mem mem(CEodeCreate(ctx));
+      ASSERT_EQ(CEodeInit(mem.get(), SpringWithJump, 0, x.get(), v.get()), CE_SUCCESS);
+      ASSERT_EQ(CEodeSetUserData(mem.get(), &jump_at), CE_SUCCESS);
+      ASSERT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
+      ASSERT_EQ(CEodeSetFusedKernel(mem.get(), fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+      ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-6, 1e-6), CE_SUCCESS);
+      ASSERT_EQ(CEodeSetMaxErrTestFails(mem.get(), 3), CE_SUCCESS);
+      sunrealtype t = 0;
+      sunrealtype tmid = 0;
+      for (int k = 0; k < 20; ++k) {
+        ASSERT_EQ(CEodeEvolve(mem.get(), 100, x.get(), v.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+      }
+      sunrealtype hlast = 0;
+      ASSERT_EQ(CEodeGetLastStep(mem.get(), &hlast), CE_SUCCESS);
+      tmid = t - hlast / 2;
+      ASSERT_EQ(CEodeGetDky(mem.get(), tmid, 0, before.get()), CE_SUCCESS);
+      jump_at = t + 1e-3 * hlast;
+      EXPECT_EQ(CEodeEvolve(mem.get(), 100, x.get(), v.get(), &t, CE_ONE_STEP), CE_ERR_FAILURE)
+          << set;
+      ASSERT_EQ(CEodeGetDky(mem.get(), tmid, 0, after.get()), CE_SUCCESS);
+      EXPECT_NEAR(NV_Ith_S(after.get(), 0), NV_Ith_S(before.get(), 0), 1e-6) << set << " " << fused;
+    }
+  }
+}
 
 // SUNDIALS 7: a SUNAdaptController chooses the steps; the run reaches the accuracy of CEODE's
 // own controller within a factor of a few, and a multirate controller is refused.
