@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace ceode {
 
@@ -165,6 +166,11 @@ inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   if (sm.in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
+  } else if (ce->degree <= 4) {  // half the arrays, written out: a few moves fewer per step
+    N_Vector low[4];
+    std::memcpy(low, ce->D, sizeof(low));
+    std::memcpy(ce->D, ce->Dnew, sizeof(low));
+    std::memcpy(ce->Dnew, low, sizeof(low));
   } else {
     std::swap(ce->D, ce->Dnew);
   }
@@ -182,7 +188,7 @@ inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
   sm->plan_ix = sm->plan_ix == kNumPlans - 1 ? 0 : sm->plan_ix + 1;
 }
 
-void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
+inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
   RotateVectors(ce, sm);
   ce->tcur = t;
   ++ce->nsteps_h;
@@ -362,7 +368,7 @@ int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, lon
 // kernel run directly (no solve or backend to dispatch), out of place, as the lean loop's last
 // step. What CE_ONE_STEP and outputs a few steps apart take.
 template <bool kMpi>
-int LeanOneStep(CEodeMemRec* ce) {
+__attribute__((always_inline)) inline int LeanOneStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   StepMem* sm = ce->step.get();
   const sunrealtype t = StepTime(ce, 1);
@@ -404,6 +410,47 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
   return ce->step->steps(ce, target, max_steps, taken);
 }
 
+namespace {
+
+// xout = x(tcur), vout = D_1 on serial vectors, and whether they are finite: at one unknown
+// without a loop's set-up, the test on the two values.
+inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector vout) {
+  const sunrealtype* x = NV_DATA_S(ce->xcur);
+  const sunrealtype* v = NV_DATA_S(ce->D[1]);
+  if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  const sunrealtype a = x[0];
+  const sunrealtype b = v[0];
+  NV_DATA_S(xout)[0] = a;
+  NV_DATA_S(vout)[0] = b;
+  return std::isfinite(a) && std::isfinite(b);
+}
+
+}  // namespace
+
+// The whole call in one function, after the configuration and arguments (DirectEvolve, the
+// outputs' kind) and the interval (StepsRemain): the call of f, the update's kernel, the commit and
+// the outputs' copy, as many instructions as the lean loop's step and the copy; every other case,
+// and every failure, is the caller's module's (EvolveOneStepGeneral, OneStepRest).
+int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  const sunrealtype target = ce->tcur + ce->h;
+  const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
+                      tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
+                      DirectConfiguration(ce) && StepsRemain(ce, target);
+  if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
+  const int flag = LeanOneStep<false>(ce);
+  // One step reaches tcur + h to round-off (then no step remains); anything else is
+  // ReturnAtTarget's.
+  if (flag != CE_SUCCESS || !(std::fabs(target - ce->tcur) <= 1e-8 * ce->h)) {
+    return OneStepRest(ce, flag, target, xout, vout, tret);
+  }
+  if (!CopyPairFiniteSerial(ce, xout, vout)) {  // reported as ReturnAtTarget reports it
+    return OneStepRest(ce, CE_SUCCESS, target, xout, vout, tret);
+  }
+  *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
 bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
   const StepMem* sm = ce->step.get();
   if (sm == nullptr || sm->one == nullptr) return false;
@@ -440,6 +487,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
                     ce->ls.mfn == nullptr && ce->ls.M == nullptr;
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
+  sm->one_call = lean && serial;
 }
 
 }  // namespace ceode
