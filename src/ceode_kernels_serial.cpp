@@ -536,6 +536,12 @@ constexpr int TermRole(int d, unsigned ones, int s, int j) {
 constexpr int OutRole(int d, int s) {
   return d > 3 && s == 0 ? RoleZ(d) : RoleNew(d, SumLevel(d, s));
 }
+// Whether term j of sum s is the accumulated one (the old D_k of a level, x(t) of the position:
+// the last term), whose weight is 1: its product is the value itself, bit for bit, and is not
+// formed (RolesMatch checks the weight).
+constexpr bool UnitTerm(int d, unsigned ones, int s, int j) {
+  return j == StepTerms(d, ones, s) - 1 && !(d > 3 && s == 0);
+}
 // An input role (a, the history, x(t)) is loaded only when some sum reads it.
 constexpr bool RoleRead(int d, unsigned ones, int r) {
   for (int s = 0; s < StepSums(d); ++s) {
@@ -561,6 +567,7 @@ bool RolesMatch(const FusedPlan& fp) {
     for (int j = 0; j < tk.m; ++j) {
       const int r = TermRole(D, Ones, s, j);
       const sunrealtype* x = tk.X[j];
+      if (UnitTerm(D, Ones, s, j) && tk.c[j] != 1) return false;
       if (r > D) {
         if (made[r] != x) return false;
         continue;
@@ -601,7 +608,8 @@ inline __m128d RoleTerms(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d 
   if constexpr (J == StepTerms(D, Ones, S)) {
     return acc;
   } else {
-    const __m128d t = _mm_mul_pd(rp.c[S][J], v[TermRole(D, Ones, S, J)]);
+    const __m128d x = v[TermRole(D, Ones, S, J)];
+    const __m128d t = UnitTerm(D, Ones, S, J) ? x : _mm_mul_pd(rp.c[S][J], x);
     return RoleTerms<D, Ones, S, J + 1>(rp, v, _mm_add_pd(acc, t));
   }
 }

@@ -258,7 +258,7 @@ void Time(long n, int reps) {
     std::exit(1);
   }
   const long len = p.g.n();
-  const long outputs = std::max(2L, 30000000L / (len * kOutputEvery));  // ~3e7 DOF steps a block
+  const long outputs = std::max(2L, 60000000L / (len * kOutputEvery));  // ~6e7 DOF steps a block
   c.Outputs(1);  // first touches of the buffers: not a step's cost
   l.Outputs(1);
   std::vector<double> ratio, tc, tl;
