@@ -656,13 +656,15 @@ inline __m128d RolePair(const RolePlan<D, Ones>& rp, sunindextype i) {
 template <int D, unsigned Ones>
 sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
   const RolePlan<D, Ones> rp(fp);
-  const __m128d sign = _mm_set1_pd(-0.0);
+  // |x| as x & mask: the position's register is free after its store, so (unlike andnot with the
+  // sign) the mask needs no copy per pair.
+  const __m128d mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
   __m128d s01 = _mm_setzero_pd();
   __m128d s23 = _mm_setzero_pd();
   sunindextype i = 0;
   for (; i + 4 <= n; i += 4) {
-    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i)));
-    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i + 2)));
+    s01 = _mm_add_pd(s01, _mm_and_pd(RolePair<D, Ones>(rp, i), mask));
+    s23 = _mm_add_pd(s23, _mm_and_pd(RolePair<D, Ones>(rp, i + 2), mask));
   }
   sunrealtype s[4];
   _mm_storeu_pd(s, s01);
