@@ -297,8 +297,8 @@ __attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealt
 
 // CE_NORMAL on the direct path: what EvolveTarget and StepTo do for target = tout (a tout behind
 // tcur takes the general path, which reports it).
-__attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                           N_Vector xout, N_Vector vout, sunrealtype* tret) {
+inline int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                        N_Vector vout, sunrealtype* tret) {
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   if (tout < ce->tcur - troundoff) return Evolve(ce, func, tout, xout, vout, tret, CE_NORMAL);
   const int flag = StepTo(ce, func, tout);
@@ -308,6 +308,18 @@ __attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, su
     return flag;
   }
   return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
+}
+
+// CE_NORMAL (and any other itask, which the general path refuses): the direct path where the
+// call has its form, else the general one. Out of line, so that CEodeEvolve's CE_ONE_STEP call is
+// the guard and a jump.
+__attribute__((noinline)) int EvolveNormal(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                           N_Vector xout, N_Vector vout, sunrealtype* tret,
+                                           int itask) {
+  if (itask == CE_NORMAL && DirectEvolve(ce, tout, xout, vout, tret)) {
+    return EvolveToTout(ce, func, tout, xout, vout, tret);
+  }
+  return Evolve(ce, func, tout, xout, vout, tret, itask);
 }
 
 }  // namespace
@@ -459,10 +471,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
-  if (itask == CE_NORMAL && ceode::DirectEvolve(ce, tout, xout, vout, tret)) {
-    return ceode::EvolveToTout(ce, __func__, tout, xout, vout, tret);
-  }
-  return ceode::Evolve(ce, __func__, tout, xout, vout, tret, itask);
+  return ceode::EvolveNormal(ce, __func__, tout, xout, vout, tret, itask);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
