@@ -555,10 +555,20 @@ constexpr bool RoleRead(int d, unsigned ones, int r) {
 // Whether a plan of the shape (d, ones) reads its vectors in these roles, so that loading every
 // input first gives the terms the values the plan's order gives them: each input role one
 // vector, written by no earlier sum (the results of earlier sums are read as their roles), and
-// each result read from the output of the sum that computes it.
+// each result read from the output of the sum that computes it; the accumulated terms weigh 1
+// (UnitWeightsHold).
+template <int D, unsigned Ones>
+bool UnitWeightsHold(const FusedPlan& fp) {
+  for (int s = 0; s < fp.n; ++s) {
+    for (int j = 0; j < fp.terms[s].m; ++j) {
+      if (UnitTerm(D, Ones, s, j) && fp.terms[s].c[j] != 1) return false;
+    }
+  }
+  return true;
+}
 template <int D, unsigned Ones>
 bool RolesMatch(const FusedPlan& fp) {
-  if (fp.compensated || fp.n != StepSums(D)) return false;
+  if (fp.compensated || fp.n != StepSums(D) || !UnitWeightsHold<D, Ones>(fp)) return false;
   const sunrealtype* in[NumRoles(D)] = {};
   const sunrealtype* made[NumRoles(D)] = {};
   for (int s = 0; s < fp.n; ++s) {
@@ -567,7 +577,6 @@ bool RolesMatch(const FusedPlan& fp) {
     for (int j = 0; j < tk.m; ++j) {
       const int r = TermRole(D, Ones, s, j);
       const sunrealtype* x = tk.X[j];
-      if (UnitTerm(D, Ones, s, j) && tk.c[j] != 1) return false;
       if (r > D) {
         if (made[r] != x) return false;
         continue;
