@@ -38,19 +38,26 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
   return flag;
 }
 
-int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
-  *ce = static_cast<CEodeMemRec*>(mem);
-  if (*ce == nullptr) {
+namespace {
+
+// Access's report, out of line: the guard itself is two tests.
+__attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* func) {
+  if (ce == nullptr) {
     ProcessError(nullptr, CE_MEM_NULL, func,
                  "The CEODE memory is NULL: create it with CEodeCreate first.");
     return CE_MEM_NULL;
   }
-  if (need_init && !(*ce)->initialized) {
-    ProcessError(*ce, CE_NO_MALLOC, func,
-                 "The CEODE memory is not initialised: call CEodeInit first.");
-    return CE_NO_MALLOC;
-  }
-  return CE_SUCCESS;
+  ProcessError(ce, CE_NO_MALLOC, func,
+               "The CEODE memory is not initialised: call CEodeInit first.");
+  return CE_NO_MALLOC;
+}
+
+}  // namespace
+
+int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
+  *ce = static_cast<CEodeMemRec*>(mem);
+  if (*ce != nullptr && (!need_init || (*ce)->initialized)) return CE_SUCCESS;
+  return AccessFailed(*ce, func);
 }
 
 void Restart(CEodeMemRec* ce) {
@@ -288,22 +295,10 @@ __attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealt
   return ReturnAtTarget(ce, func, target, xout, vout, tret, hit_tstop);
 }
 
-// A fixed-step call needs the general path's target logic only for a stop time, roots, error
-// control or a pending guard check, and its checks of the start only before one; without them
-// the call is the steps and the outputs. Arguments that CheckEvolveArgs would refuse take the
-// general path, which reports them.
-inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                         const sunrealtype* tret) {
-  const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&
-                    VectorLength(xout) == ce->n && VectorLength(vout) == ce->n;
-  return args && ce->started && ce->h > 0 && !ce->tstop_set && ce->root == nullptr &&
-         ce->adapt == nullptr && !ce->guard.pending && ce->mxstep > 0;
-}
-
 // CE_NORMAL on the direct path: what EvolveTarget and StepTo do for target = tout (a tout behind
 // tcur takes the general path, which reports it).
-__attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                           N_Vector xout, N_Vector vout, sunrealtype* tret) {
+inline int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                        N_Vector vout, sunrealtype* tret) {
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   if (tout < ce->tcur - troundoff) return Evolve(ce, func, tout, xout, vout, tret, CE_NORMAL);
   const int flag = StepTo(ce, func, tout);
@@ -315,16 +310,39 @@ __attribute__((noinline)) int EvolveToTout(CEodeMemRec* ce, const char* func, su
   return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
 }
 
-// CE_ONE_STEP on the direct path with the step's direct form: what EvolveTarget and StepTo do
-// for target = tcur + h.
-int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret) {
+// CE_NORMAL (and any other itask, which the general path refuses): the direct path where the
+// call has its form, else the general one. Out of line, so that CEodeEvolve's CE_ONE_STEP call is
+// the guard and a jump.
+__attribute__((noinline)) int EvolveNormal(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                           N_Vector xout, N_Vector vout, sunrealtype* tret,
+                                           int itask) {
+  if (itask == CE_NORMAL && DirectEvolve(ce, tout, xout, vout, tret)) {
+    return EvolveToTout(ce, func, tout, xout, vout, tret);
+  }
+  return Evolve(ce, func, tout, xout, vout, tret, itask);
+}
+
+}  // namespace
+
+int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                         sunrealtype* tret) {
+  static const char* func = "CEodeEvolve";
+  if (!DirectEvolve(ce, tout, xout, vout, tret)) {
+    return Evolve(ce, func, tout, xout, vout, tret, CE_ONE_STEP);
+  }
+  // CE_ONE_STEP on the direct path: what EvolveTarget and StepTo do for target = tcur + h.
+  // Interval too short for a step (h near t's round-off), or no direct form: the general path.
   const sunrealtype target = ce->tcur + ce->h;
   int flag = CE_SUCCESS;
-  // Interval too short for a step (h near t's round-off), or no direct form: the general path.
   if (!StepsRemain(ce, target) || !TakeDirectStep(ce, &flag)) {
     return Evolve(ce, func, target, xout, vout, tret, CE_ONE_STEP);
   }
+  return OneStepRest(ce, flag, target, xout, vout, tret);
+}
+
+int OneStepRest(CEodeMemRec* ce, int flag, sunrealtype target, N_Vector xout, N_Vector vout,
+                sunrealtype* tret) {
+  static const char* func = "CEodeEvolve";
   if (flag == CE_SUCCESS && StepsRemain(ce, target)) flag = StepTo(ce, func, target);
   if (flag != CE_SUCCESS) {  // as CEodeEvolve's general path: the last good state
     ReturnCurrentState(ce, xout, vout, tret);
@@ -333,6 +351,8 @@ int EvolveOneStep(CEodeMemRec* ce, const char* func, N_Vector xout, N_Vector vou
   }
   return ReturnAtTarget(ce, func, target, xout, vout, tret, false);
 }
+
+namespace {
 
 // What CEodeReInit and Reset share: the state at t0 and a restart of the method and the solvers;
 // with counters (CEodeReInit), a fresh start that zeroes them and the guard's warning state.
@@ -450,11 +470,8 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (ceode::DirectEvolve(ce, tout, xout, vout, tret)) {
-    if (itask == CE_ONE_STEP) return ceode::EvolveOneStep(ce, __func__, xout, vout, tret);
-    if (itask == CE_NORMAL) return ceode::EvolveToTout(ce, __func__, tout, xout, vout, tret);
-  }
-  return ceode::Evolve(ce, __func__, tout, xout, vout, tret, itask);
+  if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
+  return ceode::EvolveNormal(ce, __func__, tout, xout, vout, tret, itask);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

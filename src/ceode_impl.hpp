@@ -385,6 +385,13 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
 // configuration, chosen by ChooseStep): TakeStep's effect and flag (*flag) without its dispatch.
 // false: no direct form, nothing done.
 bool TakeDirectStep(CEodeMemRec* ce, int* flag);
+// CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run has the lean configuration
+// on serial vectors (chosen at the start), the call has DirectEvolve's form and the outputs are
+// serial: the step (TakeDirectStep's) and x, x' at its end copied into xout, vout, tested as they
+// are written; otherwise EvolveOneStepGeneral, and after a failed step or an end that is not
+// tcur + h to round-off, OneStepRest.
+int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option
@@ -641,6 +648,15 @@ struct ResetOptions {
 };
 int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
           const ResetOptions& opt);
+
+// CEodeEvolve's CE_ONE_STEP call on the general path (the checks, the start, the step through
+// TakeSteps or TakeDirectStep, the outputs): where OneStepEvolve has no direct form.
+int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                         sunrealtype* tret);
+// The end of a CE_ONE_STEP call after OneStepEvolve's step towards target, flag its result: a
+// failed step's last good state, or the steps left and the outputs at target (ReturnAtTarget).
+int OneStepRest(CEodeMemRec* ce, int flag, sunrealtype target, N_Vector xout, N_Vector vout,
+                sunrealtype* tret);
 
 // Name of a flag, static storage (CEodeGetReturnFlagName returns a malloc'd copy).
 const char* FlagName(long int flag);

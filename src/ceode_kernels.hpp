@@ -9,6 +9,8 @@
 
 #include <nvector/nvector_serial.h>
 
+#include <cmath>
+
 #include "ceode_impl.hpp"
 
 namespace ceode {
@@ -155,6 +157,27 @@ bool AllFinite(N_Vector v);
 inline sunindextype VectorLength(N_Vector v) {
   if (v->ops->nvgetlength == N_VGetLength_Serial) return NV_LENGTH_S(v);
   return N_VGetLength(v);
+}
+// Whether a fixed-step CEodeEvolve call goes straight to the steps and the outputs (ceode.cpp's
+// direct path, ceode_step.cpp's OneStepEvolve): the general path's target logic is needed only for
+// a stop time, roots, error control or a pending guard check, and its checks of the start only
+// before one. Arguments that CheckEvolveArgs would refuse take the general path, which reports
+// them.
+// DirectConfiguration: the memory's part of the test, on a started run.
+inline bool DirectConfiguration(const CEodeMemRec* ce) {
+  return ce->h > 0 && !ce->tstop_set && ce->root == nullptr && ce->adapt == nullptr &&
+         !ce->guard.pending && ce->mxstep > 0;
+}
+inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                         const sunrealtype* tret) {
+  const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&
+                    VectorLength(xout) == ce->n && VectorLength(vout) == ce->n;
+  return args && ce->started && DirectConfiguration(ce);
+}
+// Whether v is an NVECTOR_SERIAL of length n (v may be NULL).
+inline bool SerialOfLength(N_Vector v, sunindextype n) {
+  return v != nullptr && v->ops->nvgetarraypointer == N_VGetArrayPointer_Serial &&
+         NV_LENGTH_S(v) == n;
 }
 // The plan on its raw-pointer form (vectors of length n): one pass over the vectors (entry by
 // entry for small n). Returns the L1 norm of the last combination's output (the new position)

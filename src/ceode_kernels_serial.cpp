@@ -536,6 +536,12 @@ constexpr int TermRole(int d, unsigned ones, int s, int j) {
 constexpr int OutRole(int d, int s) {
   return d > 3 && s == 0 ? RoleZ(d) : RoleNew(d, SumLevel(d, s));
 }
+// Whether term j of sum s is the accumulated one (the old D_k of a level, x(t) of the position:
+// the last term), whose weight is 1: its product is the value itself, bit for bit, and is not
+// formed (RolesMatch checks the weight).
+constexpr bool UnitTerm(int d, unsigned ones, int s, int j) {
+  return j == StepTerms(d, ones, s) - 1 && !(d > 3 && s == 0);
+}
 // An input role (a, the history, x(t)) is loaded only when some sum reads it.
 constexpr bool RoleRead(int d, unsigned ones, int r) {
   for (int s = 0; s < StepSums(d); ++s) {
@@ -549,10 +555,20 @@ constexpr bool RoleRead(int d, unsigned ones, int r) {
 // Whether a plan of the shape (d, ones) reads its vectors in these roles, so that loading every
 // input first gives the terms the values the plan's order gives them: each input role one
 // vector, written by no earlier sum (the results of earlier sums are read as their roles), and
-// each result read from the output of the sum that computes it.
+// each result read from the output of the sum that computes it; the accumulated terms weigh 1
+// (UnitWeightsHold).
+template <int D, unsigned Ones>
+bool UnitWeightsHold(const FusedPlan& fp) {
+  for (int s = 0; s < fp.n; ++s) {
+    for (int j = 0; j < fp.terms[s].m; ++j) {
+      if (UnitTerm(D, Ones, s, j) && fp.terms[s].c[j] != 1) return false;
+    }
+  }
+  return true;
+}
 template <int D, unsigned Ones>
 bool RolesMatch(const FusedPlan& fp) {
-  if (fp.compensated || fp.n != StepSums(D)) return false;
+  if (fp.compensated || fp.n != StepSums(D) || !UnitWeightsHold<D, Ones>(fp)) return false;
   const sunrealtype* in[NumRoles(D)] = {};
   const sunrealtype* made[NumRoles(D)] = {};
   for (int s = 0; s < fp.n; ++s) {
@@ -601,7 +617,8 @@ inline __m128d RoleTerms(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d 
   if constexpr (J == StepTerms(D, Ones, S)) {
     return acc;
   } else {
-    const __m128d t = _mm_mul_pd(rp.c[S][J], v[TermRole(D, Ones, S, J)]);
+    const __m128d x = v[TermRole(D, Ones, S, J)];
+    const __m128d t = UnitTerm(D, Ones, S, J) ? x : _mm_mul_pd(rp.c[S][J], x);
     return RoleTerms<D, Ones, S, J + 1>(rp, v, _mm_add_pd(acc, t));
   }
 }
@@ -648,13 +665,15 @@ inline __m128d RolePair(const RolePlan<D, Ones>& rp, sunindextype i) {
 template <int D, unsigned Ones>
 sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
   const RolePlan<D, Ones> rp(fp);
-  const __m128d sign = _mm_set1_pd(-0.0);
+  // |x| as x & mask: the position's register is free after its store, so (unlike andnot with the
+  // sign) the mask needs no copy per pair.
+  const __m128d mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
   __m128d s01 = _mm_setzero_pd();
   __m128d s23 = _mm_setzero_pd();
   sunindextype i = 0;
   for (; i + 4 <= n; i += 4) {
-    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i)));
-    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, RolePair<D, Ones>(rp, i + 2)));
+    s01 = _mm_add_pd(s01, _mm_and_pd(RolePair<D, Ones>(rp, i), mask));
+    s23 = _mm_add_pd(s23, _mm_and_pd(RolePair<D, Ones>(rp, i + 2), mask));
   }
   sunrealtype s[4];
   _mm_storeu_pd(s, s01);

@@ -8,6 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace ceode {
 
@@ -157,16 +160,39 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, UpdateResult r, const char* func,
                       static_cast<double>(ce->h), ce->method_name.c_str());
 }
 
+// a[0, M) and b[0, M) trade places, two pointers a move where SSE2 has them (a swap of the
+// arrays can compile to a loop, or through the stack).
+template <int M>
+inline void SwapSlots(N_Vector* a, N_Vector* b) {
+#if defined(__SSE2__)
+  static_assert(M % 2 == 0 && sizeof(N_Vector) == 8, "pairs of 64-bit pointers");
+  if constexpr (M > 0) {
+    auto* pa = reinterpret_cast<__m128i*>(a);
+    auto* pb = reinterpret_cast<__m128i*>(b);
+    const __m128i ta = _mm_loadu_si128(pa);
+    const __m128i tb = _mm_loadu_si128(pb);
+    _mm_storeu_si128(pa, tb);
+    _mm_storeu_si128(pb, ta);
+    SwapSlots<M - 2>(a + 2, b + 2);
+  }
+#else
+  for (int j = 0; j < M; ++j) std::swap(a[j], b[j]);
+#endif
+}
+
 // The new derivatives become the history; the three positions rotate.
-// Whole arrays, not the degree's slots: a fixed-length swap compiles to a few vector moves
-// instead of a loop; the slots at and above the degree are spare buffers and D[0] is unused.
+// Fixed lengths, not the degree's slots: the first four slots (degree <= 4) or the whole arrays
+// move as a few vector moves instead of a loop; the slots at and above the degree are spare
+// buffers and D[0] is unused.
 // Two rotations of the history and three of the positions are the identity.
 inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   if (sm.in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
+  } else if (ce->degree <= 4) {  // half the arrays: a few moves fewer per step
+    SwapSlots<4>(ce->D, ce->Dnew);
   } else {
-    std::swap(ce->D, ce->Dnew);
+    SwapSlots<kMaxDegree>(ce->D, ce->Dnew);
   }
   if (ce->compensated) std::swap(ce->comp, ce->compnew);
 }
@@ -182,7 +208,7 @@ inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
   sm->plan_ix = sm->plan_ix == kNumPlans - 1 ? 0 : sm->plan_ix + 1;
 }
 
-void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
+inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
   RotateVectors(ce, sm);
   ce->tcur = t;
   ++ce->nsteps_h;
@@ -362,7 +388,7 @@ int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, lon
 // kernel run directly (no solve or backend to dispatch), out of place, as the lean loop's last
 // step. What CE_ONE_STEP and outputs a few steps apart take.
 template <bool kMpi>
-int LeanOneStep(CEodeMemRec* ce) {
+__attribute__((always_inline)) inline int LeanOneStep(CEodeMemRec* ce) {
   static const char* func = "CEodeEvolve";
   StepMem* sm = ce->step.get();
   const sunrealtype t = StepTime(ce, 1);
@@ -404,6 +430,47 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
   return ce->step->steps(ce, target, max_steps, taken);
 }
 
+namespace {
+
+// xout = x(tcur), vout = D_1 on serial vectors, and whether they are finite: at one unknown
+// without a loop's set-up, the test on the two values.
+inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector vout) {
+  const sunrealtype* x = NV_DATA_S(ce->xcur);
+  const sunrealtype* v = NV_DATA_S(ce->D[1]);
+  if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  const sunrealtype a = x[0];
+  const sunrealtype b = v[0];
+  NV_DATA_S(xout)[0] = a;
+  NV_DATA_S(vout)[0] = b;
+  return std::isfinite(a) && std::isfinite(b);
+}
+
+}  // namespace
+
+// The whole call in one function, after the configuration and arguments (DirectEvolve, the
+// outputs' kind) and the interval (StepsRemain): the call of f, the update's kernel, the commit and
+// the outputs' copy, as many instructions as the lean loop's step and the copy; every other case,
+// and every failure, is the caller's module's (EvolveOneStepGeneral, OneStepRest).
+int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  const sunrealtype target = ce->tcur + ce->h;
+  const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
+                      tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
+                      DirectConfiguration(ce) && StepsRemain(ce, target);
+  if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
+  const int flag = LeanOneStep<false>(ce);
+  // One step reaches tcur + h to round-off (then no step remains); anything else is
+  // ReturnAtTarget's.
+  if (flag != CE_SUCCESS || !(std::fabs(target - ce->tcur) <= 1e-8 * ce->h)) {
+    return OneStepRest(ce, flag, target, xout, vout, tret);
+  }
+  if (!CopyPairFiniteSerial(ce, xout, vout)) {  // reported as ReturnAtTarget reports it
+    return OneStepRest(ce, CE_SUCCESS, target, xout, vout, tret);
+  }
+  *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
 bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
   const StepMem* sm = ce->step.get();
   if (sm == nullptr || sm->one == nullptr) return false;
@@ -440,6 +507,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
                     ce->ls.mfn == nullptr && ce->ls.M == nullptr;
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
+  sm->one_call = lean && serial;
 }
 
 }  // namespace ceode

@@ -35,6 +35,7 @@ struct StepMem {
   UpdateFn update = nullptr;              // the derivatives and x(t + h) after the solve (TakeStep)
   StepsFn steps = nullptr;                // TakeSteps: the lean loop or one TakeStep
   int (*one)(CEodeMemRec* ce) = nullptr;  // TakeDirectStep: TakeStep of the lean configuration
+  bool one_call = false;                  // OneStepCall: the lean configuration on serial vectors
 
   // The update plans (ceode_step_plans.cpp)
   bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place

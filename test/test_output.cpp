@@ -128,6 +128,74 @@ TEST_F(HarmonicRun, OneStepModeReturnsEveryStepWithTheSameValuesAsNormalMode) {
   }
 }
 
+// n independent springs x_i'' = -(1 + i/n) x_i: large enough (n = 2000) for the in-place update.
+int SpringChain(sunrealtype /*t*/, N_Vector x, N_Vector /*v*/, N_Vector a, void* /*data*/) {
+  const sunindextype n = N_VGetLength(x);
+  const sunrealtype* xp = N_VGetArrayPointer(x);
+  sunrealtype* ap = N_VGetArrayPointer(a);
+  for (sunindextype i = 0; i < n; ++i) {
+    ap[i] = -(1 + static_cast<sunrealtype>(i) / static_cast<sunrealtype>(n)) * xp[i];
+  }
+  return 0;
+}
+
+// States after k steps of h = 1e-3: every CE_ONE_STEP return (tret, x, v), or CE_NORMAL returns
+// at the given step counts.
+struct ChainStates {
+  std::vector<sunrealtype> t;
+  std::vector<std::vector<sunrealtype>> x, v;
+};
+ChainStates RunChain(const char* method, int itask, const std::vector<int>& outputs) {
+  constexpr sunindextype kN = 2000;
+  constexpr sunrealtype kH = SUN_RCONST(1e-3);
+  Context ctx;
+  Vector x = SerialVector(kN, ctx, 1);
+  Vector v = SerialVector(kN, ctx, 0);
+  Mem mem(CEodeCreate(ctx));
+  ChainStates s;
+  if (CEodeInit(mem.get(), SpringChain, 0, x.get(), v.get()) != CE_SUCCESS ||
+      CEodeSetMethodByName(mem.get(), method) != CE_SUCCESS ||
+      CEodeSetFixedStep(mem.get(), kH) != CE_SUCCESS ||
+      CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0) != CE_SUCCESS) {
+    return s;
+  }
+  const auto keep = [&](sunrealtype t) {
+    const sunrealtype* xp = N_VGetArrayPointer(x.get());
+    const sunrealtype* vp = N_VGetArrayPointer(v.get());
+    s.t.push_back(t);
+    s.x.emplace_back(xp, xp + kN);
+    s.v.emplace_back(vp, vp + kN);
+  };
+  sunrealtype t = 0;
+  for (int k : outputs) {
+    const sunrealtype tout = itask == CE_NORMAL ? kH * k : 1;
+    if (CEodeEvolve(mem.get(), tout, x.get(), v.get(), &t, itask) != CE_SUCCESS) return s;
+    keep(t);
+  }
+  return s;
+}
+
+// The direct one-step call (the step and both outputs in one function) returns at each step the
+// step's own state, bit for bit what CE_NORMAL returns at that step (the lean loop, in-place
+// update), and the step grid's time, for sets of degree 3, 4 and 8.
+TEST(OneStepMode, ReturnsBitwiseTheStatesOfNormalModeOnALargeSystem) {
+  for (const char* method : {"G3_CD", "G4_A34", "G8_O8"}) {
+    std::vector<int> every(40);
+    for (int k = 0; k < 40; ++k) every[k] = k + 1;
+    const ChainStates one = RunChain(method, CE_ONE_STEP, every);
+    const ChainStates normal = RunChain(method, CE_NORMAL, {7, 20, 40});
+    ASSERT_EQ(one.t.size(), 40U) << method;
+    ASSERT_EQ(normal.t.size(), 3U) << method;
+    const int steps[] = {7, 20, 40};
+    for (int j = 0; j < 3; ++j) {
+      const int k = steps[j] - 1;
+      EXPECT_EQ(one.t[k], normal.t[j]) << method << " step " << k + 1;
+      EXPECT_TRUE(one.x[k] == normal.x[j]) << method << " step " << k + 1;
+      EXPECT_TRUE(one.v[k] == normal.v[j]) << method << " step " << k + 1;
+    }
+  }
+}
+
 TEST_F(HarmonicRun, StopTimeIsHitExactlyAndReturnsTstopReturn) {
   ASSERT_EQ(CEodeSetStopTime(mem(), SUN_RCONST(0.377)), CE_SUCCESS);
   sunrealtype t = 0;

@@ -10,11 +10,13 @@
 #   bench/step_cost/instructions.sh high-order BUILD_DIR [METHOD[+comp]]...   wp_high_order: per run and per step
 #   bench/step_cost/instructions.sh rk8pd BUILD_DIR                     wp_high_order: G8_O8 against GSL rk8pd
 #   bench/step_cost/instructions.sh fe-plate BUILD_DIR [NY ...]         wp_fe_plate: per step and DOF, and LL misses
+#   bench/step_cost/instructions.sh membrane BUILD_DIR [N ...]          membrane_driver: per step, CEODE against
+#                                                                       the hand leapfrog (outputs every 30 steps)
 #
 # Needs valgrind. The simulated last-level-cache misses (fe-plate) follow the cache valgrind reads
 # from cpuid; read them only where that size is real (or pass --LL= by hand).
 set -euo pipefail
-mode=${1:?mode: step, passes, adaptive, high-order, rk8pd or fe-plate}
+mode=${1:?mode: step, passes, adaptive, high-order, rk8pd, fe-plate or membrane}
 build=${2:?BUILD_DIR}
 shift 2
 command -v valgrind > /dev/null || { echo "valgrind not found (apt-get install valgrind)"; exit 1; }
@@ -150,5 +152,14 @@ fe-plate)  # per step and DOF on the 4 ny x ny meshes (default 35 112 354: 10^4 
       'BEGIN {printf " %s %.3f", s, log(i1 / i0) / log(n1 / n0)}'
   done
   echo ;;
-*) echo "unknown mode $mode (step, passes, adaptive, high-order, rk8pd, fe-plate)"; exit 2 ;;
+membrane)  # per step at each N (default 10^5 and 10^6): 60 and 180 steps (two and six output blocks)
+  ns=("$@")
+  [ ${#ns[@]} -gt 0 ] || ns=(100000 1000000)
+  for n in "${ns[@]}"; do
+    c=$(per "$(count membrane_driver ceode "$n" 60)" "$(count membrane_driver ceode "$n" 180)" 120)
+    l=$(per "$(count membrane_driver leapfrog "$n" 60)" "$(count membrane_driver leapfrog "$n" 180)" 120)
+    awk -v n="$n" -v c="$c" -v l="$l" \
+      'BEGIN {printf "membrane N=%-8s ceode %14.1f  leapfrog %14.1f instructions/step  ratio %.3f\n", n, c, l, c / l}'
+  done ;;
+*) echo "unknown mode $mode (step, passes, adaptive, high-order, rk8pd, fe-plate, membrane)"; exit 2 ;;
 esac
