@@ -8,7 +8,7 @@
 //  * One runner family: CeodeRun (second-order form, optionally a mass matrix, index-3
 //    constraints, the implicit step; fixed steps or error control), SundialsRun (ARKODE ERKStep
 //    with a fixed Butcher table or adaptive, ARKStep DIRK / IMEX, CVODE Adams / BDF with a dense,
-//    SPGMR or KLU solver), IdaRun (residual form), each in one of two modes: one step at a time
+//    SPGMR or KLU solver), IdaRun (residual form), each in one of three modes: one step at a time
 //    with the error measured after every step, or (Problem::nout > 0) to nout output instants in
 //    the normal mode, or (Problem::end_only) to the end time in one normal-mode call. Every solver
 //    of a scene is driven, observed and timed the same way in the same process.
@@ -620,7 +620,8 @@ struct CeodeObjects {
 };
 
 // Velocity dependence, linear solver, mass matrix and constraints; true on failure. One-step
-// mode leaves an undeclared velocity dependence to CEODE; output mode declares it either way.
+// mode leaves an undeclared velocity dependence to CEODE; output and end modes declare it either
+// way.
 inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, CeodeObjects* o) {
   void* mem = o->mem;
   if (c.vel || p.nout > 0 || p.end_only) {
