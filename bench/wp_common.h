@@ -8,10 +8,10 @@
 //  * One runner family: CeodeRun (second-order form, optionally a mass matrix, index-3
 //    constraints, the implicit step; fixed steps or error control), SundialsRun (ARKODE ERKStep
 //    with a fixed Butcher table or adaptive, ARKStep DIRK / IMEX, CVODE Adams / BDF with a dense,
-//    SPGMR or KLU solver), IdaRun (residual form), each in one of two modes: one step at a time
+//    SPGMR or KLU solver), IdaRun (residual form), each in one of three modes: one step at a time
 //    with the error measured after every step, or (Problem::nout > 0) to nout output instants in
-//    the normal mode. Every solver of a scene is driven, observed and timed the same way in the
-//    same process.
+//    the normal mode, or (Problem::end_only) to the end time in one normal-mode call. Every solver
+//    of a scene is driven, observed and timed the same way in the same process.
 //  * Timing: every configuration is run back to back until one repetition has lasted >= 50 ms,
 //    and the per-run time is the median of 5 repetitions (3 for runs of >= 0.5 s; a run of
 //    >= 2 s is its own measurement), either configuration by configuration (Measure) or in
@@ -488,6 +488,10 @@ struct Problem {
   int nout = 0;
   std::vector<Vec> ref;
   double x0norm = 1;
+  // -- end mode (nout = 0): err counts at tend alone, so CEODE and SUNDIALS integrate to tend in
+  // one normal-mode call (stop time tend) and err is taken there, as a user who wants the final
+  // state drives them; the peers step on as their own drivers do --
+  bool end_only = false;
 
   template <AccFn A>
   void Lift() {
@@ -616,10 +620,11 @@ struct CeodeObjects {
 };
 
 // Velocity dependence, linear solver, mass matrix and constraints; true on failure. One-step
-// mode leaves an undeclared velocity dependence to CEODE; output mode declares it either way.
+// mode leaves an undeclared velocity dependence to CEODE; output and end modes declare it either
+// way.
 inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, CeodeObjects* o) {
   void* mem = o->mem;
-  if (c.vel || p.nout > 0) {
+  if (c.vel || p.nout > 0 || p.end_only) {
     if (Failed(CEodeSetVelocityDependence(mem, c.vel ? SUNTRUE : SUNFALSE),
                "CEodeSetVelocityDependence")) {
       return true;
@@ -684,7 +689,8 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
 // limit are part of the picture); output mode rounds h down to divide the output interval
 // (FixedStep). With c.adaptive, h_or_tol = rtol = atol and the guard at its defaults. One-step
 // mode observes every step; output mode every output instant, appending x there to *xs (if
-// given). rhs_evals counts every f evaluation: the steps', the difference quotients', the guard's.
+// given); end mode (p.end_only) tend alone. rhs_evals counts every f evaluation: the steps', the
+// difference quotients', the guard's.
 inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double h_or_tol,
                     Outcome* out, CeodeStats* st = nullptr, std::vector<Vec>* xs = nullptr) {
   CeodeObjects o;
@@ -720,9 +726,14 @@ inline int CeodeRun(SUNContext ctx, const Problem& p, const CeodeOpts& c, double
       if (!bad && xs != nullptr) xs->emplace_back(xd, xd + p.n);
     }
   }
+  if (!outputs && p.end_only && !bad) {
+    out->flag = CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_NORMAL);
+    bad = Failed(out->flag, "CEodeEvolve");
+    if (!bad) tr.Step(t, xd, vd);
+  }
   // Fixed steps end half a step before tend, adaptive ones at tend (the stop time).
   const double margin = c.adaptive ? 1e-12 * std::max(1.0, std::fabs(p.tend)) : 0.5 * h;
-  while (!outputs && !bad && t < p.tend - margin) {
+  while (!outputs && !p.end_only && !bad && t < p.tend - margin) {
     // One step at a time: x and x' are then known at the same instant.
     out->flag = CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP);
     bad = Failed(out->flag, "CEodeEvolve");
@@ -969,7 +980,8 @@ inline bool SunCounters(const SunObjects& o, Outcome* out) {
 }
 
 // One integration of the first-order form. kErkFixed: h_or_rtol is the step; otherwise the
-// relative tolerance. One-step mode observes every step; output mode every output instant.
+// relative tolerance. One-step mode observes every step; output mode every output instant; end
+// mode (p.end_only) tend alone.
 inline int SundialsRun(SUNContext ctx, const Problem& p, const SunOpts& c, double h_or_rtol,
                        Outcome* out) {
   SunObjects o(c.kind);
@@ -985,10 +997,14 @@ inline int SundialsRun(SUNContext ctx, const Problem& p, const SunOpts& c, doubl
     bad = Failed(SunEvolve(o, OutputTime(p, k), &t, false), "Evolve");
     if (!bad) tr.Output(k, Y);
   }
+  if (p.nout == 0 && p.end_only && !bad) {
+    bad = Failed(SunEvolve(o, p.tend, &t, false), "Evolve");
+    if (!bad) tr.Step(t, Y, Y + p.n);
+  }
   // Fixed steps end half a step before tend (as CeodeRun), adaptive ones at tend.
   const double margin =
       c.kind == Sun::kErkFixed ? 0.5 * h_or_rtol : 1e-12 * std::max(1.0, std::fabs(p.tend));
-  while (p.nout == 0 && !bad && t < p.tend - margin) {
+  while (p.nout == 0 && !p.end_only && !bad && t < p.tend - margin) {
     bad = Failed(SunEvolve(o, p.tend, &t, true), "Evolve");
     if (!bad) tr.Step(t, Y, Y + p.n);
   }

@@ -305,7 +305,8 @@ if ((${#dae[@]})); then "$PYTHON" scripts/plot_dae.py --outdir "$OUT" "${dae[@]}
 "$PYTHON" scripts/plot_which_set.py --lib "$BUILD/libceode.so" --out "$OUT/which_set.png" || status=1
 
 step "ratios at equal error"
-"$PYTHON" scripts/ratios.py --out "$OUT/ratios.csv" --scene-levels fe_=1e-4,1e-6 "${wp[@]}" ||
+"$PYTHON" scripts/ratios.py --out "$OUT/ratios.csv" --scene-levels fe_=1e-4,1e-6 \
+  --scene-levels fpu_chain=1e-6,1e-8,1e-10 "${wp[@]}" ||
   status=1
 # docs/results.md's summary table, regenerated from ratios.csv
 "$PYTHON" scripts/summary_table.py "$OUT/ratios.csv" --out "$OUT/summary.md" > /dev/null || status=1

@@ -26,7 +26,7 @@ from wp_curves import time_to_reach  # noqa: E402
 
 # Scenes in the order of docs/results.md; chain_dae (N-scaling, CEODE only) has no ratio.
 SCENES = ["pendulum_ode", "spinning_top", "damped_pendulum", "forced_vibration", "kepler",
-          "events",
+          "events", "fpu_chain",
           "pendulum_dae", "chain_dae_wp", "fe_plate", "fe_nonlinear", "fe_damped_mass",
           "fe_damped_stiff", "wp_high_order"]
 KINDS = ["SUNDIALS", "Boost.Odeint", "GSL", "hand loop"]

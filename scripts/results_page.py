@@ -38,6 +38,11 @@ SCENES = [
     ("forced_vibration", "Forced vibration (stability-limited)",
      "x'' + x = sin(0.01 t) over 1000 s, started on its exact particular solution: the answer is "
      "slow, but the free frequency bounds every explicit step. Error: max |x − x_exact|."),
+    ("fpu_chain", "FPU-β chain of 1 000 masses (expensive smooth f)",
+     "x_i'' = (d_i − d_{i−1}) + β (d_i³ − d_{i−1}³), d_i = x_{i+1} − x_i, fixed ends, β = 1, "
+     "released from rest on 2 sin(50π i / 1001), 100 s; f is one pass of about 1 µs, so a step's "
+     "own arithmetic counts beside f. Error: max_i |x_i(100) − ref_i| against a "
+     "Richardson-extrapolated long-double RK4 reference; ratios at 1e-6, 1e-8 and 1e-10."),
     ("events", "Event location (Kepler orbit)",
      "SUNDIALS' Kepler problem (e = 0.6) over 10 orbits with the root function g = q₂ in both "
      "directions: 20 events at t = kπ, located on each solver's dense output (CEODE, ARKODE ERK, "

@@ -5,19 +5,19 @@
 //     Phi(q) = (x - L sin theta, y + L cos theta) = 0,  G = dPhi/dq,
 // released at rest from theta = 90 deg, t in [0, 10] s; M is singular, only the saddle-point
 // matrix [[M, G^T], [G, 0]] is regular. error = max |E - E0|, drift = max |x^2 + y^2 - L^2|.
-// Solvers: CEODE G5_ONES (zero and consistent start), G4_A34, G3_CD at h = 1e-2 ... 1e-4 (1e-5
-// with --full), dense saddle matrix; ARKODE RK3 on the index-1 form, with and without a
-// projection onto Phi = 0 after every step (the paper's Tables 9 and 10); IDA on the GGL form
-// (lambda, mu and theta' algebraic, analytic iteration matrix, first step 1e-5 s: IDA's own
-// estimate is too small for the index-2 Newton iteration), rtol = atol = 1e-4 ... 1e-10. CEODE
-// error control (config "<set> adaptive", h_or_tol the tolerance) with G4_A34 and G5_O4 at
-// rtol = atol = 1e-3 ... 1e-11, G3_CD to 1e-8, dense saddle matrix, IDA's first step (CEODE's
-// own comes from x and v alone and is a tenth of the interval from rest, too long for the
-// constrained start); printed with every other curve at equal error (f evaluations and time).
-// Checks (exit code): RK3, RK3+proj and G5_ONES (zero start) reproduce the paper's Tables 9-11
-// within 10 % at h = 1e-2 and 1e-3; G5_ONES reaches <= 2e-12 at 1e-4 with drift <= 1e-14; every
-// run succeeds. --quick: ARKODE only at 1e-2 and 1e-3, IDA only to 1e-6, CEODE adaptive G4_A34
-// and G5_O4 at 1e-4 and 1e-7.
+// Solvers: CEODE G5_ONES (zero and consistent start), G5_O4, G4_A34, G3_CD at h = 1e-2 ... 1e-4
+// (1e-5 with --full), dense saddle matrix (degrees 6 to 8 do not run constrained problems); ARKODE
+// RK3 on the index-1 form, with and without a projection onto Phi = 0 after every step (the paper's
+// Tables 9 and 10); IDA on the GGL form (lambda, mu and theta' algebraic, analytic iteration
+// matrix, first step 1e-5 s: IDA's own estimate is too small for the index-2 Newton iteration),
+// rtol = atol = 1e-4 ... 1e-10. CEODE error control (config "<set> adaptive", h_or_tol the
+// tolerance) with G4_A34 and G5_O4 at rtol = atol = 1e-3 ... 1e-11, G3_CD to 1e-8, dense saddle
+// matrix, IDA's first step (CEODE's own comes from x and v alone and is a tenth of the interval
+// from rest, too long for the constrained start); printed with every other curve at equal error (f
+// evaluations and time). Checks (exit code): RK3, RK3+proj and G5_ONES (zero start) reproduce the
+// paper's Tables 9-11 within 10 % at h = 1e-2 and 1e-3; G5_ONES reaches <= 2e-12 at 1e-4 with drift
+// <= 1e-14; every run succeeds. --quick: ARKODE only at 1e-2 and 1e-3, IDA only to 1e-6, CEODE
+// adaptive G4_A34 and G5_O4 at 1e-4 and 1e-7.
 // -----------------------------------------------------------------------------
 #include <array>
 #include <cmath>
@@ -280,6 +280,7 @@ void RunCeode(Scene* sc, const wp::Problem& p) {
   };
   const CeConfig ces[] = {{"G5_ONES", "G5_ONES", true},
                           {"G5_ONES/consistent", "G5_ONES", false},
+                          {"G5_O4", "G5_O4", false},
                           {"G4_A34", "G4_A34", false},
                           {"G3_CD", "G3_CD", false}};
   for (const CeConfig& c : ces) {

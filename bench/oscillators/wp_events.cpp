@@ -12,8 +12,9 @@
 //
 // Curves (CSV: the common schema; the drift column holds the g evaluations, this scene has no
 // drift):
-//  * CEODE fixed step h = t_e / N (G5_O4, G8_O8) and adaptive rtol = atol = tol (G4_A34, G5_O4,
-//    G8_O8), CEodeEvolve in CE_NORMAL to t_e, returning at every root.
+//  * CEODE fixed step h = t_e / N (G5_O4, G6_O5, G7_O7, G8_O8; --quick: G5_O4, G8_O8) and
+//    adaptive rtol = atol = tol (G4_A34, G5_O4, G8_O8), CEodeEvolve in CE_NORMAL to t_e,
+//    returning at every root.
 //  * ARKODE ERKStep adaptive (default table, order 4) with ERKStepRootInit and CVODE Adams
 //    (fixed-point iteration) with CVodeRootInit, both on y = (q, q'), in their normal mode.
 // f evaluations are counted in f itself for every solver.
@@ -259,12 +260,14 @@ int main(int argc, char** argv) {
   // CVODE Adams) no longer return the 20 events.
   std::vector<double> tols = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
   std::vector<long> fixed_n = {2000, 4000, 8000, 16000, 32000, 64000};
+  std::vector<const char*> fixed_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   if (args.quick) {
     tols = {1e-7, 1e-9, 1e-11};
     fixed_n = {4000, 16000};
+    fixed_sets = {"G5_O4", "G8_O8"};
   }
   std::vector<Curve> curves;
-  for (const char* set : {"G5_O4", "G8_O8"}) {
+  for (const char* set : fixed_sets) {
     const std::string config = std::string(set) + "_fixed";
     curves.push_back({"CEODE", config});
     for (long n : fixed_n) {

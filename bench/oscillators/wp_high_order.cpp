@@ -208,8 +208,8 @@ bool Measure(const wp::Problem& p, const std::string& solver, double param, F ru
   Result r{solver, param, err, 0, M(p).evals};
   double dummy = 0;
   r.seconds = wp::TimeMedian([&] { return run(&dummy); });
-  std::printf("%-10s %-14s %10.4g  error %.3e  f-evals %8ld  %.3e s\n", M(p).name,
-              solver.c_str(), param, r.error, r.evals, r.seconds);
+  std::printf("%-10s %-14s %10.4g  error %.3e  f-evals %8ld  %.3e s\n", M(p).name, solver.c_str(),
+              param, r.error, r.evals, r.seconds);
   out->push_back(r);
   return r.seconds >= 0;
 }
@@ -348,7 +348,7 @@ int main(int argc, char** argv) {
   SUNContext ctx;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return 1;
   Model pend{"pendulum", 1, PendulumAccel, {}};
-  Model chain{"fpu_chain", kChain, ChainAccel, {}};
+  Model chain{"fpu_chain_16", kChain, ChainAccel, {}};
   std::vector<double> chain_x0;
   for (int i = 0; i < kChain; ++i) {
     const double q = M_PI * (i + 1) / (kChain + 1);

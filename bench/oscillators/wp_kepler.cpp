@@ -15,8 +15,9 @@
 //    are counted in f itself (the start's and the stability guard's included). A run that
 //    returns a failure flag is a failure row with the flag's name, not a point of the curve,
 //    and not a failure of the scene: it is one of the results.
-//  * CEODE fixed step (wp::CeodeRun, guard off): G8_O8 and G6_O5, for adaptive against fixed
-//    at equal f.
+//  * CEODE fixed step (wp::CeodeRun, guard off, one CE_NORMAL call to t_f: Problem::end_only):
+//    G5_O4, G6_O5, G7_O7, G8_O8 (--quick: G6_O5, G8_O8), for adaptive against fixed at equal f.
+//    ARKODE's default table and CVODE Adams run in their normal mode to t_f as well.
 //  * ARKODE ERKStep adaptive with the default table (order 4) and CVODE Adams (fixed-point
 //    iteration) through wp::SundialsRun; ERKStep with Verner 8-5-6 (order 6) and Fehlberg 13-7-8
 //    (order 8; SUNDIALS 6.4 has no Verner 16-8-9) through ErkTableRun, the same one-step loop
@@ -64,8 +65,9 @@ const double kTend = 2 * M_PI * kOrbits;
 
 long& Evals(const wp::Problem& p) { return static_cast<Kepler*>(p.user)->evals; }
 
-// The runners observe after every step; only the instant t_f counts (fixed steps reach it up
-// to the rounding of N additions, adaptive ones exactly).
+// Only the instant t_f counts (fixed steps reach it up to the rounding of N additions, adaptive
+// ones exactly): the runners of wp_common.h observe it alone (Problem::end_only), the others
+// after every step.
 bool AtEnd(double t) { return t >= kTend * (1 - 1e-9); }
 
 double EndError(double t, const double* x, const double*, void*) {
@@ -436,7 +438,7 @@ void PrintSummary(const wp::Table& table, const std::vector<double>& levels) {
   }
   // Adaptive against fixed steps of the same set at equal error: f and time.
   std::printf("\nadaptive / fixed step of the same set at equal error (f ratio, time ratio)\n");
-  for (const char* set : {"G8_O8", "G6_O5"}) {
+  for (const char* set : {"G5_O4", "G6_O5", "G7_O7", "G8_O8"}) {
     const Curve a{"CEODE", std::string(set) + "_adaptive"}, f{"CEODE", std::string(set) + "_fixed"};
     std::printf("  %-6s", set);
     for (double e : levels) {
@@ -476,15 +478,17 @@ int main(int argc, char** argv) {
   p.err = EndError;
   p.drift = EndDrift;
   p.separable = true;
+  p.end_only = true;
 
   std::vector<double> tols = {1e-4,  1e-5,  1e-6,  1e-7,  1e-8, 1e-9,
                               1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
   std::vector<const char*> sets = {"G4_A34", "G5_O4", "G6_O5", "G7_O7", "G8_O8"};
+  std::vector<const char*> fixed_sets = {"G5_O4", "G6_O5", "G7_O7", "G8_O8"};
   std::vector<long> fixed_n = {2000,  2800,  4000,  5600,  8000,  11300,
                                16000, 22600, 32000, 45000, 64000, 90000};
   if (args.quick) {
     tols = {1e-7, 1e-9, 1e-11};
-    sets = {"G6_O5", "G8_O8"};
+    sets = fixed_sets = {"G6_O5", "G8_O8"};
     fixed_n = {4000, 16000};
   }
   int bad = 0, ceode_failures = 0;
@@ -492,7 +496,7 @@ int main(int argc, char** argv) {
   for (const char* set : sets) {
     for (double tol : tols) MeasureCeodeAdaptive(&table, ctx, p, set, tol, &ceode_failures);
   }
-  for (const char* set : {"G8_O8", "G6_O5"}) {
+  for (const char* set : fixed_sets) {
     for (long n : fixed_n) {
       wp::MeasureCeode(&table, ctx, p, set, kTend / static_cast<double>(n), false,
                        std::string(set) + "_fixed");

@@ -164,5 +164,53 @@ class RatiosAndSummary(unittest.TestCase):
         self.assertIn("(-O0)", lines[3])  # the FE scene has only the Debian half
 
 
+
+class BestCeodeOverEverySet(unittest.TestCase):
+    """A fixed-step set fastest at loose errors, an error-control curve of another set at tight
+    ones: the best CEODE curve is picked over all of them at each level, and the summary names
+    that curve's set and mode."""
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        d = self.dir.name
+        # G5 fixed: 1e-3 (1 / e)^(1/5) s; G8_O8 adaptive: 1e-3 (1e4 / e)^(1/8) s. G5 is faster at
+        # 1e-6 (0.0158 s against 0.0178 s), G8_O8 adaptive at 1e-11 (0.075 s against 0.158 s).
+        path = os.path.join(d, "sets.csv")
+        write_scene(path, "sets", {
+            ("CEODE", "G5"): power_curve(1.0, 5, HS),
+            ("CEODE", "G8_O8 adaptive"): power_curve(1e4, 8, HS),
+            ("CEODE", "G3_CD"): power_curve(100.0, 2, HS),
+            ("ARKODE-ERK", "order8"): power_curve(1e6, 8, HS),
+            ("GSL", "rk8pd"): power_curve(1e3, 8, HS),
+        })
+        self.out = os.path.join(d, "ratios.csv")
+        subprocess.run([sys.executable, os.path.join(SCRIPTS, "ratios.py"), "--out", self.out,
+                        "--levels", "1e-6,1e-11", path], check=True, stdout=subprocess.DEVNULL)
+        with open(self.out, newline="") as f:
+            self.rows = {r["error_level"]: r for r in csv.DictReader(f)}
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def test_picks_the_fastest_ceode_curve_over_fixed_and_adaptive_sets_at_each_level(self):
+        loose, tight = self.rows["1e-06"], self.rows["1e-11"]
+        self.assertEqual(loose["ceode_best"], "CEODE G5")
+        self.assertAlmostEqual(float(loose["ceode_seconds"]), exact_time(1.0, 5, 1e-6),
+                               delta=1e-3 * exact_time(1.0, 5, 1e-6))
+        self.assertEqual(tight["ceode_best"], "CEODE G8_O8 adaptive")
+        self.assertAlmostEqual(float(tight["ceode_seconds"]), exact_time(1e4, 8, 1e-11),
+                               delta=1e-3 * exact_time(1e4, 8, 1e-11))
+        # Same order 8: the peer's time over CEODE's is (1e3 / 1e4)^(1/8) at every level.
+        self.assertAlmostEqual(float(tight["ratio_ceode_over_peer"]), 10 ** (1 / 8), places=2)
+
+    def test_summary_names_the_set_and_mode_of_the_best_curve(self):
+        out = subprocess.run([sys.executable, os.path.join(SCRIPTS, "summary_table.py"), self.out],
+                             check=True, capture_output=True, text=True).stdout
+        cells = {l.split("|")[2].strip(): [c.strip() for c in l.split("|")[1:-1]]
+                 for l in out.splitlines() if l.startswith("| sets")}
+        self.assertEqual(cells["1e-06"][2], "G5")
+        self.assertEqual(cells["1e-11"][2], "G8_O8 adaptive")
+
+
 if __name__ == "__main__":
     unittest.main()
