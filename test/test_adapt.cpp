@@ -247,9 +247,9 @@ void ExpectProportional(const char* set, const char* problem,
 
 // Global error against tolerance: slope 1 by design (the local error is held to tol^((p+1)/p),
 // docs/theory.md 12.3); asserted within 0.8 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
-// runs scatter by a factor of a few around the trend; the fitted slopes are 0.92 .. 1.32: G8_O8's
-// 1.32 is its global error, A h^8 + B h^9 with |B h| >> |A| at these steps and a change of sign
-// near 1e-10, docs/theory.md 12.3). The
+// runs scatter by a factor of a few around the trend; the fitted slopes are 0.89 .. 1.24: a global
+// error A h^p + B h^(p+1) with |B h| >> |A| at these steps and a change of sign tilts a set's slope,
+// docs/theory.md 12.3). The
 // pendulum starts at rest at the origin: the first step comes from a alone (12.3).
 TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   const double ref = PendulumReference();
@@ -258,7 +258,7 @@ TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   });
 }
 
-// Kepler e = 0.6 over two orbits, the same band over 1e-6 .. 1e-10 (fitted: 0.89 .. 1.14).
+// Kepler e = 0.6 over two orbits, the same band over 1e-6 .. 1e-10 (fitted: 0.96 .. 1.13).
 TEST_P(ToleranceProportionality, KeplerGlobalErrorFollowsTheTolerance) {
   ExpectProportional(GetParam(), "Kepler", [&](double tol) {
     return Integrate(KeplerSetup(), GetParam(), tol, 4 * M_PI, {1 - kEcc, 0});
