@@ -248,9 +248,9 @@ void ExpectProportional(const char* set, const char* problem,
 // Global error against tolerance: slope 1 by design (the local error is held to tol^((p+1)/p),
 // docs/theory.md 12.3); asserted within 0.8 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
 // runs scatter by a factor of a few around the trend; the fitted slopes are 0.89 .. 1.24: a global
-// error A h^p + B h^(p+1) with |B h| >> |A| at these steps and a change of sign tilts a set's slope,
-// docs/theory.md 12.3). The
-// pendulum starts at rest at the origin: the first step comes from a alone (12.3).
+// error A h^p + B h^(p+1) with |B h| >> |A| at these steps and a change of sign tilts a set's
+// slope, docs/theory.md 12.3). The pendulum starts at rest at the origin: the first step comes from
+// a alone (12.3).
 TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   const double ref = PendulumReference();
   ExpectProportional(GetParam(), "pendulum", [&](double tol) {
