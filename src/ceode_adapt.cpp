@@ -127,22 +127,35 @@ constexpr sunrealtype kEtaMax = 2;
 constexpr sunrealtype kStableSafety = 0.9;
 constexpr sunrealtype kEnvelope = 0.85;
 constexpr sunrealtype kSunSafety = 0.9;
-constexpr sunrealtype kHoldLow = 0.97;
-constexpr sunrealtype kHoldHigh = 1.05;
-// The same band for the exponent of the controllers' exp, 0.9 exp(x) (PI) and exp(x) (H211b):
-// log(kHoldLow / 0.9), log(kHoldHigh / 0.9), log(kHoldLow), log(kHoldHigh), narrowed by 1e-9,
-// far beyond the rounding of exp, so that an exponent inside it is a ratio inside the band.
+// The band of ratios that keep h is CEodeSetFixedStepBounds' [hold_lb, hold_ub] (AdaptMem); the
+// controllers' fast path compares their exponent with the band's logarithms, narrowed by kMargin,
+// far beyond the rounding of exp and log, so that an exponent inside it is a ratio inside the band.
 constexpr sunrealtype kMargin = 1e-9;
-constexpr sunrealtype kPiHoldLow = 0.0749013081731177 + kMargin;
-constexpr sunrealtype kPiHoldHigh = 0.15415067982725836 - kMargin;
-constexpr sunrealtype kFilterHoldLow = -0.030459207484708574 + kMargin;
-constexpr sunrealtype kFilterHoldHigh = 0.04879016416943205 - kMargin;
 
 // exp(x) (times 0.9 with the PI controller), or 1 for an x whose ratio the band holds anyway:
 // most steps keep their size, and then no exp is taken.
-sunrealtype RatioOfExponent(sunrealtype x, bool pi) {
-  if (pi) return x > kPiHoldLow && x < kPiHoldHigh ? 1 : 0.9 * std::exp(x);
-  return x > kFilterHoldLow && x < kFilterHoldHigh ? 1 : std::exp(x);
+sunrealtype RatioOfExponent(const AdaptMem& am, sunrealtype x, bool pi) {
+  if (pi) return x > am.xhold[0] && x < am.xhold[1] ? 1 : 0.9 * std::exp(x);
+  return x > am.xhold[2] && x < am.xhold[3] ? 1 : std::exp(x);
+}
+
+// The default top of the band, measured (docs/theory.md 12.3): 1.5 as ARKODE's up to degree 6;
+// 1.2 for degrees 7 and 8, where G7_O7 leaves Kepler's orbit at loose tolerances with 1.5 and
+// 1.2 costs as few instructions a step with fewer f.
+constexpr sunrealtype kHoldHighLow = 1.5;
+constexpr sunrealtype kHoldHighHigh = 1.2;
+
+// The run's band: its top is the lower of the band's (hold_ub, 0: the default for degree d) and
+// the remap's growth bound (a step that the bound clips is not held), and its exponents for the
+// fast path of both controllers.
+void HoldBand(AdaptMem* am, int d) {
+  const sunrealtype ub = am->hold_ub > 0 ? am->hold_ub : (d <= 6 ? kHoldHighLow : kHoldHighHigh);
+  am->hold_hi = std::min(ub, am->eta_grow);
+  const sunrealtype lo = std::log(am->hold_lb), hi = std::log(am->hold_hi), l9 = std::log(0.9);
+  am->xhold[0] = lo - l9 + kMargin;
+  am->xhold[1] = hi - l9 - kMargin;
+  am->xhold[2] = lo + kMargin;
+  am->xhold[3] = hi - kMargin;
 }
 
 // SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
@@ -336,6 +349,7 @@ int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   am.pfac = Factorial(am.order - 1);
   am.refresh = ce->degree >= 6 && !HasConstraints(ce);
   am.eta_grow = am.refresh ? kEtaMax : GrowthBound(ce->degree, am.remap, am.nremap);
+  HoldBand(&am, ce->degree);
   return CE_SUCCESS;
 }
 
@@ -463,10 +477,11 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
   if (SunControllerRatio(ce, err, hbase, &eta)) {
     // the user's SUNAdaptController chose
   } else if (am.controller == CE_ADAPT_PI) {
-    eta = RatioOfExponent((-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
+    eta =
+        RatioOfExponent(am, (-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
   } else {
     const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
-    eta = RatioOfExponent(-(le + lep) / (kFilterB * k) - lr / kFilterB, false);
+    eta = RatioOfExponent(am, -(le + lep) / (kFilterB * k) - lr / kFilterB, false);
   }
   am.err_prev = err;
   am.lerr_prev = le;
@@ -485,7 +500,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   // grows by at most the remap's bound (GrowthBound), unless the estimate is exactly 0 (nothing
   // for the remap to carry).
   const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
-  if (eta > kHoldLow && eta < std::min(kHoldHigh, grow)) eta = 1;
+  if (eta >= am.hold_lb && eta <= std::min(am.hold_hi, grow)) eta = 1;
   eta = std::min(grow, std::max(kEtaMin, eta));
   const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
@@ -667,6 +682,22 @@ int CEodeSetMaxStep(void* mem, sunrealtype hmax) {
                         static_cast<double>(hmax), static_cast<double>(ce->adapt->hmin));
   }
   ce->adapt->hmax = hmax;
+  return CE_SUCCESS;
+}
+
+int CEodeSetFixedStepBounds(void* mem, sunrealtype lb, sunrealtype ub) {
+  CEodeMemRec* ce = nullptr;
+  int flag = AdaptAccess(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(lb > 0 && lb <= 1 && ub >= 1) || !std::isfinite(ub)) {
+    return ProcessError(ce, CE_ILL_INPUT, __func__,
+                        "lb = %g, ub = %g: need 0 < lb <= 1 <= ub, both finite.",
+                        static_cast<double>(lb), static_cast<double>(ub));
+  }
+  ce->adapt->hold_lb = lb;
+  ce->adapt->hold_ub = ub;
+  ceode::HoldBand(ce->adapt.get(),
+                  ce->degree);  // for the running method (each start sets it again)
   return CE_SUCCESS;
 }
 

@@ -87,12 +87,16 @@ struct AdaptMem {
   sunrealtype h0 = 0;     // the first step of the run
   sunrealtype err = 0;    // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
-  sunrealtype lerr_prev = 0;  // log(err_prev / the controller's target)
-  sunrealtype eta_prev = 1;   // the last accepted ratio (the filter's memory)
-  sunrealtype eta_grow = 2;   // the largest growth of a step the remap's coupling admits
-  bool first = true;          // no step has passed an error test since the start
-  bool capped_last = false;   // the stable step decided the last step
-  long int nst_refresh = 0;   // nst at the last estimate of the frequency behind the cap
+  sunrealtype lerr_prev = 0;   // log(err_prev / the controller's target)
+  sunrealtype eta_prev = 1;    // the last accepted ratio (the filter's memory)
+  sunrealtype eta_grow = 2;    // the largest growth of a step the remap's coupling admits
+  sunrealtype hold_lb = 0.97;  // CEodeSetFixedStepBounds: a ratio in [hold_lb, hold_ub] keeps h
+  sunrealtype hold_ub = 0;     // 0: the default for the set's degree
+  sunrealtype hold_hi = 1.5;   // the band's top for the run (ceode_adapt.cpp, HoldBand)
+  sunrealtype xhold[4] = {};   // the band's exponents for the PI controller and for H211b
+  bool first = true;           // no step has passed an error test since the start
+  bool capped_last = false;    // the stable step decided the last step
+  long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
   // With constraints the solve at a node imposes the constraint one step ahead, so the step
   // after the next one is planned at each acceptance (docs/theory.md 12.6).

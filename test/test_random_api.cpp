@@ -615,7 +615,7 @@ void Sequence::StepOptions() {
 
 void Sequence::Tolerances() {
   void* m = MemArg();
-  switch (Int(0, 8)) {
+  switch (Int(0, 9)) {
     case 0:
       Call("CEodeSStolerances", m, [&] {
         return CEodeSStolerances(m, Real({1e-6, 1e-3}), Real({1e-8, 0}));
@@ -646,6 +646,11 @@ void Sequence::Tolerances() {
     case 7:
       Call("CEodeSetAdaptivityMethod", m, [&] {
         return CEodeSetAdaptivityMethod(m, IntArg({CE_ADAPT_PI, CE_ADAPT_H211B}));
+      });
+      break;
+    case 8:
+      Call("CEodeSetFixedStepBounds", m, [&] {
+        return CEodeSetFixedStepBounds(m, Real({1, 0.97, 0.5}), Real({1, 1.2, 1.5}));
       });
       break;
     default:

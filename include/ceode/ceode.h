@@ -188,6 +188,7 @@ SUNDIALS_EXPORT int CEodeWFtolerances(void* mem, CEodeEwtFn efun);
 SUNDIALS_EXPORT int CEodeSetInitStep(void* mem, sunrealtype hin);
 SUNDIALS_EXPORT int CEodeSetMinStep(void* mem, sunrealtype hmin);
 SUNDIALS_EXPORT int CEodeSetMaxStep(void* mem, sunrealtype hmax);
+SUNDIALS_EXPORT int CEodeSetFixedStepBounds(void* mem, sunrealtype lb, sunrealtype ub);
 SUNDIALS_EXPORT int CEodeSetMaxErrTestFails(void* mem, int maxnef);
 SUNDIALS_EXPORT int CEodeSetAdaptivityMethod(void* mem, int controller);
 #if SUNDIALS_VERSION_MAJOR >= 7
