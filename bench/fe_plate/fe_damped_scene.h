@@ -22,13 +22,20 @@
 //    Newton tolerance, 1e-7); G4_A34 and G5_O4 with AUTO (mass variant; with C = b K G4_A34
 //    diverges at every step tried, printed by G4Probe); and (stiff variant) the undeclared,
 //    lagged-velocity explicit step (first order, docs/theory.md 4.1).
+//  * (stiff variant) Newton with the exact df/dv = -M^{-1} C (VelJac, CSR on K's pattern)
+//    factored by KLU once per step size: G3_CD-Newton-KLU, G5_O4-Newton-KLU and the adaptive
+//    G5_O4-KLU. The damping is linear and the matrix exact, so every step takes one Newton
+//    iteration (one f, one KLU solve); the elastic force stays explicit, so the step is capped
+//    at the undamped stable step 2/omega_max (ERK3's at about 0.67/omega_max), where G5_O4's
+//    error is already about 2e-8.
 //  * CEODE error control with AUTO and SPGMR (AdaptiveConfigs, wp::FeTolCurves): config
 //    "<set>-AUTO adaptive", h_or_tol the tolerance.
 //  * ARKODE ERK adaptive orders 3, 4, 5; CVODE Adams (fixed point); CVODE BDF + SPGMR;
 //    ARKStep IMEX (damping -C v implicit and linear, K x explicit) + SPGMR; ARKStep
 //    DIRK (all implicit) + SPGMR.
 // Checks (exit 1): the modes converged, every run succeeded, the mass-proportional hand
-// loop equals CEODE G3_CD with Newton (same method), CEODE G3_CD converges at order 2.
+// loop equals CEODE G3_CD with Newton (same method), CEODE G3_CD converges at order 2, and
+// (stiff variant) G3_CD with KLU gives the errors of G3_CD with SPGMR at the same steps.
 // -----------------------------------------------------------------------------
 #ifndef CEODE_BENCH_FE_DAMPED_SCENE_H_
 #define CEODE_BENCH_FE_DAMPED_SCENE_H_
