@@ -461,6 +461,7 @@ struct Problem {
   ARKPostProcessFn post_step = nullptr;
   // -- CEODE's extras --
   CEodeVelJacFn vjac = nullptr;  // df/dv (nullptr: difference quotients)
+  long vjac_nnz = 0;             // nonzeros of df/dv in CSR (CeodeOpts::kKlu)
   CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
   Vec lumped_mass;               // the guard's inner product (CEodeSetGuardMass)
   // Index-3 constraints Phi(x) = 0 (nc of them, Jacobian G); the saddle-point matrix
@@ -569,7 +570,8 @@ struct CeodeOpts {
   const char* method;       // a name CEodeSetMethodByName knows (a literal: runs may be queued)
   bool zero_start = false;  // one-step mode only
   bool vel = false;
-  enum Ls { kDense, kSpgmr, kNone } ls = kDense;
+  // kKlu: p.vjac fills a CSR df/dv with p.vjac_nnz entries; KLU factors M - kappa df/dv.
+  enum Ls { kDense, kSpgmr, kKlu, kNone } ls = kDense;
   int implicit_mode = CE_IMPLICIT_NEWTON;  // CEodeSetImplicitMode
   double nls_rtol = 0, nls_atol = 0;       // CEodeSetNonlinTolerances (rtol 0: the default)
   long msbj = 0;                           // CEodeSetJacEvalFrequency (0: the default)
@@ -638,6 +640,9 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
       // Restarts: without them an unpreconditioned SPGMR stalls on M + kappa b K.
       o->LS = SUNLinSol_SPGMR(o->x, SUN_PREC_NONE, c.maxl, ctx);
       if (o->LS != nullptr && SUNLinSol_SPGMRSetMaxRestarts(o->LS, 5) != 0) return true;
+    } else if (c.ls == CeodeOpts::kKlu && p.vjac != nullptr) {
+      o->A = SUNSparseMatrix(p.n, p.n, p.vjac_nnz, CSR_MAT, ctx);
+      o->LS = o->A != nullptr ? SUNLinSol_KLU(o->x, o->A, ctx) : nullptr;
     }
     if ((c.ls != CeodeOpts::kNone &&
          (o->LS == nullptr ||
@@ -1203,8 +1208,10 @@ inline void PrintAdaptStats(const std::string& config, double tol, const Outcome
                             const CeodeStats& st) {
   std::printf(
       "    %s tol %.0e: %ld failed error tests, %ld steps capped by the stable step, f: %ld by "
-      "the step, %ld by the guard, %ld in all\n",
-      config.c_str(), tol, st.netf, st.ncapped, st.nfe, st.guard_fe, o.rhs_evals);
+      "the step, %ld by the guard, %ld in all; %ld steps, %ld nonlinear iterations, %ld "
+      "linear-solver setups\n",
+      config.c_str(), tol, st.netf, st.ncapped, st.nfe, st.guard_fe, o.rhs_evals, o.steps, st.nni,
+      o.lin_setups);
 }
 
 // The curve in one-step (or output) mode, configuration by configuration (Measure); the outcome
@@ -1409,9 +1416,10 @@ inline double FractionCurves(SUNContext ctx, const Problem* p, const std::vector
       if (ok && opts.vel) {
         std::printf(
             "    %s h = %.3e: %.3f f/step, %.3f nonlinear iters/step, %ld PC steps, "
-            "%ld NLS steps, coupling kappa |df/dv| = %.3e\n",
+            "%ld NLS steps, coupling kappa |df/dv| = %.3e, %ld linear-solver setups\n",
             c.label.c_str(), h, static_cast<double>(got.rhs_evals) / got.steps,
-            static_cast<double>(st->nni) / got.steps, st->npc, st->nnls, st->coupling);
+            static_cast<double>(st->nni) / got.steps, st->npc, st->nnls, st->coupling,
+            got.lin_setups);
       }
       if (hand && c.label == "G3_CD") {
         rounds->Measure("CEODE-hand", "G3_CD", h, [hand, hr](Outcome* o) { return hand(hr, o); });
