@@ -6,6 +6,7 @@
 #include <sunadaptcontroller/sunadaptcontroller_soderlind.h>
 #endif
 
+#include <algorithm>
 #include <functional>
 #include <random>
 
@@ -77,6 +78,11 @@ struct RunResult {
 struct Setup {
   CEodeRhsFn f;
   std::vector<double> x0, v0;
+  // The initial state into the leading entries of serial vectors x and v.
+  void Load(N_Vector x, N_Vector v) const {
+    std::copy(x0.begin(), x0.end(), N_VGetArrayPointer(x));
+    std::copy(v0.begin(), v0.end(), N_VGetArrayPointer(v));
+  }
 };
 
 Setup KeplerSetup() { return {Kepler, {1 - kEcc, 0}, {0, std::sqrt((1 + kEcc) / (1 - kEcc))}}; }
@@ -89,10 +95,7 @@ RunResult Integrate(const Setup& s, const char* set, double tol, double T,
   const auto n = static_cast<sunindextype>(s.x0.size());
   Vector x = SerialVector(n, ctx);
   Vector v = SerialVector(n, ctx);
-  for (sunindextype i = 0; i < n; ++i) {
-    NV_Ith_S(x.get(), i) = s.x0[i];
-    NV_Ith_S(v.get(), i) = s.v0[i];
-  }
+  s.Load(x.get(), v.get());
   Mem mem(CEodeCreate(ctx));
   RunResult r;
   EXPECT_EQ(CEodeInit(mem.get(), s.f, 0, x.get(), v.get()), CE_SUCCESS);
@@ -310,10 +313,7 @@ TEST_P(NoDivergence, KeplerStaysOnItsOrbitAtLooseTolerances) {
     const auto s = KeplerSetup();
     Vector x = SerialVector(2, ctx);
     Vector v = SerialVector(2, ctx);
-    for (int i = 0; i < 2; ++i) {
-      NV_Ith_S(x.get(), i) = s.x0[i];
-      NV_Ith_S(v.get(), i) = s.v0[i];
-    }
+    s.Load(x.get(), v.get());
     Mem mem(CEodeCreate(ctx));
     ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
     ASSERT_EQ(CEodeSetMethodByName(mem.get(), GetParam()), CE_SUCCESS);
@@ -507,10 +507,7 @@ BackendRun RunBackend(const char* set, bool fused, bool springs) {
   Vector v = SerialVector(n, ctx, 0.0);
   Vector atol = SerialVector(n, ctx, 1e-9);
   NV_Ith_S(atol.get(), 1) = 2e-9;
-  for (int i = 0; i < 2; ++i) {
-    NV_Ith_S(x.get(), i) = s.x0[i];
-    NV_Ith_S(v.get(), i) = s.v0[i];
-  }
+  s.Load(x.get(), v.get());
   Mem mem(CEodeCreate(ctx));
   BackendRun out;
   EXPECT_EQ(CEodeInit(mem.get(), KeplerAndSprings, 0, x.get(), v.get()), CE_SUCCESS);
@@ -606,10 +603,7 @@ TEST(ErrorControl, ASundialsControllerChoosesTheSteps) {
   for (int own = 0; own < 2; ++own) {
     Vector x = SerialVector(2, ctx);
     Vector v = SerialVector(2, ctx);
-    for (int i = 0; i < 2; ++i) {
-      NV_Ith_S(x.get(), i) = s.x0[i];
-      NV_Ith_S(v.get(), i) = s.v0[i];
-    }
+    s.Load(x.get(), v.get());
     Mem mem(CEodeCreate(ctx));
     ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
     ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G6_O5"), CE_SUCCESS);
@@ -719,10 +713,7 @@ BandRun KeplerSteps(const char* set, double lb, double ub) {
   const auto s = KeplerSetup();
   Vector x = SerialVector(2, ctx);
   Vector v = SerialVector(2, ctx);
-  for (int i = 0; i < 2; ++i) {
-    NV_Ith_S(x.get(), i) = s.x0[i];
-    NV_Ith_S(v.get(), i) = s.v0[i];
-  }
+  s.Load(x.get(), v.get());
   Mem mem(CEodeCreate(ctx));
   EXPECT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
