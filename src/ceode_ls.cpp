@@ -289,10 +289,27 @@ int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector
   return CE_SUCCESS;
 }
 
+namespace {
+
+// A factored Newton matrix M - kappa_setup df/dv still serves a kappa within kKappaReuse of
+// kappa_setup (relative, CVODE's DGMAX): on the velocity coupling the iteration then contracts by
+// about |kappa / kappa_setup - 1| per iteration, an extra iteration costs a solve where a new
+// factorisation costs many, and a solve that fails is retried with a fresh matrix. Matrix-free
+// products (no factorisation to save) and the first setup want kappa itself.
+constexpr sunrealtype kKappaReuse = 0.3;
+
+bool KappaServes(const LsMem& ls, sunrealtype kappa) {
+  if (ls.kappa_setup == kappa) return true;
+  if (ls.matrix_free || ls.A == nullptr || !(ls.kappa_setup > 0)) return false;
+  return std::fabs(kappa / ls.kappa_setup - 1) <= kKappaReuse;
+}
+
+}  // namespace
+
 bool NewtonMatrixStale(const CEodeMemRec* ce, sunrealtype kappa) {
   const LsMem& ls = ce->ls;
   return ls.a_holds != Holds::kNewton || !ls.jac_current || ls.nst_lastsetup < 0 ||
-         ce->nst - ls.nst_lastsetup >= ls.msbj || ls.mass_dirty || ls.kappa_setup != kappa;
+         ce->nst - ls.nst_lastsetup >= ls.msbj || ls.mass_dirty || !KappaServes(ls, kappa);
 }
 
 bool LsUseOwnLu(CEodeMemRec* ce, bool use) {
