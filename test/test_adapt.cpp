@@ -87,6 +87,20 @@ struct Setup {
 
 Setup KeplerSetup() { return {Kepler, {1 - kEcc, 0}, {0, std::sqrt((1 + kEcc) / (1 - kEcc))}}; }
 
+// Kepler e = 0.6 from pericentre, ready to evolve with the set `set` and rtol = atol = tol.
+struct KeplerMem {
+  Context ctx;
+  Vector x = SerialVector(2, ctx);
+  Vector v = SerialVector(2, ctx);
+  Mem mem{CEodeCreate(ctx)};
+  KeplerMem(const char* set, double tol) {
+    KeplerSetup().Load(x.get(), v.get());
+    EXPECT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
+    EXPECT_EQ(CEodeSStolerances(mem.get(), tol, tol), CE_SUCCESS);
+  }
+};
+
 // A run to T with tolerances (rtol = atol = tol), or on a step schedule when one is given.
 RunResult Integrate(const Setup& s, const char* set, double tol, double T,
                     const std::vector<double>& exact, CEodeStepScheduleFn schedule = nullptr,
@@ -309,26 +323,20 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, NoDivergence, ::testing::ValuesIn(kSets));
 TEST_P(NoDivergence, KeplerStaysOnItsOrbitAtLooseTolerances) {
   for (double tol : {3e-2, 1.5e-2, 1.2e-2, 1e-2, 8e-3, 7e-3, 6e-3, 5e-3, 4e-3, 3.6e-3, 3e-3, 2.5e-3,
                      2e-3, 1.5e-3, 1e-3}) {
-    Context ctx;
-    const auto s = KeplerSetup();
-    Vector x = SerialVector(2, ctx);
-    Vector v = SerialVector(2, ctx);
-    s.Load(x.get(), v.get());
-    Mem mem(CEodeCreate(ctx));
-    ASSERT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
-    ASSERT_EQ(CEodeSetMethodByName(mem.get(), GetParam()), CE_SUCCESS);
-    ASSERT_EQ(CEodeSStolerances(mem.get(), tol, tol), CE_SUCCESS);
-    ASSERT_EQ(CEodeSetStopTime(mem.get(), 4 * M_PI), CE_SUCCESS);
+    KeplerMem k(GetParam(), tol);
+    N_Vector x = k.x.get(), v = k.v.get();
+    void* mem = k.mem.get();
+    ASSERT_EQ(CEodeSetStopTime(mem, 4 * M_PI), CE_SUCCESS);
     sunrealtype t = 0;
     double rmax = 0;
     int flag = CE_SUCCESS;
     while (flag == CE_SUCCESS) {
-      flag = CEodeEvolve(mem.get(), 4 * M_PI, x.get(), v.get(), &t, CE_ONE_STEP);
-      rmax = std::max(rmax, std::hypot(NV_Ith_S(x.get(), 0), NV_Ith_S(x.get(), 1)));
+      flag = CEodeEvolve(mem, 4 * M_PI, x, v, &t, CE_ONE_STEP);
+      rmax = std::max(rmax, std::hypot(NV_Ith_S(x, 0), NV_Ith_S(x, 1)));
     }
     ASSERT_EQ(flag, CE_TSTOP_RETURN) << GetParam() << " tol " << tol;
-    const double r = std::hypot(NV_Ith_S(x.get(), 0), NV_Ith_S(x.get(), 1));
-    const double v2 = std::pow(NV_Ith_S(v.get(), 0), 2) + std::pow(NV_Ith_S(v.get(), 1), 2);
+    const double r = std::hypot(NV_Ith_S(x, 0), NV_Ith_S(x, 1));
+    const double v2 = std::pow(NV_Ith_S(v, 0), 2) + std::pow(NV_Ith_S(v, 1), 2);
     const double energy = 0.5 * v2 - 1 / r;
     EXPECT_GT(energy, -2) << GetParam() << " tol " << tol;
     EXPECT_LT(energy, -0.25) << GetParam() << " tol " << tol;
@@ -709,28 +717,22 @@ struct BandRun {
 // Kepler e = 0.6 over one orbit in CE_ONE_STEP mode with tolerances 1e-8 and the fixed-step bounds
 // [lb, ub] (lb = 0: the library's default bounds, no call).
 BandRun KeplerSteps(const char* set, double lb, double ub) {
-  Context ctx;
-  const auto s = KeplerSetup();
-  Vector x = SerialVector(2, ctx);
-  Vector v = SerialVector(2, ctx);
-  s.Load(x.get(), v.get());
-  Mem mem(CEodeCreate(ctx));
-  EXPECT_EQ(CEodeInit(mem.get(), Kepler, 0, x.get(), v.get()), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetMethodByName(mem.get(), set), CE_SUCCESS);
-  EXPECT_EQ(CEodeSStolerances(mem.get(), 1e-8, 1e-8), CE_SUCCESS);
-  if (lb > 0) EXPECT_EQ(CEodeSetFixedStepBounds(mem.get(), lb, ub), CE_SUCCESS);
+  KeplerMem k(set, 1e-8);
+  N_Vector x = k.x.get(), v = k.v.get();
+  void* mem = k.mem.get();
+  if (lb > 0) EXPECT_EQ(CEodeSetFixedStepBounds(mem, lb, ub), CE_SUCCESS);
   BandRun r;
   sunrealtype t = 0;
   while (t < 2 * M_PI && r.h.size() < 100000) {
-    EXPECT_EQ(CEodeEvolve(mem.get(), 1e30, x.get(), v.get(), &t, CE_ONE_STEP), CE_SUCCESS);
+    EXPECT_EQ(CEodeEvolve(mem, 1e30, x, v, &t, CE_ONE_STEP), CE_SUCCESS);
     sunrealtype hl = 0;
-    CEodeGetLastStep(mem.get(), &hl);
+    CEodeGetLastStep(mem, &hl);
     r.h.push_back(hl);
   }
   double q[2];
   KeplerExact(t, q);
-  r.err = std::hypot(NV_Ith_S(x.get(), 0) - q[0], NV_Ith_S(x.get(), 1) - q[1]);
-  CEodeGetNumStableStepLimited(mem.get(), &r.ncapped);
+  r.err = std::hypot(NV_Ith_S(x, 0) - q[0], NV_Ith_S(x, 1) - q[1]);
+  CEodeGetNumStableStepLimited(mem, &r.ncapped);
   return r;
 }
 
