@@ -449,30 +449,40 @@ TEST(NewtonMatrixOnTheOdePath, IsRebuiltOnlyEveryJacEvalFrequencySteps) {
   }
 }
 
-TEST(NewtonMatrixOnTheOdePath, IsRebuiltWhenTheStepChanges) {
+// DampedForced on the Newton path with a dense matrix refreshed every msbj steps, ready to evolve
+// once the step (fixed or tolerances) is set.
+struct NewtonOscillator {
   DampedForced prob;
   Context ctx;
   Vector x = SerialVector(1, ctx, prob.x0);
   Vector v = SerialVector(1, ctx, prob.v0);
-  Matrix A(SUNDenseMatrix(1, 1, ctx));
-  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
-  Mem mem(CEodeCreate(ctx));
-  ASSERT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetStabilityGuard(mem.get(), CE_GUARD_OFF, 0), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON), CE_SUCCESS);  // its matrix
-  ASSERT_EQ(CEodeSetJacEvalFrequency(mem.get(), 1000), CE_SUCCESS);
+  Matrix A{SUNDenseMatrix(1, 1, ctx)};
+  LinearSolver LS{SUNLinSol_Dense(x.get(), A.get(), ctx)};
+  Mem mem{CEodeCreate(ctx)};
+  explicit NewtonOscillator(long int msbj) {
+    EXPECT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON), CE_SUCCESS);  // its matrix
+    EXPECT_EQ(CEodeSetJacEvalFrequency(mem.get(), msbj), CE_SUCCESS);
+  }
+};
+
+TEST(NewtonMatrixOnTheOdePath, IsRebuiltWhenTheStepChanges) {
+  NewtonOscillator o(1000);
+  void* mem = o.mem.get();
+  N_Vector x = o.x.get(), v = o.v.get();
+  ASSERT_EQ(CEodeSetFixedStep(mem, SUN_RCONST(0.01)), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), CE_SUCCESS);
   sunrealtype t = 0;
   long int nje = 0;
-  ASSERT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
-  CEodeGetNumJacEvals(mem.get(), &nje);
+  ASSERT_EQ(CEodeEvolve(mem, 1, x, v, &t, CE_NORMAL), CE_SUCCESS);
+  CEodeGetNumJacEvals(mem, &nje);
   EXPECT_EQ(nje, 1);  // 100 steps, one matrix
-  ASSERT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.005)), CE_SUCCESS);
-  ASSERT_EQ(CEodeEvolve(mem.get(), 2, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
-  CEodeGetNumJacEvals(mem.get(), &nje);
+  ASSERT_EQ(CEodeSetFixedStep(mem, SUN_RCONST(0.005)), CE_SUCCESS);
+  ASSERT_EQ(CEodeEvolve(mem, 2, x, v, &t, CE_NORMAL), CE_SUCCESS);
+  CEodeGetNumJacEvals(mem, &nje);
   EXPECT_EQ(nje, 2);  // a new kappa: one more
 }
 
@@ -484,38 +494,28 @@ struct AdaptiveNewton {
   double err = 0;
 };
 AdaptiveNewton RunAdaptiveNewton(sunrealtype tol, long int msbj) {
-  DampedForced prob;
-  Context ctx;
-  Vector x = SerialVector(1, ctx, prob.x0);
-  Vector v = SerialVector(1, ctx, prob.v0);
-  Matrix A(SUNDenseMatrix(1, 1, ctx));
-  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
-  Mem mem(CEodeCreate(ctx));
-  EXPECT_EQ(CEodeInit(mem.get(), DampedForced::F, 0, x.get(), v.get()), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetMethodByName(mem.get(), "G4_A34"), CE_SUCCESS);
-  EXPECT_EQ(CEodeSStolerances(mem.get(), tol, tol), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_NEWTON), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetJacEvalFrequency(mem.get(), msbj), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetStopTime(mem.get(), 10), CE_SUCCESS);
+  NewtonOscillator o(msbj);
+  void* mem = o.mem.get();
+  N_Vector x = o.x.get(), v = o.v.get();
+  EXPECT_EQ(CEodeSetMethodByName(mem, "G4_A34"), CE_SUCCESS);
+  EXPECT_EQ(CEodeSStolerances(mem, tol, tol), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetStopTime(mem, 10), CE_SUCCESS);
   AdaptiveNewton r;
   sunrealtype t = 0, hprev = 0;
   while (t < 10) {
-    if (CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_ONE_STEP) < 0) {
+    if (CEodeEvolve(mem, 10, x, v, &t, CE_ONE_STEP) < 0) {
       ADD_FAILURE() << "the run failed at t = " << t;
       break;
     }
     sunrealtype h = 0, xe = 0, ve = 0;
-    CEodeGetLastStep(mem.get(), &h);
+    CEodeGetLastStep(mem, &h);
     if (hprev > 0 && h != hprev) ++r.nchanges;
     hprev = h;
-    prob.Exact(t, &xe, &ve);
-    r.err = std::max(r.err, std::fabs(NV_Ith_S(x.get(), 0) - xe));
+    o.prob.Exact(t, &xe, &ve);
+    r.err = std::max(r.err, std::fabs(NV_Ith_S(x, 0) - xe));
   }
-  CEodeGetNumJacEvals(mem.get(), &r.nje);
-  CEodeGetNumSteps(mem.get(), &r.nst);
+  CEodeGetNumJacEvals(mem, &r.nje);
+  CEodeGetNumSteps(mem, &r.nst);
   return r;
 }
 
