@@ -177,10 +177,12 @@ __attribute__((always_inline)) inline int ReturnAtTarget(CEodeMemRec* ce, const 
                                                          sunrealtype target, N_Vector xout,
                                                          N_Vector vout, sunrealtype* tret,
                                                          bool hit_tstop) {
-  if (std::fabs(target - ce->tcur) <= 1e-8 * ce->h) target = ce->tcur;
-  const sunrealtype s = target - ce->tcur;  // 0: the method's own values (OutputState's copy)
+  // On the grid: the method's own values, returned at tcur, or at the stop time itself, which
+  // CE_TSTOP_RETURN promises exactly.
+  const sunrealtype s = OnGrid(ce, target) ? 0 : target - ce->tcur;
   const bool finite =
       s == 0 ? CopyPairFinite(ce->xcur, ce->D[1], xout, vout) : OutputState(ce, s, xout, vout);
+  if (s == 0 && !hit_tstop) target = ce->tcur;
   *tret = target;
   ce->tretlast = target;
   if (hit_tstop) ce->tstop_set = false;
@@ -493,7 +495,7 @@ int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {
   const bool back = ceode::AdaptOn(ce);
   const sunrealtype lo = back ? -ce->adapt->hlast : 0;
   const sunrealtype hi = back ? 0 : ce->h;
-  const sunrealtype tol = 1e-8 * (back ? ce->adapt->hlast : ce->h);
+  const sunrealtype tol = ceode::GridTolerance(ce, back ? ce->adapt->hlast : ce->h);
   if (!(s >= lo - tol && s <= hi + tol)) {  // also refuses t = NaN
     return ceode::ProcessError(ce, CE_BAD_T, __func__,
                                "t = %.17g is outside the current interval [%.17g, %.17g].",

@@ -176,7 +176,7 @@ void KeepEnd(CEodeMemRec* ce, Forcing* fc) {
 bool CanCarry(const CEodeMemRec* ce, const Forcing& fc, sunrealtype t0) {
   const ForcedEnd& e = fc.end;
   return e.valid && !ce->vel_dependent && !ce->zero_start && e.degree == ce->degree &&
-         std::fabs(t0 - e.t) <= 1e-8 * ce->h;
+         std::fabs(t0 - e.t) <= GridTolerance(ce, ce->h);
 }
 
 // The forcing's derivatives are known exactly. x and v are continuous, so g(t0, x0) is

@@ -5,6 +5,7 @@
 #include <ceode/ceode.h>
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -375,9 +376,21 @@ inline bool AdaptOn(const CEodeMemRec* ce) { return ce->adapt != nullptr && Adap
 
 // ceode_step.cpp
 int TakeStep(CEodeMemRec* ce);
+// Two times closer than this are the same point of the step grid: 1e-8 h, or the round-off of the
+// grid's times (t_start_h + k h, a few units in the last place of t) where that is larger, as it is
+// once h < 1e-7 |t|. Without the second term a target one rounding short of tcur + h leaves the
+// step untaken and the output is interpolated over the whole step.
+inline sunrealtype GridTolerance(const CEodeMemRec* ce, sunrealtype h) {
+  const sunrealtype tr = 64 * SUN_UNIT_ROUNDOFF * std::fabs(ce->tcur);
+  const sunrealtype th = SUN_RCONST(1e-8) * h;
+  return tr > th ? tr : th;
+}
+inline bool OnGrid(const CEodeMemRec* ce, sunrealtype t) {
+  return std::fabs(t - ce->tcur) <= GridTolerance(ce, ce->h);
+}
 // Whether the step interval [tcur, tcur + h] ends before target (CEodeEvolve steps while it does).
 inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
-  return target - ce->tcur > ce->h * (1 - 1e-8);
+  return target - ce->tcur > ce->h - GridTolerance(ce, ce->h);
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);

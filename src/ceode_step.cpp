@@ -260,7 +260,7 @@ long int LeanStepCount(const CEodeMemRec* ce, sunrealtype target, long int max_s
   const auto remains = [&](long int j) {
     const sunrealtype tj =
         j == 0 ? ce->tcur : ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + j) * ce->h;
-    return target - tj > ce->h * (1 - 1e-8);
+    return target - tj > ce->h - GridTolerance(ce, ce->h);
   };
   const sunrealtype guess = std::floor((target - ce->tcur) / ce->h);
   long int j =
@@ -461,7 +461,7 @@ int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vou
   const int flag = LeanOneStep<false>(ce);
   // One step reaches tcur + h to round-off (then no step remains); anything else is
   // ReturnAtTarget's.
-  if (flag != CE_SUCCESS || !(std::fabs(target - ce->tcur) <= 1e-8 * ce->h)) {
+  if (flag != CE_SUCCESS || !OnGrid(ce, target)) {
     return OneStepRest(ce, flag, target, xout, vout, tret);
   }
   if (!CopyPairFiniteSerial(ce, xout, vout)) {  // reported as ReturnAtTarget reports it

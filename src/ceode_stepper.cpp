@@ -234,7 +234,7 @@ int StepperEvolve(Stepper* st, sunrealtype tout, N_Vector y, const char* func) {
     if (st->adaptive) CEodeGetLastStep(ce, &st->h_last);
     // The output is the method's own state at tcur (no interpolation) only if the run ended on
     // a step; only then is the history's D_2 the acceleration at the returned state.
-    if (std::fabs(tout - ce->tcur) <= 1e-8 * ce->h) KeepEnd(ce, &st->forcing);
+    if (OnGrid(ce, tout)) KeepEnd(ce, &st->forcing);
     ForcingX(st->forcing, tout, 1, st->u, -1, own.v);
     st->t_own = tout;
   }

@@ -218,6 +218,38 @@ TEST_F(HarmonicRun, StopTimeIsHitExactlyAndReturnsTstopReturn) {
   EXPECT_EQ(t, SUN_RCONST(1.005));
 }
 
+// Far from t = 0 a time on the step grid and the user's stop time differ by round-off larger than
+// 1e-8 h (at t = 1e8 one unit in the last place is 1.5e-6 h): the last step is still taken and
+// its own values are returned, as at the same step without a stop time.
+TEST_F(HarmonicRun, AStopTimeOneRoundingOffTheStepGridEndsOnTheMethodsOwnStep) {
+  const sunrealtype t0 = SUN_RCONST(1e8);
+  const sunrealtype h = SUN_RCONST(0.01);
+  for (int itask : {CE_ONE_STEP, CE_NORMAL}) {
+    for (sunrealtype dir : {-1e9, 1e9}) {
+      Vector x0 = SerialVector(1, ctx_, prob_.x0);
+      Vector v0 = SerialVector(1, ctx_, prob_.v0);
+      // Without a stop time: the method's own state after 37 steps.
+      ASSERT_EQ(CEodeReInit(mem(), t0, x0.get(), v0.get()), CE_SUCCESS);
+      sunrealtype t = 0;
+      for (int k = 0; k < 37; ++k) ASSERT_EQ(Evolve(t0 + 1, &t, CE_ONE_STEP), CE_SUCCESS);
+      const sunrealtype x37 = X();
+      const sunrealtype v37 = V();
+      ASSERT_EQ(CEodeReInit(mem(), t0, x0.get(), v0.get()), CE_SUCCESS);
+      const sunrealtype tstop = std::nextafter(t0 + 37 * h, dir);
+      ASSERT_EQ(CEodeSetStopTime(mem(), tstop), CE_SUCCESS);
+      int flag = CE_SUCCESS;
+      for (int k = 0; k < 100 && flag == CE_SUCCESS; ++k) flag = Evolve(t0 + 1, &t, itask);
+      EXPECT_EQ(flag, CE_TSTOP_RETURN);
+      EXPECT_EQ(t, tstop);
+      long int nst = 0;
+      CEodeGetNumSteps(mem(), &nst);
+      EXPECT_EQ(nst, 37) << "itask " << itask << ", tstop " << (dir < 0 ? "below" : "above");
+      EXPECT_EQ(X(), x37);
+      EXPECT_EQ(V(), v37);
+    }
+  }
+}
+
 TEST_F(HarmonicRun, StepLimitGivesTooMuchWorkAndTheRunCanContinue) {
   ASSERT_EQ(CEodeSetMaxNumSteps(mem(), 30), CE_SUCCESS);
   sunrealtype t = 0;
