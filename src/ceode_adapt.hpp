@@ -90,9 +90,10 @@ struct AdaptMem {
   sunrealtype lerr_prev = 0;   // log(err_prev / the controller's target)
   sunrealtype eta_prev = 1;    // the last accepted ratio (the filter's memory)
   sunrealtype eta_grow = 2;    // the largest growth of a step the remap's coupling admits
-  sunrealtype hold_lb = 0.97;  // CEodeSetFixedStepBounds: a ratio in [hold_lb, hold_ub] keeps h
-  sunrealtype hold_ub = 0;     // 0: the default for the set's degree
-  sunrealtype hold_hi = 1.5;   // the band's top for the run (ceode_adapt.cpp, HoldBand)
+  sunrealtype hold_lb = 0;     // CEodeSetFixedStepBounds: a ratio in [hold_lb, hold_ub] keeps h
+  sunrealtype hold_ub = 0;     // (0: the default for the set's degree)
+  sunrealtype hold_lo = 0.97;  // the band's bottom and top for the run (ceode_adapt.cpp,
+  sunrealtype hold_hi = 1.5;   // HoldBand)
   sunrealtype xhold[4] = {};   // the band's exponents for the PI controller and for H211b
   bool first = true;           // no step has passed an error test since the start
   bool capped_last = false;    // the stable step decided the last step

@@ -245,11 +245,17 @@ double PendulumReference() {
 
 class ToleranceProportionality : public ::testing::TestWithParam<const char*> {};
 
-// The runs of one problem at 1e-6 .. 1e-10: the fitted slope of the global error within the band.
+// The runs of one problem at 17 tolerances, four a decade from 1e-6 to 1e-10: the fitted slope of
+// the global error within the band. A single run's error scatters by a factor of a few around the
+// trend, as the held steps of the fixed-step band (docs/theory.md 12.3) fall differently from one
+// tolerance to the next; the fit over 17 runs sees the trend, the fit over the five decades alone
+// moves by up to 0.11 when every tolerance changes by 1e-9 of itself (G7_O7 and G8_O8 on the
+// pendulum), the fit over 17 by up to 0.08.
 void ExpectProportional(const char* set, const char* problem,
                         const std::function<RunResult(double)>& run) {
   std::vector<double> tols, errs;
-  for (double tol : {1e-6, 1e-7, 1e-8, 1e-9, 1e-10}) {
+  for (int i = 0; i <= 16; ++i) {
+    const double tol = 1e-6 * std::pow(10.0, -i / 4.0);
     const RunResult r = run(tol);
     ASSERT_EQ(r.flag, CE_SUCCESS) << set << " " << problem << " tol " << tol;
     tols.push_back(tol);
@@ -258,16 +264,13 @@ void ExpectProportional(const char* set, const char* problem,
   const double slope = Slope(tols, errs);
   std::printf("%s: %s slope %.3f\n", set, problem, slope);
   EXPECT_GE(slope, 0.8) << set << " " << problem;
-  EXPECT_LE(slope, 1.35) << set << " " << problem;
+  EXPECT_LE(slope, 1.2) << set << " " << problem;
   EXPECT_LT(errs.back(), 1e4 * tols.back()) << set << " " << problem;
 }
 
 // Global error against tolerance: slope 1 by design (the local error is held to tol^((p+1)/p),
-// docs/theory.md 12.3); asserted within 0.8 .. 1.35 on the pendulum over 1e-6 .. 1e-10 (single
-// runs scatter by a factor of a few around the trend; the fitted slopes are 0.89 .. 1.24: a global
-// error A h^p + B h^(p+1) with |B h| >> |A| at these steps and a change of sign tilts a set's
-// slope, docs/theory.md 12.3). The pendulum starts at rest at the origin: the first step comes from
-// a alone (12.3).
+// docs/theory.md 12.3), asserted within 0.8 .. 1.2 on the pendulum over 1e-6 .. 1e-10. Fitted:
+// PENDULUM_FITS. The pendulum starts at rest at the origin: the first step comes from a alone (12.3).
 TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   const double ref = PendulumReference();
   ExpectProportional(GetParam(), "pendulum", [&](double tol) {
@@ -275,7 +278,7 @@ TEST_P(ToleranceProportionality, PendulumGlobalErrorFollowsTheTolerance) {
   });
 }
 
-// Kepler e = 0.6 over two orbits, the same band over 1e-6 .. 1e-10 (fitted: 0.96 .. 1.13).
+// Kepler e = 0.6 over two orbits, the same band over 1e-6 .. 1e-10. Fitted: KEPLER_FITS.
 TEST_P(ToleranceProportionality, KeplerGlobalErrorFollowsTheTolerance) {
   ExpectProportional(GetParam(), "Kepler", [&](double tol) {
     return Integrate(KeplerSetup(), GetParam(), tol, 4 * M_PI, {1 - kEcc, 0});
@@ -704,9 +707,9 @@ TEST(ErrorControl, FixedStepAfterTolerancesGivesTheFixedRunsBits) {
 // ---- the fixed-step bounds -------------------------------------------------------------------
 
 // The library's default bounds (docs/api.md, CEodeSetFixedStepBounds): [0.97, 1.5] up to degree 6,
-// [0.97, 1.2] for degrees 7 and 8.
-constexpr double kDefaultBoundLow = 0.97;
-double DefaultBoundHigh(int degree) { return degree <= 6 ? 1.5 : 1.2; }
+// [0.95, 1.1] for degrees 7 and 8.
+double DefaultBoundLow(int degree) { return degree <= 6 ? 0.97 : 0.95; }
+double DefaultBoundHigh(int degree) { return degree <= 6 ? 1.5 : 1.1; }
 
 struct BandRun {
   std::vector<double> h;  // the accepted steps
@@ -773,7 +776,7 @@ TEST(FixedStepBounds, TheDefaultBoundsGivenExplicitlyChangeNoBit) {
   for (int d = 3; d <= 8; ++d) {
     const char* set = kSets[d - 3];
     const BandRun def = KeplerSteps(set, 0, 0);
-    const BandRun given = KeplerSteps(set, kDefaultBoundLow, DefaultBoundHigh(d));
+    const BandRun given = KeplerSteps(set, DefaultBoundLow(d), DefaultBoundHigh(d));
     EXPECT_EQ(def.h, given.h) << set;
     EXPECT_EQ(def.err, given.err) << set;
   }
