@@ -140,13 +140,12 @@ sunrealtype RatioOfExponent(const AdaptMem& am, sunrealtype x, bool pi) {
 }
 
 // The default band, measured (docs/theory.md 12.3): [0.97, 1.5], 1.5 as ARKODE's, up to degree
-// 6; [0.95, 1.1] for degrees 7 and 8. The band leaves the local error free to wander by a factor
-// (ub / lb)^((p + 1) / 0.7) under the PI controller, 11 for [0.97, 1.2] at p = 7; how the held steps
-// sit in it then differs from tolerance to tolerance, and G7_O7's global error on the pendulum
-// followed the tolerance with slope 1.24. [0.95, 1.1] narrows the factor to 5.3: the slopes of G7_O7
-// and G8_O8 lie within 0.99 .. 1.13 on the pendulum and Kepler for every band from [0.93, 1.1] to
-// [0.96, 1.1], and Kepler takes fewer f. With a top of 1.5 G7_O7 leaves Kepler's orbit at loose
-// tolerances.
+// 6; [0.95, 1.1] for degrees 7 and 8. Under the PI controller a band leaves the error norm free to
+// wander by (ub / lb)^((p + 1) / 0.7) before h changes: 11 for [0.97, 1.2] at p = 7, with which the
+// held steps sit differently from one tolerance to the next and G7_O7's global error on the
+// pendulum follows the tolerance with slope 1.24; 5.3 for [0.95, 1.1], with which the slopes of
+// G7_O7 and G8_O8 on the pendulum and Kepler lie within 0.95 .. 1.13 for every bottom from 0.93 to
+// 0.96, with fewer f on Kepler. With a top of 1.5 G7_O7 leaves Kepler's orbit at loose tolerances.
 constexpr sunrealtype kHoldLowLow = 0.97;
 constexpr sunrealtype kHoldLowHigh = 0.95;
 constexpr sunrealtype kHoldHighLow = 1.5;
