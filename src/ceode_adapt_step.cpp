@@ -203,11 +203,10 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
     return;
   }
   if (am->spec_h != ce->h) {  // after the step: hprev = hmap = h (CommitNode)
-    PositionTerms(ce, *am, ce->h, ce->h, am->spec_c, &am->spec_m);
+    PositionTerms(ce, *am, ce->h, ce->h, w->spec_c, &am->spec_m);  // kept in w while h stays
     am->spec_h = ce->h;
   }
   w->spec_m = am->spec_m;
-  std::copy(am->spec_c, am->spec_c + am->spec_m, w->spec_c);
   w->spec_weights = am->wkind;
   w->spec_x = am->xspec;
   w->spec_ewt = am->ewt_spec;
