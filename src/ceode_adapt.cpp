@@ -560,9 +560,12 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5). A step
   // grows by at most the remap's bound (GrowthBound), unless the estimate is exactly 0 (nothing
   // for the remap to carry).
-  const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
-  if (eta >= am.hold_lb && eta <= std::min(am.hold_hi, grow)) eta = 1;
-  eta = std::min(grow, std::max(kEtaMin, eta));
+  // (A ratio of 1, the band's usual verdict, passes both unchanged: hold_lb <= 1 <= the growth.)
+  if (eta != 1) {
+    const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
+    if (eta >= am.hold_lb && eta <= std::min(am.hold_hi, grow)) eta = 1;
+    eta = std::min(grow, std::max(kEtaMin, eta));
+  }
   const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
   h = ScheduledStep(ce, h);
