@@ -332,6 +332,12 @@ void ClearRun(CEodeMemRec* ce) {
   am->after.atol = am->pos.atol = am->atol;
   am->after.atolv = am->pos.atolv = am->atol_vec;
   am->first = true;
+  for (int b = 0; b < 2; ++b) {  // the serial pass's differences (only NVECTOR_SERIAL there)
+    for (int j = 0; j < kMaxDegree; ++j) {
+      const N_Vector v = am->dd[b][j];
+      am->dd_data[b][j] = am->kernels.serial && v != nullptr ? NV_DATA_S(v) : nullptr;
+    }
+  }
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
   am->cw_h = am->est_h = am->pos_h = am->spec_h = 0;  // the method or the start's coefficients

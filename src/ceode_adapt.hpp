@@ -77,9 +77,10 @@ struct AdaptMem {
   N_Vector est = nullptr;       // the estimate of the step under test
   N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
   N_Vector yd_next = nullptr;   // the same at the step's end
-  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
-  int cur = 0;                             // dd[cur] belongs to the node
-  sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
+  N_Vector dd[2][kMaxDegree] = {};  // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
+  int cur = 0;                      // dd[cur] belongs to the node
+  sunrealtype* dd_data[2][kMaxDegree] = {};  // their data on the serial pass (ClearRun)
+  sunrealtype tnode[kMaxDegree + 1] = {};    // t_n, t_{n-1}, ... (with the start's multiplicity)
   int ndata = 0;          // accelerations and start derivatives behind the divided differences
   sunrealtype hprev = 0;  // t_n - t_{n-1} (0 at the start)
   sunrealtype hmap = 0;   // the step the node's history is remapped for

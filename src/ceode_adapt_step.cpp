@@ -166,11 +166,13 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   const int p = am->order;
   const int jmax = std::min(p - 1, am->ndata);
   w->ndiff = jmax;
-  for (int j = 1; j <= jmax; ++j) {
-    w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
-    w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-    w->dout[j - 1] = j == p - 1 ? am->est : am->dd[1 - am->cur][j];
-    w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
+  // (The differences' data: their table and the node's half of it.)
+  w->dd_data = am->dd_data;
+  w->dd_cur = am->cur;
+  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
+    w->r[0] = 1 / (t - am->tnode[0]);
+  } else {
+    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
   }
   const sunrealtype h = ce->h;
   if (h != am->est_h) {
@@ -188,6 +190,17 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
     w->scale /= h;
   } else if (jmax < p - 1) {
     w->est_kind = AdaptAfterF::kEstNone;
+  }
+}
+
+// The differences' vectors of EstimateTerms for the operations one by one (the serial pass reads
+// their data from dd_data).
+void DifferenceVectors(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
+  const int p = am->order;
+  for (int j = 1; j <= w->ndiff; ++j) {
+    w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
+    w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
+    w->dout[j - 1] = j == p - 1 ? am->est : am->dd[1 - am->cur][j];
   }
 }
 
@@ -232,7 +245,11 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
   NextPositionTerms(ce, am, &w);
-  w.kp = am->kernels.AfterFIsFused(&w) ? nullptr : &DerivativePlan(ce, am);
+  w.kp = nullptr;
+  if (!am->kernels.AfterFIsFused(&w)) {
+    DifferenceVectors(ce, am, &w);
+    w.kp = &DerivativePlan(ce, am);
+  }
   am->spec_ready = w.spec_m > 0 && w.kp == nullptr;
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);

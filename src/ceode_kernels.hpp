@@ -297,9 +297,16 @@ struct AdaptAfterF {
   N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
   int ndiff = 0;
   sunrealtype r[kMaxDegree] = {};
+  // dnew[j] = j == 0 ? Dn[2] : the node's new difference j (dout[j - 1]); dold[j] = j == 0 ? D[2]
+  // : the node's difference j; dout[j] = the new difference j + 1, the last one est. The serial
+  // pass reads the differences' data instead from dd_data[dd_cur][j] (the node's) and
+  // dd_data[1 - dd_cur][j] (the new ones), 1 <= j < ndiff: the adaptive step fills dnew, dold
+  // and dout only for the operations one by one.
   N_Vector dnew[kMaxDegree] = {};
   N_Vector dold[kMaxDegree] = {};
   N_Vector dout[kMaxDegree] = {};
+  sunrealtype* const (*dd_data)[kMaxDegree] = nullptr;
+  int dd_cur = 0;
   int est_kind = kEstNone;
   N_Vector est_src = nullptr;
   sunrealtype scale = 0;

@@ -167,8 +167,8 @@ struct AfterFArrays {
       Dn[k] = NV_DATA_S(w.Dn[k]);
     }
     for (int j = 1; j < ND; ++j) {
-      ddo[j] = NV_DATA_S(w.dold[j]);
-      ddn[j] = NV_DATA_S(w.dout[j - 1]);
+      ddo[j] = w.dd_data[w.dd_cur][j];
+      ddn[j] = w.dd_data[1 - w.dd_cur][j];
     }
     ddn[ND] = NV_DATA_S(w.est);
     ewt = NV_DATA_S(w.ewt);
