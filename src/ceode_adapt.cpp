@@ -7,6 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <new>
 
 namespace ceode {
@@ -337,6 +340,12 @@ void ClearRun(CEodeMemRec* ce) {
   am->after.atol = am->pos.atol = am->atol;
   am->after.atolv = am->pos.atolv = am->atol_vec;
   am->first = true;
+  for (int b = 0; b < 2; ++b) {  // the serial pass's differences (only NVECTOR_SERIAL there)
+    for (int j = 0; j < kMaxDegree; ++j) {
+      const N_Vector v = am->dd[b][j];
+      am->dd_data[b][j] = am->kernels.serial && v != nullptr ? NV_DATA_S(v) : nullptr;
+    }
+  }
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
   am->cw_h = am->est_h = am->pos_h = am->spec_h = 0;  // the method or the start's coefficients
@@ -458,6 +467,52 @@ sunrealtype ScheduledStep(const CEodeMemRec* ce, sunrealtype h) {
 
 namespace {
 
+// log(v) within kApproxLogError, for the controller's decision only (v >= 1e-10 finite): the
+// binary exponent from the bits and the log of the mantissa m in [sqrt(1/2), sqrt(2)) by the
+// series 2 atanh(s), s = (m - 1) / (m + 1), |s| < 0.1716, to s^3 (the rest below 6.2e-5). Other
+// types than IEEE double, and v beyond 1e300, take std::log.
+constexpr sunrealtype kApproxLogError = 1e-4;
+sunrealtype ApproxLog(sunrealtype v) {
+  if constexpr (sizeof(sunrealtype) == sizeof(std::uint64_t) &&
+                std::numeric_limits<sunrealtype>::is_iec559) {
+    if (!(v < 1e300)) return std::log(v);
+    std::uint64_t u = 0;
+    std::memcpy(&u, &v, sizeof u);
+    int e = static_cast<int>(u >> 52) - 1023;  // v > 0: no sign bit
+    u = (u & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL;
+    sunrealtype m = 0;
+    std::memcpy(&m, &u, sizeof m);
+    if (m > 1.4142135623730951) {
+      m *= 0.5;
+      ++e;
+    }
+    const sunrealtype s = (m - 1) / (m + 1);
+    return e * 0.6931471805599453 + 2 * s * (1 + s * s * (1.0 / 3));
+  } else {
+    return std::log(v);
+  }
+}
+
+// Whether the controller keeps h, decided from logarithms within kApproxLogError of
+// log(err / target) (le) and of the last step's (lep): only when the exponent lies inside the band
+// by more than what their error can move it, so that the exact logarithms decide the same; false
+// leaves the decision to them (and to the user's SUNAdaptController when there is one).
+bool BandKeepsStep(const AdaptMem& am, sunrealtype le, sunrealtype lep, sunrealtype k) {
+  // Above the exponents' error: 1.5 kApproxLogError / k (PI, k >= 2), kApproxLogError / (2 k).
+  constexpr sunrealtype kSlack = 1e-4;
+  if (am.sun_controller != nullptr) return false;
+  if (am.controller == CE_ADAPT_PI) {
+    const sunrealtype x = (-0.7 * le + 0.4 * (lep - le)) / k;
+    return x > am.xhold[0] + kSlack && x < am.xhold[1] - kSlack;
+  }
+  if (am.eta_prev != 1) return false;  // H211b with log(eta_prev) != 0
+  const sunrealtype x = -(le + lep) / (kFilterB * k);
+  return x > am.xhold[2] + kSlack && x < am.xhold[3] - kSlack;
+}
+
+// The exact log(err_prev / target), which the last step did not take.
+sunrealtype PrevLog(const AdaptMem& am) { return std::log(std::max(am.err_prev, 1e-10) / kTarget); }
+
 // The controller's ratio from the error norm err of the last accepted step of hbase.
 sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
   AdaptMem& am = *ce->adapt;
@@ -477,10 +532,22 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
     // to aim at, so the step grows by the largest ratio, as CVODE's eta = etamax.
     return kEtaMax;
   }
-  // In logarithms: one log and one exp a step instead of two pow calls; the last step's
-  // logarithm is kept.
-  const sunrealtype le = std::log(std::max(err, 1e-10) / kTarget);
-  const sunrealtype lep = am.err_prev > 0 ? am.lerr_prev : le;
+  // In logarithms: one log and one exp a step instead of two pow calls, and neither while the
+  // bounded approximation decides that the band keeps h (BandKeepsStep).
+  const sunrealtype v = std::max(err, 1e-10) / kTarget;
+  const sunrealtype le_approx = ApproxLog(v);
+  const bool had_prev = am.err_prev > 0;
+  const sunrealtype lep_approx = had_prev ? am.lerr_prev_approx : le_approx;
+  am.lerr_prev_approx = le_approx;
+  if (BandKeepsStep(am, le_approx, lep_approx, k)) {
+    am.err_prev = err;
+    am.lerr_prev_exact = false;
+    return 1;
+  }
+  const sunrealtype le = std::log(v);
+  const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
+  am.lerr_prev_approx = le;
+  am.lerr_prev_exact = true;
   sunrealtype eta = 1;
   if (SunControllerRatio(ce, err, hbase, &eta)) {
     // the user's SUNAdaptController chose
@@ -507,9 +574,12 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   // fewer changes excite the high-degree sets' parasitic roots less (docs/theory.md 12.5). A step
   // grows by at most the remap's bound (GrowthBound), unless the estimate is exactly 0 (nothing
   // for the remap to carry).
-  const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
-  if (eta >= am.hold_lo && eta <= std::min(am.hold_hi, grow)) eta = 1;
-  eta = std::min(grow, std::max(kEtaMin, eta));
+  // (A ratio of 1, the band's usual verdict, passes both unchanged: hold_lo <= 1 <= the growth.)
+  if (eta != 1) {
+    const sunrealtype grow = AdaptEstimated(am) && err == 0 ? kEtaMax : am.eta_grow;
+    if (eta >= am.hold_lo && eta <= std::min(am.hold_hi, grow)) eta = 1;
+    eta = std::min(grow, std::max(kEtaMin, eta));
+  }
   const sunrealtype hold = hbase;
   sunrealtype h = hold * eta;
   h = ScheduledStep(ce, h);

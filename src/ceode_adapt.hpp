@@ -77,9 +77,10 @@ struct AdaptMem {
   N_Vector est = nullptr;       // the estimate of the step under test
   N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node
   N_Vector yd_next = nullptr;   // the same at the step's end
-  N_Vector dd[2][kMaxDegree] = {};         // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
-  int cur = 0;                             // dd[cur] belongs to the node
-  sunrealtype tnode[kMaxDegree + 1] = {};  // t_n, t_{n-1}, ... (with the start's multiplicity)
+  N_Vector dd[2][kMaxDegree] = {};  // divided differences a[t_n .. t_{n-j}], j = 1 .. p - 2
+  int cur = 0;                      // dd[cur] belongs to the node
+  sunrealtype* dd_data[2][kMaxDegree] = {};  // their data on the serial pass (ClearRun)
+  sunrealtype tnode[kMaxDegree + 1] = {};    // t_n, t_{n-1}, ... (with the start's multiplicity)
   int ndata = 0;          // accelerations and start derivatives behind the divided differences
   sunrealtype hprev = 0;  // t_n - t_{n-1} (0 at the start)
   sunrealtype hmap = 0;   // the step the node's history is remapped for
@@ -87,7 +88,7 @@ struct AdaptMem {
   sunrealtype h0 = 0;     // the first step of the run
   sunrealtype err = 0;    // the last accepted step's error norm (0: none estimated)
   sunrealtype err_prev = 0;
-  sunrealtype lerr_prev = 0;   // log(err_prev / the controller's target)
+  sunrealtype lerr_prev = 0;   // log(err_prev / the controller's target), when lerr_prev_exact
   sunrealtype eta_prev = 1;    // the last accepted ratio (the filter's memory)
   sunrealtype eta_grow = 2;    // the largest growth of a step the remap's coupling admits
   sunrealtype hold_lb = 0;     // CEodeSetFixedStepBounds: a ratio in [hold_lb, hold_ub] keeps h
@@ -99,6 +100,10 @@ struct AdaptMem {
   bool capped_last = false;    // the stable step decided the last step
   long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
+  // A step that keeps h takes no log (ceode_adapt.cpp, BandKeepsStep): whether lerr_prev is
+  // set, and log(err_prev / the target) within 1e-4 (ApproxLog).
+  bool lerr_prev_exact = false;
+  sunrealtype lerr_prev_approx = 0;
   // With constraints the solve at a node imposes the constraint one step ahead, so the step
   // after the next one is planned at each acceptance (docs/theory.md 12.6).
   sunrealtype h_plan = 0;  // the first step failed its test: the next start's step
@@ -126,11 +131,10 @@ struct AdaptMem {
   bool ewt_next_ready = false;            // ewt_next holds the weights of xnext (formed with it)
   int wkind = AdaptAfterF::kWeightsNone;  // the weights the tolerances give (AdaptAfterF)
   // The next position at an unchanged step, formed with the step's pass (AdaptAfterF 7.): its
-  // terms for the step spec_h, whether the last pass formed it (in xspec and ewt_spec) and its
-  // L1 norm.
+  // terms for the step spec_h (in after.spec_c), whether the last pass formed it (in xspec and
+  // ewt_spec) and its L1 norm.
   sunrealtype spec_h = 0;
   int spec_m = 0;
-  sunrealtype spec_c[kMaxDegree + 2] = {};
   bool spec_ready = false;
   sunrealtype spec_l1 = 0;
 

@@ -166,11 +166,13 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   const int p = am->order;
   const int jmax = std::min(p - 1, am->ndata);
   w->ndiff = jmax;
-  for (int j = 1; j <= jmax; ++j) {
-    w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
-    w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
-    w->dout[j - 1] = j == p - 1 ? am->est : am->dd[1 - am->cur][j];
-    w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
+  // (The differences' data: their table and the node's half of it.)
+  w->dd_data = am->dd_data;
+  w->dd_cur = am->cur;
+  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
+    w->r[0] = 1 / (t - am->tnode[0]);
+  } else {
+    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
   }
   const sunrealtype h = ce->h;
   if (h != am->est_h) {
@@ -191,6 +193,17 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   }
 }
 
+// The differences' vectors of EstimateTerms for the operations one by one (the serial pass reads
+// their data from dd_data).
+void DifferenceVectors(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
+  const int p = am->order;
+  for (int j = 1; j <= w->ndiff; ++j) {
+    w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
+    w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
+    w->dout[j - 1] = j == p - 1 ? am->est : am->dd[1 - am->cur][j];
+  }
+}
+
 // Most steps keep h (the controller's band): on few unknowns (kNextPositionMaxN) the serial pass
 // forms the position of a next step of the same h with the new history, as MoveTo would after the
 // step is accepted, into xspec and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes
@@ -203,11 +216,10 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
     return;
   }
   if (am->spec_h != ce->h) {  // after the step: hprev = hmap = h (CommitNode)
-    PositionTerms(ce, *am, ce->h, ce->h, am->spec_c, &am->spec_m);
+    PositionTerms(ce, *am, ce->h, ce->h, w->spec_c, &am->spec_m);  // kept in w while h stays
     am->spec_h = ce->h;
   }
   w->spec_m = am->spec_m;
-  std::copy(am->spec_c, am->spec_c + am->spec_m, w->spec_c);
   w->spec_weights = am->wkind;
   w->spec_x = am->xspec;
   w->spec_ewt = am->ewt_spec;
@@ -233,7 +245,11 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
   NextPositionTerms(ce, am, &w);
-  w.kp = am->kernels.AfterFIsFused(&w) ? nullptr : &DerivativePlan(ce, am);
+  w.kp = nullptr;
+  if (!am->kernels.AfterFIsFused(&w)) {
+    DifferenceVectors(ce, am, &w);
+    w.kp = &DerivativePlan(ce, am);
+  }
   am->spec_ready = w.spec_m > 0 && w.kp == nullptr;
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);

@@ -248,11 +248,16 @@ struct AdaptKernels {
   // estimate's WRMS norm in the node's weights (0 with kEstNone) and the smallest denominator
   // of the new weights in *dmin (1 without them); with the next position (spec_m > 0, serial
   // pass only) its L1 norm in *l1.
-  sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const;
+  // (Inline, as AfterFIsFused: on few unknowns the calls cost as much as the pass.)
+  inline sunrealtype AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const;
   // Chooses AfterF's serial pass for w (kept in w while what it depends on stays); whether AfterF
   // runs w in one serial pass (then w.kp is not read). AfterF runs the choice of the last call:
   // call it whenever w's fields change.
-  bool AfterFIsFused(AdaptAfterF* w) const;
+  inline bool AfterFIsFused(AdaptAfterF* w) const;
+  // AfterF by the N_Vector operations one by one (the reference; no serial pass chosen).
+  sunrealtype AfterFByOperations(const AdaptAfterF& w, sunrealtype* dmin) const;
+  // AfterFIsFused's choice for the key of w's fields.
+  void ChooseAfterF(AdaptAfterF* w, int key) const;
   // The history's remap and the position (AdaptPosition); returns the position's L1 norm and
   // the smallest denominator of its weights in *dmin (1 without them).
   sunrealtype Position(AdaptPosition* w, sunrealtype* dmin) const;
@@ -292,9 +297,16 @@ struct AdaptAfterF {
   N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
   int ndiff = 0;
   sunrealtype r[kMaxDegree] = {};
+  // dnew[j] = j == 0 ? Dn[2] : the node's new difference j (dout[j - 1]); dold[j] = j == 0 ? D[2]
+  // : the node's difference j; dout[j] = the new difference j + 1, the last one est. The serial
+  // pass reads the differences' data instead from dd_data[dd_cur][j] (the node's) and
+  // dd_data[1 - dd_cur][j] (the new ones), 1 <= j < ndiff: the adaptive step fills dnew, dold
+  // and dout only for the operations one by one.
   N_Vector dnew[kMaxDegree] = {};
   N_Vector dold[kMaxDegree] = {};
   N_Vector dout[kMaxDegree] = {};
+  sunrealtype* const (*dd_data)[kMaxDegree] = nullptr;
+  int dd_cur = 0;
   int est_kind = kEstNone;
   N_Vector est_src = nullptr;
   sunrealtype scale = 0;
@@ -315,6 +327,28 @@ struct AdaptAfterF {
   N_Vector spec_x = nullptr;
   N_Vector spec_ewt = nullptr;
 };
+
+// What AfterFIsFused's choice depends on.
+inline int AfterFKey(const AdaptAfterF& w) {
+  const int shape =
+      ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
+      (w.positive ? 1 : 0);
+  return (shape * 16 + w.spec_m) * 4 + w.spec_weights;
+}
+
+inline bool AdaptKernels::AfterFIsFused(AdaptAfterF* w) const {
+  const int key = AfterFKey(*w);
+  if (key != w->fused_key) ChooseAfterF(w, key);
+  return w->fused != nullptr;
+}
+
+inline sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin,
+                                        sunrealtype* l1) const {
+  using Fn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
+  *l1 = 0;
+  if (w.fused != nullptr) return reinterpret_cast<Fn>(w.fused)(w, n, dmin, l1);
+  return AfterFByOperations(w, dmin);
+}
 
 // The remap of the history and the position (docs/theory.md 12.1, 12.2): first rD[i] += rc[i]
 // rY[i], i < nremap, in order (Axpy's arithmetic), then out = sum_j c[j] X[j], j < m (m >= 3,

@@ -167,8 +167,8 @@ struct AfterFArrays {
       Dn[k] = NV_DATA_S(w.Dn[k]);
     }
     for (int j = 1; j < ND; ++j) {
-      ddo[j] = NV_DATA_S(w.dold[j]);
-      ddn[j] = NV_DATA_S(w.dout[j - 1]);
+      ddo[j] = w.dd_data[w.dd_cur][j];
+      ddn[j] = w.dd_data[1 - w.dd_cur][j];
     }
     ddn[ND] = NV_DATA_S(w.est);
     ewt = NV_DATA_S(w.ewt);
@@ -386,32 +386,12 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
 
 }  // namespace
 
-namespace {
-
-// What FusedAfterF's choice depends on.
-int AfterFKey(const AdaptAfterF& w) {
-  const int shape =
-      ((((w.d * 16 + w.ndiff) * 4 + w.est_kind) * 4 + w.weights) * 2 + (w.full ? 1 : 0)) * 2 +
-      (w.positive ? 1 : 0);
-  return (shape * 16 + w.spec_m) * 4 + w.spec_weights;
+void AdaptKernels::ChooseAfterF(AdaptAfterF* w, int key) const {
+  w->fused_key = key;
+  w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w)) : nullptr;
 }
 
-}  // namespace
-
-bool AdaptKernels::AfterFIsFused(AdaptAfterF* w) const {
-  const int key = AfterFKey(*w);
-  if (key != w->fused_key) {
-    w->fused_key = key;
-    w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w)) : nullptr;
-  }
-  return w->fused != nullptr;
-}
-
-sunrealtype AdaptKernels::AfterF(const AdaptAfterF& w, sunrealtype* dmin, sunrealtype* l1) const {
-  *l1 = 0;
-  if (w.fused != nullptr) {  // AfterFIsFused's choice for these fields
-    return reinterpret_cast<AfterFFn>(w.fused)(w, n, dmin, l1);
-  }
+sunrealtype AdaptKernels::AfterFByOperations(const AdaptAfterF& w, sunrealtype* dmin) const {
   RunPlan(*w.kp, n);
   for (int j = 0; j < w.ndiff; ++j) {
     const sunrealtype c[2] = {w.r[j], -w.r[j]};
