@@ -246,6 +246,7 @@ struct PhaseVectors {
   SerialKernelFn update;       // UpdateSerial's kernel for the plan, chosen once
   const FusedPlan* plan_over;  // the plan writing the position over x(t + h); nullptr: none
   SerialKernelFn update_over;
+  LeapKernels leap;  // StepMem::leap_kernels of the plan
 };
 
 // Below this many steps to go the table of the lean loop costs more than it saves (CE_ONE_STEP).
@@ -296,18 +297,27 @@ void RebuildPosition(CEodeMemRec* ce) {
 
 // How the lean loop ended, for LeanExit.
 struct LeanEnd {
-  long int steps = 0;        // completed
-  long int moved = 0;        // of them, those that rotated the positions
-  bool over = false;         // the last completed step wrote the position over x(tcur)
-  bool failed_over = false;  // the failing update wrote over x(tcur + h)
+  long int steps = 0;           // completed
+  long int moved = 0;           // of them, those that rotated the positions
+  bool over = false;            // the last completed step wrote the position over x(tcur)
+  bool failed_over = false;     // the failing update wrote over x(tcur + h)
+  bool carried = false;         // the last completed step left the half-step velocity in D_1
+  bool failed_carried = false;  // the failing update wrote the half-step velocity into D_1
   int rv = 0;
   bool state_ok = true;
   sunrealtype t = 0;
   UpdateResult update = {CE_SUCCESS, 0};
 };
 
-// Brings the vectors to the state TakeStep would have left (the position to rounding, or the
-// failed step's, where it was written over), then reports as TakeStep does.
+// D_1 = u - c_0 a: the velocity from the half-step velocity u = v + c_0 a a run of G3 steps
+// carried (LeapKernels), equal to rounding.
+void VelocityFromHalfStep(CEodeMemRec* ce, const StepMem& sm, N_Vector a) {
+  N_VLinearSum(1, ce->D[1], -sm.plans[sm.plan_ix].combos[0].c[0], a, ce->D[1]);
+}
+
+// Brings the vectors to the state TakeStep would have left (the position and a carried
+// velocity to rounding, or the failed step's, where it was written over), then reports as
+// TakeStep does.
 int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* taken) {
   static const char* func = "CEodeEvolve";
   if (e.steps % 2 != 0) RotateHistory(ce, *sm);
@@ -315,15 +325,24 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
   sm->plan_ix = ip;
   *taken = e.steps;
   if (e.rv != 0) {
+    if (e.carried) VelocityFromHalfStep(ce, *sm, ce->D[2]);
     if (e.over) RebuildPosition(ce);
     return RhsFailed(ce, e.rv, e.t, func);
   }
   if (!e.state_ok) {
+    if (e.failed_carried) VelocityFromHalfStep(ce, *sm, ce->Dnew[2]);
     if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
     return CheckState(ce, e.t, e.update, func, !e.failed_over);
   }
   const bool guard_due = e.steps > 0 && ce->guard.every > 0 && ce->nst % ce->guard.every == 0;
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
+}
+
+// The kernel of a step of the lean loop that writes the position over x(t + h) (not the last):
+// with G3's half-step velocity carried, the first step's or a middle step's.
+inline SerialKernelFn LeanKernel(const PhaseVectors& p, bool leap, long int steps) {
+  if (!leap) return p.update_over;
+  return steps == 0 ? p.leap.first : p.leap.mid;
 }
 
 // TakeStep's explicit step on serial (kMpi: NVECTOR_PARALLEL, the same kernel on this rank's
@@ -340,9 +359,9 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   for (int j = 0; j < kNumPlans; ++j) {
     const int i = (ip + j) % kNumPlans;
     const bool over = sm->xin_ready;
-    pv[i] = {ce->xnext,           ce->D[1],       ce->Dnew[2],
-             &sm->fused_plans[i], sm->kernels[i], over ? &sm->fused_plans_xin[i] : nullptr,
-             sm->kernels_xin[i]};
+    pv[i] = {ce->xnext,           ce->D[1],           ce->Dnew[2],
+             &sm->fused_plans[i], sm->kernels[i],     over ? &sm->fused_plans_xin[i] : nullptr,
+             sm->kernels_xin[i],  sm->leap_kernels[i]};
     RotateVectors(ce, sm);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
@@ -359,11 +378,13 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     ++ce->nfe;
     if (e.rv != 0) break;
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;
-    e.update.xl1 = over ? p.update_over(*p.plan_over, len) : p.update(*p.plan, len);
+    e.update.xl1 = over ? LeanKernel(p, sm->leap, e.steps)(*p.plan_over, len)
+                        : (sm->leap && e.steps > 0 ? p.leap.last : p.update)(*p.plan, len);
     if constexpr (kMpi) e.update = GlobalL1(p.x, e.update.xl1);  // one allreduce, as TakeStep's
     e.state_ok = std::isfinite(e.update.xl1) && !Exploded(e.update.xl1, bound);
     if (!e.state_ok) {
       e.failed_over = over;
+      e.failed_carried = over && sm->leap;
       break;
     }
     ce->tcur = e.t;
@@ -371,6 +392,7 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     ++ce->nst;
     ++e.steps;
     e.over = over;
+    e.carried = over && sm->leap;
     e.moved += over ? 0 : 1;
     ip = (ip + (over ? 3 : 1)) % kNumPlans;  // over: the positions keep their buffers
   }
