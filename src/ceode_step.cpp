@@ -303,6 +303,8 @@ struct LeanEnd {
   bool failed_over = false;     // the failing update wrote over x(tcur + h)
   bool carried = false;         // the last completed step left the half-step velocity in D_1
   bool failed_carried = false;  // the failing update wrote the half-step velocity into D_1
+  bool accel_lost = false;      // f's failing call was handed the buffer of a(tcur) (LeapRun)
+  N_Vector failed_a = nullptr;  // where the failing update's acceleration is
   int rv = 0;
   bool state_ok = true;
   sunrealtype t = 0;
@@ -315,6 +317,18 @@ void VelocityFromHalfStep(CEodeMemRec* ce, const StepMem& sm, N_Vector a) {
   N_VLinearSum(1, ce->D[1], -sm.plans[sm.plan_ix].combos[0].c[0], a, ce->D[1]);
 }
 
+// f failed in a run whose later steps share one acceleration buffer (LeapRun), which held a(tcur):
+// x(tcur) = x(tcur + h) - h u, a(tcur) evaluated again there, v = u - c a, each to rounding.
+int LostAccelerationExit(CEodeMemRec* ce, const StepMem& sm, const LeanEnd& e, const char* func) {
+  const Combo& drift = sm.plans[sm.plan_ix].combos[2];  // x(t) + h u
+  N_VLinearSum(1, ce->xnext, -drift.c[0], ce->D[1], ce->xcur);
+  const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2]);
+  ++ce->nfe;
+  if (rv != 0) return RhsFailed(ce, rv, ce->tcur, func);
+  VelocityFromHalfStep(ce, sm, ce->D[2]);
+  return RhsFailed(ce, e.rv, e.t, func);
+}
+
 // Brings the vectors to the state TakeStep would have left (the position and a carried
 // velocity to rounding, or the failed step's, where it was written over), then reports as
 // TakeStep does.
@@ -325,11 +339,13 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
   sm->plan_ix = ip;
   *taken = e.steps;
   if (e.rv != 0) {
+    if (e.accel_lost) return LostAccelerationExit(ce, *sm, e, func);
     if (e.carried) VelocityFromHalfStep(ce, *sm, ce->D[2]);
     if (e.over) RebuildPosition(ce);
     return RhsFailed(ce, e.rv, e.t, func);
   }
   if (!e.state_ok) {
+    if (e.failed_a != ce->Dnew[2]) N_VScale(1, e.failed_a, ce->Dnew[2]);  // CheckState reads it
     if (e.failed_carried) VelocityFromHalfStep(ce, *sm, ce->Dnew[2]);
     if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
     return CheckState(ce, e.t, e.update, func, !e.failed_over);
@@ -338,11 +354,33 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
 }
 
-// The kernel of a step of the lean loop that writes the position over x(t + h) (not the last):
-// with G3's half-step velocity carried, the first step's or a middle step's.
-inline SerialKernelFn LeanKernel(const PhaseVectors& p, bool leap, long int steps) {
-  if (!leap) return p.update_over;
-  return steps == 0 ? p.leap.first : p.leap.mid;
+// G3_CD's run carrying the half-step velocity (StepMem::leap) over at least three steps: every
+// step after the first has f write one buffer, the last step's, and the middle steps' update read
+// it there (mid), so that the run touches x, u and one acceleration, as the leapfrog does.
+struct LeapRun {
+  N_Vector a = nullptr;        // that buffer; nullptr: no such run
+  N_Vector first_a = nullptr;  // the first step's acceleration
+  FusedPlan mid;               // fused_plans_xin with that buffer as the acceleration
+};
+void PrepareLeapRun(const StepMem& sm, const PhaseVectors* pv, int ip, long int count, LeapRun* r) {
+  if (!sm.leap || count < 3) return;
+  r->a = pv[(ip + ((count - 1) % 2) * 3) % kNumPlans].a;  // every step but the last moves 3 on
+  r->first_a = pv[ip].a;
+  r->mid = sm.fused_plans_xin[(ip + 3) % kNumPlans];  // x, u: the same buffers in every phase
+  sunrealtype* a = SerialData(r->a);
+  r->mid.terms[0].X[2] = a;
+  r->mid.terms[1].X[1] = a;
+}
+
+// Step `steps` of the lean loop's update after f: the in-place plan (over) or the out-of-place
+// one, with G3_CD's half-step velocity carried the kernel of the first, a middle or the last step.
+inline sunrealtype LeanUpdate(const PhaseVectors& p, const StepMem& sm, const LeapRun& run,
+                              long int steps, bool over) {
+  const sunindextype len = sm.len;
+  if (!over) return (sm.leap && steps > 0 ? p.leap.last : p.update)(*p.plan, len);
+  if (!sm.leap) return p.update_over(*p.plan_over, len);
+  if (steps == 0) return p.leap.first(*p.plan_over, len);
+  return run.a != nullptr ? p.leap.mid(run.mid, len) : p.leap.mid(*p.plan_over, len);
 }
 
 // TakeStep's explicit step on serial (kMpi: NVECTOR_PARALLEL, the same kernel on this rank's
@@ -353,7 +391,6 @@ inline SerialKernelFn LeanKernel(const PhaseVectors& p, bool leap, long int step
 template <bool kMpi>
 __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, sunrealtype target,
                                                 long int max_steps, long int* taken) {
-  const sunindextype len = sm->len;  // this rank's part on NVECTOR_PARALLEL
   PhaseVectors pv[kNumPlans];
   int ip = sm->plan_ix;
   for (int j = 0; j < kNumPlans; ++j) {
@@ -370,21 +407,27 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   const CEodeRhsFn rhs = own_f ? ce->f : ce->adapters.rhs;
   void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
   const long int count = LeanStepCount(ce, target, max_steps);
+  LeapRun run;
+  PrepareLeapRun(*sm, pv, ip, count, &run);
   LeanEnd e;
   while (e.steps < count) {
     e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    e.rv = rhs(e.t, p.x, p.v, p.a, rhs_data);
+    const N_Vector a = run.a != nullptr && e.steps > 0 ? run.a : p.a;
+    e.rv = rhs(e.t, p.x, p.v, a, rhs_data);
     ++ce->nfe;
-    if (e.rv != 0) break;
+    if (e.rv != 0) {
+      e.accel_lost = a == run.a && (e.steps > 1 || run.a == run.first_a);
+      break;
+    }
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;
-    e.update.xl1 = over ? LeanKernel(p, sm->leap, e.steps)(*p.plan_over, len)
-                        : (sm->leap && e.steps > 0 ? p.leap.last : p.update)(*p.plan, len);
+    e.update.xl1 = LeanUpdate(p, *sm, run, e.steps, over);
     if constexpr (kMpi) e.update = GlobalL1(p.x, e.update.xl1);  // one allreduce, as TakeStep's
     e.state_ok = std::isfinite(e.update.xl1) && !Exploded(e.update.xl1, bound);
     if (!e.state_ok) {
       e.failed_over = over;
       e.failed_carried = over && sm->leap;
+      e.failed_a = a;
       break;
     }
     ce->tcur = e.t;
