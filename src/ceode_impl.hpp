@@ -539,6 +539,9 @@ void PcSetVelocityRequest(CEodeMemRec* ce, int request);  // CEodeSetVelocityDep
 // Before the solvers are set up (Prepare): the start's probe of f in x' when no dependence was
 // declared; a detected one sets vel_dependent, as a declaration does.
 int DetectVelocityDependence(CEodeMemRec* ce);
+// Whether f is known not to read its velocity argument: the start's probe ran on this f and
+// found no dependence (a declared independence may want the lagged velocity).
+bool VelocityUnread(const CEodeMemRec* ce);
 // How the dependence was decided, for the statistics: declared, none (declared), detected, none.
 const char* VelocityDependenceName(const CEodeMemRec* ce);
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,

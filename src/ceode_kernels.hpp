@@ -25,6 +25,9 @@ struct Combo {
   N_Vector old = nullptr;  // accumulated quantity, added last (nullptr: none)
   int level = 0;           // compensation slot of an accumulated quantity
   N_Vector out = nullptr;
+  // Without compensation: old leads the sum instead, (old + c_0 X_0) + c_1 X_1 + ... (G3_CD's
+  // leapfrog form, LeapKernels).
+  bool lead_old = false;
 
   void Add(sunrealtype coef, N_Vector v) {
     if (coef != 0) {
@@ -46,6 +49,7 @@ struct FusedTerms {
   int form;       // the arithmetic of the sum, fixed when the plan is built (kernels_serial)
   bool in_place;  // out is also the accumulated term X[m - 1] (an in-place plan)
   bool exact;     // compensated, its increment summed error-free (ExactIncrement)
+  bool lead_old = false;  // the accumulated term is X[0] (Combo::lead_old), not X[m - 1]
   sunrealtype c[kMaxDegree + 3];
   sunrealtype* X[kMaxDegree + 3];
   sunrealtype* old;
@@ -188,6 +192,18 @@ sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
 // The kernel UpdateSerial runs on the plan at length n, for a caller that runs it many times.
 using SerialKernelFn = sunrealtype (*)(const FusedPlan&, sunindextype);
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
+// G3_CD's step on its plan in the leapfrog's form (ceode_step_plans.cpp, LeapForm): v = (v_old +
+// c a_old) + c a, u = v + c a, x(t + h) = x(t) + h u. The next step's first rounding, v + c a, is
+// this step's u (the half-step velocity), so a run of steps can store u where v was and read
+// a_old in its first step alone: first reads v_old and a_old and stores u, mid reads and stores
+// u, last reads u and stores v; none writes u's work vector. Each gives the bits of
+// UpdateSerial's steps one by one. False, with nothing set, for other plans or lengths.
+struct LeapKernels {
+  SerialKernelFn first = nullptr;
+  SerialKernelFn mid = nullptr;
+  SerialKernelFn last = nullptr;
+};
+bool LeapKernelsOf(const FusedPlan& fp, sunindextype n, LeapKernels* k);
 // The raw-pointer form of a plan (vectors that expose their data). Returns false when some
 // combination writes a vector it also reads, other than its own accumulated quantity without
 // compensation (an in-place plan's, read entry by entry before it is written): the serial

@@ -82,6 +82,14 @@ void RunCombo(const Combo& cb, const Compensation& cs) {
   std::copy(cb.c, cb.c + cb.m, c);
   std::copy(cb.X, cb.X + cb.m, X);
   int m = cb.m;
+  if (!cs.on && cb.lead_old) {
+    c[0] = 1;
+    X[0] = cb.old;
+    std::copy(cb.c, cb.c + cb.m, c + 1);
+    std::copy(cb.X, cb.X + cb.m, X + 1);
+    Combine(m + 1, c, X, cb.out);
+    return;
+  }
   if (!cs.on) {
     c[m] = 1;
     X[m++] = cb.old;

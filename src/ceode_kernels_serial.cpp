@@ -573,7 +573,7 @@ bool RolesMatch(const FusedPlan& fp) {
   const sunrealtype* made[NumRoles(D)] = {};
   for (int s = 0; s < fp.n; ++s) {
     const FusedTerms& tk = fp.terms[s];
-    if (tk.m != StepTerms(D, Ones, s) || tk.old != nullptr) return false;
+    if (tk.m != StepTerms(D, Ones, s) || tk.old != nullptr || tk.lead_old) return false;
     for (int j = 0; j < tk.m; ++j) {
       const int r = TermRole(D, Ones, s, j);
       const sunrealtype* x = tk.X[j];
@@ -685,6 +685,103 @@ sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
+// ---- G3_CD's kick and drift (LeapKernels) ----
+// Whether fp is G3_CD's plan in the leapfrog's form (ceode_step_plans.cpp, LeapForm): v =
+// (1 v_old + c a_old) + c a into the velocity's buffer, u = 1 v + c a (a work vector, which these
+// kernels keep in registers), x(t + h) = 1 x(t) + h u.
+bool IsLeapPlan(const FusedPlan& fp) {
+  if (fp.n != 3 || fp.compensated) return false;
+  const FusedTerms& tv = fp.terms[0];
+  const FusedTerms& tu = fp.terms[1];
+  const FusedTerms& tx = fp.terms[2];
+  const bool v = tv.lead_old && tv.m == 3 && tv.form == 3 && tv.c[0] == 1 && tv.c[1] == tv.c[2];
+  const bool u = !tu.lead_old && tu.m == 2 && tu.form == 2 && tu.c[0] == 1 && tu.c[1] == tv.c[1] &&
+                 tu.X[0] == tv.out && tu.X[1] == tv.X[2];
+  const bool x = tx.lead_old && tx.m == 2 && tx.form == 2 && tx.c[0] == 1 && tx.X[1] == tu.out;
+  return v && u && x && tv.old == nullptr && tu.old == nullptr && tx.old == nullptr;
+}
+
+// The step on entries i, i + 1 (TermsAt's operations in its order; the unit products are the
+// values themselves, and c a, formed once, is the same product in both sums). kFromV: the
+// velocity buffer holds v_old (else u = v_old + c a_old, and a_old is not read); kToU: u = v + c a
+// is stored (else v). Returns x(t + h).
+template <bool kFromV, bool kToU, bool kStream>
+struct LeapStep {
+  const sunrealtype* vin;
+  const sunrealtype* aold;
+  const sunrealtype* a;
+  const sunrealtype* x;
+  sunrealtype* vout;
+  sunrealtype* xout;
+  __m128d c, w;
+  explicit LeapStep(const FusedPlan& fp)
+      : vin(fp.terms[0].X[0]),
+        aold(fp.terms[0].X[1]),
+        a(fp.terms[0].X[2]),
+        x(fp.terms[2].X[0]),
+        vout(fp.terms[0].out),
+        xout(fp.terms[2].out),
+        c(_mm_set1_pd(fp.terms[0].c[1])),
+        w(_mm_set1_pd(fp.terms[2].c[1])) {}
+  __m128d Pair(sunindextype i) const {
+    __m128d u = _mm_loadu_pd(vin + i);
+    if constexpr (kFromV) u = _mm_add_pd(u, _mm_mul_pd(c, _mm_loadu_pd(aold + i)));
+    const __m128d ca = _mm_mul_pd(c, _mm_loadu_pd(a + i));
+    const __m128d v = _mm_add_pd(u, ca);
+    const __m128d un = _mm_add_pd(v, ca);
+    const __m128d xn = _mm_add_pd(_mm_loadu_pd(x + i), _mm_mul_pd(w, un));
+    _mm_storeu_pd(vout + i, kToU ? un : v);
+    if constexpr (kStream) {
+      _mm_stream_pd(xout + i, xn);
+    } else {
+      _mm_storeu_pd(xout + i, xn);
+    }
+    return xn;
+  }
+  sunrealtype One(sunindextype i) const {
+    const sunrealtype k = _mm_cvtsd_f64(c);
+    sunrealtype u = vin[i];
+    if constexpr (kFromV) u += k * aold[i];
+    const sunrealtype ca = k * a[i];
+    const sunrealtype v = u + ca;
+    const sunrealtype un = v + ca;
+    const sunrealtype xn = x[i] + _mm_cvtsd_f64(w) * un;
+    vout[i] = kToU ? un : v;
+    xout[i] = xn;
+    return xn;
+  }
+};
+
+template <bool kFromV, bool kToU, bool kStream>
+sunrealtype UpdateLeap(const FusedPlan& fp, sunindextype n) {
+  const LeapStep<kFromV, kToU, kStream> st(fp);
+  const __m128d mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+  __m128d s01 = _mm_setzero_pd();
+  __m128d s23 = _mm_setzero_pd();
+  sunindextype i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s01 = _mm_add_pd(s01, _mm_and_pd(st.Pair(i), mask));
+    s23 = _mm_add_pd(s23, _mm_and_pd(st.Pair(i + 2), mask));
+  }
+  if constexpr (kStream) StreamFence();  // visible before f reads x(t + h)
+  sunrealtype s[4];
+  _mm_storeu_pd(s, s01);
+  _mm_storeu_pd(s + 2, s23);
+  for (; i < n; ++i) s[0] += std::fabs(st.One(i));
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+// Streaming the new position past the cache where it is written out of place (UpdatePairsAuto).
+bool LeapStreams(const FusedPlan& fp, sunindextype n) {
+  const FusedTerms& tx = fp.terms[2];
+  return n >= kStreamSystem && !tx.in_place && reinterpret_cast<std::uintptr_t>(tx.out) % 16 == 0;
+}
+template <bool kFromV, bool kToU>
+SerialKernelFn LeapKernel(const FusedPlan& fp, sunindextype n) {
+  return LeapStreams(fp, n) ? &UpdateLeap<kFromV, kToU, true> : &UpdateLeap<kFromV, kToU, false>;
+}
+constexpr bool kHaveLeap = true;
+
 template <int D, unsigned Ones>
 sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
   // A position written over its last value stays in cache until written back, as in a hand loop:
@@ -713,6 +810,12 @@ SerialKernelFn PairKernel(const FusedPlan& /*fp*/, sunindextype /*n*/) {
   return &UpdatePairsAuto<D, Ones>;
 }
 constexpr bool kHavePairs = false;
+bool IsLeapPlan(const FusedPlan& /*fp*/) { return false; }
+template <bool kFromV, bool kToU>
+SerialKernelFn LeapKernel(const FusedPlan& /*fp*/, sunindextype /*n*/) {
+  return nullptr;
+}
+constexpr bool kHaveLeap = false;
 #endif
 
 using PairKernelFn = SerialKernelFn (*)(const FusedPlan&, sunindextype);
@@ -736,12 +839,21 @@ sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
   if (fp.compensated) return &UpdateCompensated;
   if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
+  if (kHaveLeap && n >= kSmallSystem && IsLeapPlan(fp)) return LeapKernel<true, false>(fp, n);
   if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1](fp, n);
   if (n == 1) return &UpdateOne;
   return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
 }
 
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKernel(fp, n)(fp, n); }
+
+bool LeapKernelsOf(const FusedPlan& fp, sunindextype n, LeapKernels* k) {
+  if (!kHaveLeap || n < kSmallSystem || !IsLeapPlan(fp)) return false;
+  k->first = LeapKernel<true, true>(fp, n);
+  k->mid = LeapKernel<false, true>(fp, n);
+  k->last = LeapKernel<false, false>(fp, n);
+  return true;
+}
 
 // Serial vectors (their array operation is N_VGetArrayPointer_Serial, so their content is
 // serial) without a call: every plan build takes a few hundred of these, and each call runs
@@ -813,17 +925,23 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
   for (int k = 0; k < plan.n; ++k) {
     const Combo& cb = plan.combos[k];
     FusedTerms& tk = fp->terms[k];
-    tk.m = cb.m;
+    tk.lead_old = cb.old != nullptr && !cs.on && cb.lead_old;
+    const int lead = tk.lead_old ? 1 : 0;
+    tk.m = cb.m + lead;
+    if (tk.lead_old) {
+      tk.c[0] = 1;
+      tk.X[0] = SerialData(cb.old);
+    }
     for (int j = 0; j < cb.m; ++j) {
-      tk.c[j] = cb.c[j];
-      tk.X[j] = SerialData(cb.X[j]);
+      tk.c[j + lead] = cb.c[j];
+      tk.X[j + lead] = SerialData(cb.X[j]);
     }
     tk.old = nullptr;
     tk.compnew = nullptr;
-    if (cb.old != nullptr && !cs.on) {
+    if (cb.old != nullptr && !cs.on && !tk.lead_old) {
       tk.c[tk.m] = 1;
       tk.X[tk.m++] = SerialData(cb.old);
-    } else if (cb.old != nullptr) {
+    } else if (cb.old != nullptr && cs.on) {
       tk.c[tk.m] = -1;
       tk.X[tk.m++] = SerialData(cs.comp[cb.level]);
       tk.old = SerialData(cb.old);
@@ -834,7 +952,8 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
     tk.exact = tk.old != nullptr && ExactIncrement(cb.level);
-    for (int j = 0; j < tk.m - (tk.in_place ? 1 : 0); ++j) distinct = distinct && tk.X[j] != tk.out;
+    const int own = !tk.in_place ? -1 : (tk.lead_old ? 0 : tk.m - 1);  // read before written
+    for (int j = 0; j < tk.m; ++j) distinct = distinct && (j == own || tk.X[j] != tk.out);
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
@@ -1005,7 +1124,10 @@ bool SameTerms(const UpdatePlan& a, const UpdatePlan& b) {
   for (int k = 0; k < a.n; ++k) {
     const Combo& x = a.combos[k];
     const Combo& y = b.combos[k];
-    if (x.m != y.m || x.old != y.old || x.out != y.out || x.level != y.level) return false;
+    if (x.m != y.m || x.old != y.old || x.out != y.out || x.level != y.level ||
+        x.lead_old != y.lead_old) {
+      return false;
+    }
     if (!std::equal(x.X, x.X + x.m, y.X)) return false;
   }
   return true;
@@ -1021,7 +1143,7 @@ bool RefreshPlanCoefficients(const UpdatePlan& plan, KernelPlan* kp) {
     std::copy(cb.c, cb.c + cb.m, kp->plan.combos[k].c);
     if (!kp->serial) continue;
     FusedTerms& tk = kp->fused.terms[k];
-    std::copy(cb.c, cb.c + cb.m, tk.c);  // the accumulated term's 1 stays
+    std::copy(cb.c, cb.c + cb.m, tk.c + (tk.lead_old ? 1 : 0));  // the accumulated term's 1 stays
     same_forms = same_forms && FormOf(tk.m, tk.c) == tk.form;
   }
   return same_forms;

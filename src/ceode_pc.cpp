@@ -405,6 +405,12 @@ void PcSetVelocityRequest(CEodeMemRec* ce, int request) {
   ce->pc.vel_detected = false;
 }
 
+bool VelocityUnread(const CEodeMemRec* ce) {
+  const int r = ce->pc.vel_request;
+  return r != CE_VELOCITY_DEPENDENT && r != CE_VELOCITY_INDEPENDENT && !ce->vel_dependent &&
+         !ce->pc.vel_detected && ce->pc.vel_checked_f == RhsIdentity(ce);
+}
+
 const char* VelocityDependenceName(const CEodeMemRec* ce) {
   if (ce->pc.vel_request == CE_VELOCITY_DEPENDENT) return "declared";
   if (ce->pc.vel_request == CE_VELOCITY_INDEPENDENT) return "none (declared)";

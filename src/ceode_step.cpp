@@ -246,6 +246,7 @@ struct PhaseVectors {
   SerialKernelFn update;       // UpdateSerial's kernel for the plan, chosen once
   const FusedPlan* plan_over;  // the plan writing the position over x(t + h); nullptr: none
   SerialKernelFn update_over;
+  LeapKernels leap;  // StepMem::leap_kernels of the plan
 };
 
 // Below this many steps to go the table of the lean loop costs more than it saves (CE_ONE_STEP).
@@ -296,18 +297,41 @@ void RebuildPosition(CEodeMemRec* ce) {
 
 // How the lean loop ended, for LeanExit.
 struct LeanEnd {
-  long int steps = 0;        // completed
-  long int moved = 0;        // of them, those that rotated the positions
-  bool over = false;         // the last completed step wrote the position over x(tcur)
-  bool failed_over = false;  // the failing update wrote over x(tcur + h)
+  long int steps = 0;           // completed
+  long int moved = 0;           // of them, those that rotated the positions
+  bool over = false;            // the last completed step wrote the position over x(tcur)
+  bool failed_over = false;     // the failing update wrote over x(tcur + h)
+  bool carried = false;         // the last completed step left the half-step velocity in D_1
+  bool failed_carried = false;  // the failing update wrote the half-step velocity into D_1
+  bool accel_lost = false;      // f's failing call was handed the buffer of a(tcur) (LeapRun)
+  N_Vector failed_a = nullptr;  // where the failing update's acceleration is
   int rv = 0;
   bool state_ok = true;
   sunrealtype t = 0;
   UpdateResult update = {CE_SUCCESS, 0};
 };
 
-// Brings the vectors to the state TakeStep would have left (the position to rounding, or the
-// failed step's, where it was written over), then reports as TakeStep does.
+// D_1 = u - c_0 a: the velocity from the half-step velocity u = v + c_0 a a run of G3 steps
+// carried (LeapKernels), equal to rounding.
+void VelocityFromHalfStep(CEodeMemRec* ce, const StepMem& sm, N_Vector a) {
+  N_VLinearSum(1, ce->D[1], -sm.plans[sm.plan_ix].combos[0].c[0], a, ce->D[1]);
+}
+
+// f failed in a run whose later steps share one acceleration buffer (LeapRun), which held a(tcur):
+// x(tcur) = x(tcur + h) - h u, a(tcur) evaluated again there, v = u - c a, each to rounding.
+int LostAccelerationExit(CEodeMemRec* ce, const StepMem& sm, const LeanEnd& e, const char* func) {
+  const Combo& drift = sm.plans[sm.plan_ix].combos[2];  // x(t) + h u
+  N_VLinearSum(1, ce->xnext, -drift.c[0], ce->D[1], ce->xcur);
+  const int rv = CallRhs(ce, ce->tcur, ce->xcur, ce->D[1], ce->D[2]);
+  ++ce->nfe;
+  if (rv != 0) return RhsFailed(ce, rv, ce->tcur, func);
+  VelocityFromHalfStep(ce, sm, ce->D[2]);
+  return RhsFailed(ce, e.rv, e.t, func);
+}
+
+// Brings the vectors to the state TakeStep would have left (the position and a carried
+// velocity to rounding, or the failed step's, where it was written over), then reports as
+// TakeStep does.
 int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* taken) {
   static const char* func = "CEodeEvolve";
   if (e.steps % 2 != 0) RotateHistory(ce, *sm);
@@ -315,15 +339,48 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
   sm->plan_ix = ip;
   *taken = e.steps;
   if (e.rv != 0) {
+    if (e.accel_lost) return LostAccelerationExit(ce, *sm, e, func);
+    if (e.carried) VelocityFromHalfStep(ce, *sm, ce->D[2]);
     if (e.over) RebuildPosition(ce);
     return RhsFailed(ce, e.rv, e.t, func);
   }
   if (!e.state_ok) {
+    if (e.failed_a != ce->Dnew[2]) N_VScale(1, e.failed_a, ce->Dnew[2]);  // CheckState reads it
+    if (e.failed_carried) VelocityFromHalfStep(ce, *sm, ce->Dnew[2]);
     if (e.over) N_VScale(1, e.failed_over ? ce->xnext : ce->xnew, ce->xcur);
     return CheckState(ce, e.t, e.update, func, !e.failed_over);
   }
   const bool guard_due = e.steps > 0 && ce->guard.every > 0 && ce->nst % ce->guard.every == 0;
   return guard_due ? GuardCheck(ce, func) : CE_SUCCESS;
+}
+
+// G3_CD's run carrying the half-step velocity (StepMem::leap) over at least three steps: every
+// step after the first has f write one buffer, the last step's, and the middle steps' update read
+// it there (mid), so that the run touches x, u and one acceleration, as the leapfrog does.
+struct LeapRun {
+  N_Vector a = nullptr;        // that buffer; nullptr: no such run
+  N_Vector first_a = nullptr;  // the first step's acceleration
+  FusedPlan mid;               // fused_plans_xin with that buffer as the acceleration
+};
+void PrepareLeapRun(const StepMem& sm, const PhaseVectors* pv, int ip, long int count, LeapRun* r) {
+  if (!sm.leap || count < 3) return;
+  r->a = pv[(ip + ((count - 1) % 2) * 3) % kNumPlans].a;  // every step but the last moves 3 on
+  r->first_a = pv[ip].a;
+  r->mid = sm.fused_plans_xin[(ip + 3) % kNumPlans];  // x, u: the same buffers in every phase
+  sunrealtype* a = SerialData(r->a);
+  r->mid.terms[0].X[2] = a;
+  r->mid.terms[1].X[1] = a;
+}
+
+// Step `steps` of the lean loop's update after f: the in-place plan (over) or the out-of-place
+// one, with G3_CD's half-step velocity carried the kernel of the first, a middle or the last step.
+inline sunrealtype LeanUpdate(const PhaseVectors& p, const StepMem& sm, const LeapRun& run,
+                              long int steps, bool over) {
+  const sunindextype len = sm.len;
+  if (!over) return (sm.leap && steps > 0 ? p.leap.last : p.update)(*p.plan, len);
+  if (!sm.leap) return p.update_over(*p.plan_over, len);
+  if (steps == 0) return p.leap.first(*p.plan_over, len);
+  return run.a != nullptr ? p.leap.mid(run.mid, len) : p.leap.mid(*p.plan_over, len);
 }
 
 // TakeStep's explicit step on serial (kMpi: NVECTOR_PARALLEL, the same kernel on this rank's
@@ -334,15 +391,14 @@ int LeanExit(CEodeMemRec* ce, StepMem* sm, int ip, const LeanEnd& e, long int* t
 template <bool kMpi>
 __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, sunrealtype target,
                                                 long int max_steps, long int* taken) {
-  const sunindextype len = sm->len;  // this rank's part on NVECTOR_PARALLEL
   PhaseVectors pv[kNumPlans];
   int ip = sm->plan_ix;
   for (int j = 0; j < kNumPlans; ++j) {
     const int i = (ip + j) % kNumPlans;
     const bool over = sm->xin_ready;
-    pv[i] = {ce->xnext,           ce->D[1],       ce->Dnew[2],
-             &sm->fused_plans[i], sm->kernels[i], over ? &sm->fused_plans_xin[i] : nullptr,
-             sm->kernels_xin[i]};
+    pv[i] = {ce->xnext,           ce->D[1],           ce->Dnew[2],
+             &sm->fused_plans[i], sm->kernels[i],     over ? &sm->fused_plans_xin[i] : nullptr,
+             sm->kernels_xin[i],  sm->leap_kernels[i]};
     RotateVectors(ce, sm);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
@@ -351,19 +407,27 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   const CEodeRhsFn rhs = own_f ? ce->f : ce->adapters.rhs;
   void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
   const long int count = LeanStepCount(ce, target, max_steps);
+  LeapRun run;
+  PrepareLeapRun(*sm, pv, ip, count, &run);
   LeanEnd e;
   while (e.steps < count) {
     e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    e.rv = rhs(e.t, p.x, p.v, p.a, rhs_data);
+    const N_Vector a = run.a != nullptr && e.steps > 0 ? run.a : p.a;
+    e.rv = rhs(e.t, p.x, p.v, a, rhs_data);
     ++ce->nfe;
-    if (e.rv != 0) break;
+    if (e.rv != 0) {
+      e.accel_lost = a == run.a && (e.steps > 1 || run.a == run.first_a);
+      break;
+    }
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;
-    e.update.xl1 = over ? p.update_over(*p.plan_over, len) : p.update(*p.plan, len);
+    e.update.xl1 = LeanUpdate(p, *sm, run, e.steps, over);
     if constexpr (kMpi) e.update = GlobalL1(p.x, e.update.xl1);  // one allreduce, as TakeStep's
     e.state_ok = std::isfinite(e.update.xl1) && !Exploded(e.update.xl1, bound);
     if (!e.state_ok) {
       e.failed_over = over;
+      e.failed_carried = over && sm->leap;
+      e.failed_a = a;
       break;
     }
     ce->tcur = e.t;
@@ -371,6 +435,7 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     ++ce->nst;
     ++e.steps;
     e.over = over;
+    e.carried = over && sm->leap;
     e.moved += over ? 0 : 1;
     ip = (ip + (over ? 3 : 1)) % kNumPlans;  // over: the positions keep their buffers
   }

@@ -50,6 +50,10 @@ struct StepMem {
   std::array<FusedPlan, kNumPlans> fused_plans_xin;
   std::array<SerialKernelFn, kNumPlans> kernels_xin{};
   bool xin_ready = false;
+  // G3's run of steps carrying the half-step velocity in D_1 (LeapKernels): its kernels for the
+  // first, the middle (both on fused_plans_xin) and the last step (on fused_plans) of a run.
+  bool leap = false;
+  std::array<LeapKernels, kNumPlans> leap_kernels{};
   // The configuration of the vectors: the history's phase (period 2) is plan_ix % 2 and the
   // positions' (period 3) plan_ix % 3. A step advances both (+1); an in-place-position step
   // only the history's (+3).

@@ -3,6 +3,7 @@
 // them. ChooseStep (ceode_step.cpp) calls BuildPlans once per start and after an option change.
 #include <nvector/nvector_serial.h>
 
+#include <cmath>
 #include <new>
 #include <utility>
 
@@ -51,10 +52,48 @@ bool SerialBackend(const CEodeMemRec* ce) { return ce->step != nullptr && ce->st
 // plan_ix, not the step count, names the configuration.
 namespace {
 
+// G3_CD's step as the leapfrog's kick and drift: with p_0 = 1 and p_1 = 1/2 the update
+// v = v_old + c (a_old + a), x(t + h) = x(t) + h v + h^2/2 a is, to rounding of its weights
+// (h c = h^2/2), v = (v_old + c a_old) + c a, u = v + c a, x(t + h) = x(t) + h u, with u the
+// half-step velocity, formed in the work vector tmp3. Its first rounding, v_old + c a_old, is the
+// last step's u: the lean loop carries u in place of v and reads a_old in its first step alone
+// (LeapKernels), with the bits of the steps one by one. Every backend runs the plans so; the
+// compensated sums and the implicit steps keep the general form.
+bool LeapForm(const CEodeMemRec* ce, const StepMem* sm) {
+  const StepCoeffs& co = ce->co;
+  if (ce->degree != 3 || co.wz_old != 0 || ce->compensated ||
+      sm->solve_kind != SolveKind::kExplicit) {
+    return false;
+  }
+  const sunrealtype c = co.T[1][2];
+  const sunrealtype drift = co.w[1] * c;  // the weight of a in x(t + h) through u
+  return c == co.c[1] && c != 0 &&
+         std::fabs(drift - co.wz_new) <= 4 * SUN_UNIT_ROUNDOFF * co.wz_new;
+}
+void WriteLeapForm(const CEodeMemRec* ce, UpdatePlan* plan) {
+  const StepCoeffs& co = ce->co;
+  Combo& velocity = plan->combos[0];  // c a_old + c a, the old velocity leading
+  Combo position = plan->combos[1];
+  velocity.lead_old = true;
+  Combo& half = plan->combos[1];
+  half = Combo{};
+  half.Add(1, velocity.out);
+  half.Add(co.T[1][2], velocity.X[1]);
+  half.out = ce->tmp3;
+  Combo& drift = plan->combos[2];
+  drift = Combo{};
+  drift.Add(co.w[1], ce->tmp3);
+  drift.old = position.old;
+  drift.out = position.out;
+  drift.lead_old = true;
+  plan->n = 3;
+}
+
 // The six plans from the current vectors; returns whether the fused backend can run them. With
 // in_place, also the plans that write the position over its last value; *xin: all were built.
 bool BuildPlanCycle(CEodeMemRec* ce, StepMem* sm, bool in_place, bool fusable, bool* xin) {
   const int d = ce->degree;
+  const bool leap = LeapForm(ce, sm);
   N_Vector D[kMaxDegree];
   N_Vector Dn[kMaxDegree];
   N_Vector comp[kMaxDegree];
@@ -72,6 +111,7 @@ bool BuildPlanCycle(CEodeMemRec* ce, StepMem* sm, bool in_place, bool fusable, b
   for (int i = 0; i < kNumPlans; ++i) {
     const int ip = (sm->plan_ix + i) % kNumPlans;
     BuildUpdatePlan(d, ce->co, D, Dn, xnext, xnew, &sm->plans[ip]);
+    if (leap) WriteLeapForm(ce, &sm->plans[ip]);
     if (fusable) {
       fusable = BuildFusedPlan(sm->plans[ip], {ce->compensated, comp, compnew, nullptr},
                                &sm->fused_plans[ip]);
@@ -117,6 +157,14 @@ void BuildPlans(CEodeMemRec* ce, StepMem* sm) {
   for (int i = 0; i < kNumPlans; ++i) {
     sm->kernels[i] = fusable ? SerialKernel(sm->fused_plans[i], sm->len) : nullptr;
     sm->kernels_xin[i] = sm->xin_ready ? SerialKernel(sm->fused_plans_xin[i], sm->len) : nullptr;
+  }
+  // The half-step velocity reaches f in place of D_1(t - h): only where f does not read it.
+  sm->leap = sm->xin_ready && VelocityUnread(ce);
+  for (int i = 0; i < kNumPlans && sm->leap; ++i) {
+    LeapKernels last;  // the last step writes the position out of place: its own streaming
+    sm->leap = LeapKernelsOf(sm->fused_plans_xin[i], sm->len, &sm->leap_kernels[i]) &&
+               LeapKernelsOf(sm->fused_plans[i], sm->len, &last);
+    sm->leap_kernels[i].last = last.last;
   }
 }
 

@@ -138,6 +138,47 @@ INSTANTIATE_TEST_SUITE_P(EveryDegree, FusedKernel,
                            return info.param;
                          });
 
+// The chain with a damper that f reads from its velocity argument.
+int DampedChainRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector f, void* data) {
+  ChainRhs(t, x, v, f, data);
+  N_VLinearSum(1, f, -0.05, v, f);
+  return 0;
+}
+
+// With the independence declared, f on the explicit path receives the previous step's velocity
+// (docs/api.md), also where G3_CD's lean loop could carry the half-step velocity instead: a
+// damper read from it gives the generic path's numbers bit for bit.
+TEST(LeanExplicitLoop, HandsFThePreviousVelocityWhenTheIndependenceIsDeclared) {
+  constexpr sunindextype kN = 2 * ceode::kInPlaceMinLen + 3;
+  RunResult r[2];
+  for (int fused = 0; fused < 2; ++fused) {
+    SUNContext ctx = nullptr;
+    SUNContext_Create(SUN_COMM_NULL, &ctx);
+    N_Vector x = N_VNew_Serial(kN, ctx);
+    N_Vector v = N_VNew_Serial(kN, ctx);
+    for (sunindextype i = 0; i < kN; ++i) {
+      N_VGetArrayPointer(x)[i] = std::sin(0.3 * static_cast<sunrealtype>(i));
+      N_VGetArrayPointer(v)[i] = 0.1 * std::cos(0.7 * static_cast<sunrealtype>(i));
+    }
+    void* mem = CEodeCreate(ctx);
+    EXPECT_EQ(CEodeInit(mem, DampedChainRhs, 0, x, v), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetMethodByName(mem, "G3_CD"), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetVelocityDependence(mem, SUNFALSE), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetFusedKernel(mem, fused != 0 ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+    sunrealtype t = 0;
+    EXPECT_EQ(CEodeEvolve(mem, 1.0, x, v, &t, CE_NORMAL), CE_SUCCESS);
+    r[fused].x.assign(N_VGetArrayPointer(x), N_VGetArrayPointer(x) + kN);
+    r[fused].v.assign(N_VGetArrayPointer(v), N_VGetArrayPointer(v) + kN);
+    CEodeFree(&mem);
+    N_VDestroy(x);
+    N_VDestroy(v);
+    SUNContext_Free(&ctx);
+  }
+  EXPECT_TRUE(r[0].x == r[1].x);
+  EXPECT_TRUE(r[0].v == r[1].v);
+}
+
 // ---- failures on the in-place path (docs/theory.md, "In-place update") --------------------
 // The chain whose f fails from t = kFailAt on: returning 1 (a recoverable error) or, with
 // status 0, a NaN in one entry.
@@ -164,7 +205,8 @@ struct FailedRun {
 // fused = false takes the generic step, one TakeStep at a time; fused without a mass matrix takes
 // the lean loop of many explicit steps (src/ceode_step.cpp). guard_every > 0 checks the stability
 // guard every so many steps (an early exit of that loop).
-FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_every = 0) {
+FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_every = 0,
+                       const char* method = "G4_A34") {
   constexpr sunindextype kN = 2 * ceode::kInPlaceMinLen;
   SUNContext ctx = nullptr;
   SUNContext_Create(SUN_COMM_NULL, &ctx);
@@ -180,7 +222,7 @@ FailedRun RunToFailure(bool in_place, bool nan, bool fused = true, long guard_ev
   EXPECT_EQ(CEodeSetUserData(mem, &fc), CE_SUCCESS);
   FILE* err = std::tmpfile();
   EXPECT_EQ(CEodeSetErrFile(mem, err), CE_SUCCESS);
-  EXPECT_EQ(CEodeSetMethodByName(mem, "G4_A34"), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem, method), CE_SUCCESS);
   EXPECT_EQ(CEodeSetFixedStep(mem, 0.01), CE_SUCCESS);
   EXPECT_EQ(
       CEodeSetStabilityGuard(mem, guard_every > 0 ? CE_GUARD_WARN : CE_GUARD_OFF, guard_every),
@@ -240,6 +282,37 @@ TEST(InPlaceUpdate, ANonFiniteAccelerationReturnsTheFailedStepsStateAndNamesF) {
       << in_place.message;
   EXPECT_EQ(in_place.message.find("callbacks must not modify x"), std::string::npos)
       << in_place.message;
+}
+
+// G3_CD's lean loop carries the half-step velocity u = v + c a where v was (LeapKernels). On f's
+// failure the velocity is formed back, v = u - c a, and the position rebuilt: both within a few
+// units in the last place of the out-of-place run's (one addition undone by one subtraction); on
+// a non-finite acceleration the failed step's state is returned and f is named.
+TEST(InPlaceUpdate, G3CDsHalfStepVelocityIsTurnedBackIntoTheVelocityOnEveryFailure) {
+  const FailedRun exact = RunToFailure(false, false, true, 0, "G3_CD");
+  const FailedRun leap = RunToFailure(true, false, true, 0, "G3_CD");
+  EXPECT_EQ(exact.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(leap.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(leap.t, exact.t);
+  EXPECT_EQ(leap.steps, exact.steps);
+  EXPECT_GT(exact.t, kFailAt - 0.02);
+  sunrealtype dx = 0, dv = 0, vmax = 0;
+  for (size_t i = 0; i < exact.state.x.size(); ++i) {
+    dx = std::max(dx, std::fabs(leap.state.x[i] - exact.state.x[i]));
+    dv = std::max(dv, std::fabs(leap.state.v[i] - exact.state.v[i]));
+    vmax = std::max(vmax, std::fabs(exact.state.v[i]));
+  }
+  constexpr sunrealtype kEps = std::numeric_limits<sunrealtype>::epsilon();
+  EXPECT_GT(dv, 0);  // u - c a is not v bit for bit: the test sees the half-step path
+  EXPECT_LE(dv, 4 * kEps * vmax);
+  EXPECT_LE(dx, 4 * kEps);  // |x| <= 1
+  const FailedRun bad = RunToFailure(true, true, true, 0, "G3_CD");
+  EXPECT_EQ(bad.flag, CE_RHSFUNC_FAIL);
+  EXPECT_EQ(bad.t, exact.t);
+  EXPECT_FALSE(std::isfinite(bad.state.x[7]));
+  EXPECT_FALSE(std::isfinite(bad.state.v[7]));
+  EXPECT_TRUE(std::isfinite(bad.state.x[1000]) && std::isfinite(bad.state.v[1000]));
+  EXPECT_NE(bad.message.find("f returned non-finite values"), std::string::npos) << bad.message;
 }
 
 // The lean loop leaves on f's failure, on a non-finite update and for the guard's check; each
