@@ -41,15 +41,14 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 namespace {
 
 // Access's report, out of line: the guard itself is two tests.
-__attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* func) {
+__attribute__((noinline, cold)) void AccessFailed(CEodeMemRec* ce, const char* func) {
   if (ce == nullptr) {
     ProcessError(nullptr, CE_MEM_NULL, func,
                  "The CEODE memory is NULL: create it with CEodeCreate first.");
-    return CE_MEM_NULL;
+    return;
   }
   ProcessError(ce, CE_NO_MALLOC, func,
                "The CEODE memory is not initialised: call CEodeInit first.");
-  return CE_NO_MALLOC;
 }
 
 }  // namespace
@@ -57,7 +56,10 @@ __attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* fu
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   *ce = static_cast<CEodeMemRec*>(mem);
   if (*ce != nullptr && (!need_init || (*ce)->initialized)) return CE_SUCCESS;
-  return AccessFailed(*ce, func);
+  // The flag here, not AccessFailed's: the caller's compiler sees that it is never CE_SUCCESS
+  // and keeps nothing live across the report (CEodeEvolve's entry is then the two tests).
+  AccessFailed(*ce, func);
+  return *ce == nullptr ? CE_MEM_NULL : CE_NO_MALLOC;
 }
 
 void Restart(CEodeMemRec* ce) {

@@ -399,12 +399,14 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
 // false: no direct form, nothing done.
 bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 // CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run has the lean configuration
-// on serial vectors (chosen at the start), the call has DirectEvolve's form and the outputs are
-// serial: the step (TakeDirectStep's) and x, x' at its end copied into xout, vout, tested as they
-// are written; otherwise EvolveOneStepGeneral, and after a failed step or an end that is not
-// tcur + h to round-off, OneStepRest.
-int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret);
+// on serial vectors (chosen at the start) within the span of times where the grid needs no test,
+// the call has DirectEvolve's form and the outputs are serial: the step (TakeDirectStep's) and
+// x, x' at its end copied into xout, vout, tested as they are written; otherwise
+// EvolveOneStepGeneral, and after a failed step or outputs that are not finite, OneStepRest.
+// Hidden: CEodeEvolve reaches it by a jump, not through the library's symbol table.
+__attribute__((visibility("hidden"))) int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout,
+                                                        N_Vector xout, N_Vector vout,
+                                                        sunrealtype* tret);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option

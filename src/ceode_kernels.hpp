@@ -164,10 +164,12 @@ inline sunindextype VectorLength(N_Vector v) {
 // before one. Arguments that CheckEvolveArgs would refuse take the general path, which reports
 // them.
 // DirectConfiguration: the memory's part of the test, on a started run.
-inline bool DirectConfiguration(const CEodeMemRec* ce) {
-  return ce->h > 0 && !ce->tstop_set && ce->root == nullptr && ce->adapt == nullptr &&
-         !ce->guard.pending && ce->mxstep > 0;
+// DirectOptions: its part that the start does not decide (the options set between calls and a
+// pending guard check); mxstep is always positive (CEodeSetMaxNumSteps).
+inline bool DirectOptions(const CEodeMemRec* ce) {
+  return !ce->tstop_set && ce->root == nullptr && ce->adapt == nullptr && !ce->guard.pending;
 }
+inline bool DirectConfiguration(const CEodeMemRec* ce) { return ce->h > 0 && DirectOptions(ce); }
 inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          const sunrealtype* tret) {
   const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&

@@ -82,8 +82,8 @@ inline sunrealtype GrowthBound(const CEodeMemRec* ce) {
   constexpr sunrealtype kGrowthLimit = 1e15;
   return kGrowthLimit * (1 + ce->xl1_start);
 }
+constexpr sunrealtype kAbsoluteLimit = 1e150;
 inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
-  constexpr sunrealtype kAbsoluteLimit = 1e150;
   return xl1 > kAbsoluteLimit || xl1 > bound;
 }
 
@@ -377,6 +377,13 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   return LeanExit(ce, sm, ip, e, taken);
 }
 
+// The direct paths' span of the grid, in steps: where |tcur| + |t_start_h| <= DirectTimeSpan() h,
+// every time of the grid (t_start_h + k h, and tcur + h) is within 5 rounding units of it,
+// 2.5e-10 h, of its exact value, and the grid tolerance is 1e-8 h (64 rounding units of tcur are
+// less): one step always remains before tcur + h (StepsRemain) and ends on it (OnGrid), with a
+// margin of 40. Never in single precision (below one step).
+constexpr sunrealtype DirectTimeSpan() { return SUN_RCONST(1e-10) / SUN_UNIT_ROUNDOFF; }
+
 // StepMem::steps without the lean loop: one TakeStep.
 int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, long int* taken) {
   const int flag = TakeStep(ce);
@@ -398,7 +405,7 @@ __attribute__((always_inline)) inline int LeanOneStep(CEodeMemRec* ce) {
   const int ip = sm->plan_ix;
   UpdateResult r = {CE_SUCCESS, sm->kernels[ip](sm->fused_plans[ip], sm->len)};
   if constexpr (kMpi) r = GlobalL1(ce->xnext, r.xl1);
-  if (!std::isfinite(r.xl1) || Exploded(r.xl1, GrowthBound(ce))) {
+  if (!(r.xl1 <= sm->growth_limit)) {  // not finite, or Exploded: TakeStep's test in one compare
     const int flag = CheckState(ce, t, r, func);
     if (flag != CE_SUCCESS) return flag;
   }
@@ -447,25 +454,23 @@ inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector 
 
 }  // namespace
 
-// The whole call in one function, after the configuration and arguments (DirectEvolve, the
-// outputs' kind) and the interval (StepsRemain): the call of f, the update's kernel, the commit and
-// the outputs' copy, as many instructions as the lean loop's step and the copy; every other case,
-// and every failure, is the caller's module's (EvolveOneStepGeneral, OneStepRest).
+// The whole call in one function, after the configuration and arguments (the run's direct
+// path, decided at the start: direct_tmax, and DirectOptions, the outputs' kind): the call of f, the
+// update's kernel, the commit and the outputs' copy, as many instructions as the lean loop's step
+// and the copy; every other case, and every failure, is the caller's module's
+// (EvolveOneStepGeneral, OneStepRest). Below direct_tmax the grid tests hold by themselves (see
+// DirectTimeSpan), so that the call tests none.
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
-  const sunrealtype target = ce->tcur + ce->h;
-  const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
-                      tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
-                      DirectConfiguration(ce) && StepsRemain(ce, target);
+  const bool direct = ce->started && std::fabs(ce->tcur) <= ce->step->direct_tmax &&
+                      DirectOptions(ce) && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
   if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
   const int flag = LeanOneStep<false>(ce);
-  // One step reaches tcur + h to round-off (then no step remains); anything else is
-  // ReturnAtTarget's.
-  if (flag != CE_SUCCESS || !OnGrid(ce, target)) {
-    return OneStepRest(ce, flag, target, xout, vout, tret);
-  }
-  if (!CopyPairFiniteSerial(ce, xout, vout)) {  // reported as ReturnAtTarget reports it
-    return OneStepRest(ce, CE_SUCCESS, target, xout, vout, tret);
+  // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
+  // ended on tcur, the target, to round-off).
+  if (flag != CE_SUCCESS || !CopyPairFiniteSerial(ce, xout, vout)) {
+    return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
   }
   *tret = ce->tretlast = ce->tcur;
   return CE_SUCCESS;
@@ -508,6 +513,8 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
   sm->one_call = lean && serial;
+  sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's
+  sm->direct_tmax = sm->one_call ? DirectTimeSpan() * ce->h - std::fabs(ce->t_start_h) : -1;
 }
 
 }  // namespace ceode
