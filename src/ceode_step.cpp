@@ -454,18 +454,39 @@ inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector 
 
 }  // namespace
 
-// The whole call in one function, after the configuration and arguments (the run's direct
-// path, decided at the start: direct_tmax, and DirectOptions, the outputs' kind): the call of f, the
-// update's kernel, the commit and the outputs' copy, as many instructions as the lean loop's step
-// and the copy; every other case, and every failure, is the caller's module's
-// (EvolveOneStepGeneral, OneStepRest). Below direct_tmax the grid tests hold by themselves (see
-// DirectTimeSpan), so that the call tests none.
+namespace {
+
+// OneStepEvolve outside direct_tmax's span: the same path with its tests of the configuration and
+// of the grid (a step must remain before tcur + h and end on it to round-off), taken where h is
+// near the round-off of t or the run has no direct path.
+__attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
+                                             N_Vector vout, sunrealtype* tret) {
+  const sunrealtype target = ce->tcur + ce->h;
+  const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
+                      tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
+                      DirectConfiguration(ce) && StepsRemain(ce, target);
+  if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
+  const int flag = LeanOneStep<false>(ce);
+  if (flag != CE_SUCCESS || !OnGrid(ce, target) || !CopyPairFiniteSerial(ce, xout, vout)) {
+    return OneStepRest(ce, flag, target, xout, vout, tret);
+  }
+  *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+// The whole call in one function (the run's direct path, decided at the start: direct_tmax;
+// DirectOptions and the outputs' kind): the call of f, the update's kernel, the commit and the
+// outputs' copy, as many instructions as the lean loop's step and the copy; every other case is
+// OneStepChecked's, every failure the caller's module's (OneStepRest). Below direct_tmax the grid
+// tests hold by themselves (see DirectTimeSpan), so that the call tests none.
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
   const bool direct = ce->started && std::fabs(ce->tcur) <= ce->step->direct_tmax &&
                       DirectOptions(ce) && SerialOfLength(xout, ce->n) &&
                       SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
-  if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
+  if (!direct) return OneStepChecked(ce, tout, xout, vout, tret);
   const int flag = LeanOneStep<false>(ce);
   // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
   // ended on tcur, the target, to round-off).
