@@ -314,19 +314,18 @@ inline int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout, N_V
   return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
 }
 
-// CE_NORMAL (and any other itask, which the general path refuses): the direct path where the
-// call has its form, else the general one. Out of line, so that CEodeEvolve's CE_ONE_STEP call is
-// the guard and a jump.
-__attribute__((noinline)) int EvolveNormal(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                           N_Vector xout, N_Vector vout, sunrealtype* tret,
-                                           int itask) {
+}  // namespace
+
+// CE_NORMAL (and any other itask, which the general path refuses) where NormalEvolve has no
+// direct form: the direct path where the call has its form, else the general one.
+int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                        sunrealtype* tret, int itask) {
+  static const char* func = "CEodeEvolve";
   if (itask == CE_NORMAL && DirectEvolve(ce, tout, xout, vout, tret)) {
     return EvolveToTout(ce, func, tout, xout, vout, tret);
   }
   return Evolve(ce, func, tout, xout, vout, tret, itask);
 }
-
-}  // namespace
 
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret) {
@@ -475,7 +474,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
-  return ceode::EvolveNormal(ce, __func__, tout, xout, vout, tret, itask);
+  return ceode::NormalEvolve(ce, tout, xout, vout, tret, itask);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

@@ -407,6 +407,15 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 __attribute__((visibility("hidden"))) int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout,
                                                         N_Vector xout, N_Vector vout,
                                                         sunrealtype* tret);
+// CEodeEvolve's other calls (CE_NORMAL, or an itask the general path refuses) after the access
+// guard. A CE_NORMAL call a few steps ahead (no more than the lean loop's minimum) on the same
+// direct path as OneStepEvolve's, with tout also in its span: the steps (TakeDirectStep's), then
+// the outputs at tout (the method's values on the grid, else the dense output), tested as they are
+// written; otherwise EvolveNormalGeneral, and after a failed step or outputs that are not finite,
+// OneStepRest.
+__attribute__((visibility("hidden"))) int NormalEvolve(CEodeMemRec* ce, sunrealtype tout,
+                                                       N_Vector xout, N_Vector vout,
+                                                       sunrealtype* tret, int itask);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option
@@ -625,7 +634,8 @@ const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, siz
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
 void FirstOrderFree(CEodeMemRec* ce);
 // The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
-inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
+__attribute__((always_inline)) inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x,
+                                                  N_Vector v, N_Vector f) {
   return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
                                      : ce->adapters.rhs(t, x, v, f, ce);
 }
@@ -668,8 +678,12 @@ int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vect
 // TakeSteps or TakeDirectStep, the outputs): where OneStepEvolve has no direct form.
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret);
-// The end of a CE_ONE_STEP call after OneStepEvolve's step towards target, flag its result: a
-// failed step's last good state, or the steps left and the outputs at target (ReturnAtTarget).
+// CEodeEvolve's call that NormalEvolve does not take directly (ceode.cpp).
+int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                        sunrealtype* tret, int itask);
+// The end of a fixed-step call after the direct paths' steps towards target (OneStepEvolve,
+// NormalEvolve), flag their result: a failed step's last good state, or the steps left and the
+// outputs at target (ReturnAtTarget).
 int OneStepRest(CEodeMemRec* ce, int flag, sunrealtype target, N_Vector xout, N_Vector vout,
                 sunrealtype* tret);
 

@@ -185,7 +185,7 @@ inline void SwapSlots(N_Vector* a, N_Vector* b) {
 // move as a few vector moves instead of a loop; the slots at and above the degree are spare
 // buffers and D[0] is unused.
 // Two rotations of the history and three of the positions are the identity.
-inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
+__attribute__((always_inline)) inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   if (sm.in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
@@ -196,19 +196,19 @@ inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   }
   if (ce->compensated) std::swap(ce->comp, ce->compnew);
 }
-inline void RotatePositions(CEodeMemRec* ce) {
+__attribute__((always_inline)) inline void RotatePositions(CEodeMemRec* ce) {
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
   ce->xnew = old;
 }
-inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
+__attribute__((always_inline)) inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
   RotateHistory(ce, *sm);
   RotatePositions(ce);
   sm->plan_ix = sm->plan_ix == kNumPlans - 1 ? 0 : sm->plan_ix + 1;
 }
 
-inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
+__attribute__((always_inline)) inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
   RotateVectors(ce, sm);
   ce->tcur = t;
   ++ce->nsteps_h;
@@ -441,7 +441,8 @@ namespace {
 
 // xout = x(tcur), vout = D_1 on serial vectors, and whether they are finite: at one unknown
 // without a loop's set-up, the test on the two values.
-inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector vout) {
+__attribute__((always_inline)) inline bool CopyPairFiniteSerial(const CEodeMemRec* ce,
+                                                                N_Vector xout, N_Vector vout) {
   const sunrealtype* x = NV_DATA_S(ce->xcur);
   const sunrealtype* v = NV_DATA_S(ce->D[1]);
   if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
@@ -466,7 +467,7 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
                       tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
                       DirectConfiguration(ce) && StepsRemain(ce, target);
   if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
-  const int flag = LeanOneStep<false>(ce);
+  const int flag = ce->step->one(ce);  // LeanOneStep, not inlined here: OneStepEvolve's alone
   if (flag != CE_SUCCESS || !OnGrid(ce, target) || !CopyPairFiniteSerial(ce, xout, vout)) {
     return OneStepRest(ce, flag, target, xout, vout, tret);
   }
@@ -494,6 +495,32 @@ int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vou
     return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
   }
   *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
+// As OneStepEvolve, for CE_NORMAL: a call at most the lean loop's minimum of steps ahead (from
+// further the lean loop runs, on EvolveNormalGeneral's path, as it would there), tout in the span
+// too (every time of the call is then where GridTolerance is grid_tol), and more steps allowed
+// than it can take. The steps as StepTo takes them (LeanOrOneStep's one by one, while StepsRemain),
+// and the outputs as ReturnAtTarget gives them.
+int NormalEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
+                 int itask) {
+  const StepMem* sm = ce->step.get();
+  const bool direct = itask == CE_NORMAL && ce->started && std::fabs(ce->tcur) <= sm->direct_tmax &&
+                      std::fabs(tout) <= sm->direct_tmax && tout >= ce->tcur &&
+                      tout - ce->tcur <= kLeanMinSteps * ce->h && ce->mxstep > kLeanMinSteps &&
+                      DirectOptions(ce) && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr;
+  if (!direct) return EvolveNormalGeneral(ce, tout, xout, vout, tret, itask);
+  while (tout - ce->tcur > sm->grid_remain) {  // StepsRemain
+    const int flag = LeanOneStep<false>(ce);
+    if (flag != CE_SUCCESS) return OneStepRest(ce, flag, tout, xout, vout, tret);
+  }
+  const sunrealtype s = std::fabs(tout - ce->tcur) <= sm->grid_tol ? 0 : tout - ce->tcur;
+  const bool finite =
+      s == 0 ? CopyPairFiniteSerial(ce, xout, vout) : OutputState(ce, s, xout, vout);
+  if (!finite) return OneStepRest(ce, CE_SUCCESS, tout, xout, vout, tret);
+  *tret = ce->tretlast = s == 0 ? ce->tcur : tout;
   return CE_SUCCESS;
 }
 
@@ -535,6 +562,8 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
   sm->one_call = lean && serial;
   sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's
+  sm->grid_tol = SUN_RCONST(1e-8) * ce->h;                       // GridTolerance's second term
+  sm->grid_remain = ce->h - sm->grid_tol;
   sm->direct_tmax = sm->one_call ? DirectTimeSpan() * ce->h - std::fabs(ce->t_start_h) : -1;
 }
 

@@ -43,6 +43,10 @@ struct StepMem {
   // The step's growth check in one test (LeanOneStep): ||x(t + h)||_1 passes while it is at or
   // below this, the lesser of GrowthBound and the absolute limit (NaN and Inf do not).
   sunrealtype growth_limit = 0;
+  // Within direct_tmax, GridTolerance(ce, h) is 1e-8 h: that value (grid_tol) and h less it
+  // (grid_remain, StepsRemain's bound), computed as those functions compute them (NormalEvolve).
+  sunrealtype grid_tol = 0;
+  sunrealtype grid_remain = 0;
 
   // The update plans (ceode_step_plans.cpp)
   bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place
