@@ -165,11 +165,14 @@ inline sunindextype VectorLength(N_Vector v) {
 // them.
 // DirectConfiguration: the memory's part of the test, on a started run.
 // DirectOptions: its part that the start does not decide (the options set between calls and a
-// pending guard check); mxstep is always positive (CEodeSetMaxNumSteps).
+// pending guard check) but the stop time, which ceode_step.cpp's direct paths admit where it lies
+// beyond the call's end; mxstep is always positive (CEodeSetMaxNumSteps).
 inline bool DirectOptions(const CEodeMemRec* ce) {
-  return !ce->tstop_set && ce->root == nullptr && ce->adapt == nullptr && !ce->guard.pending;
+  return ce->root == nullptr && ce->adapt == nullptr && !ce->guard.pending;
 }
-inline bool DirectConfiguration(const CEodeMemRec* ce) { return ce->h > 0 && DirectOptions(ce); }
+inline bool DirectConfiguration(const CEodeMemRec* ce) {
+  return ce->h > 0 && !ce->tstop_set && DirectOptions(ce);
+}
 inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          const sunrealtype* tret) {
   const bool args = xout != nullptr && vout != nullptr && tret != nullptr && std::isfinite(tout) &&

@@ -384,6 +384,13 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
 // margin of 40. Never in single precision (below one step).
 constexpr sunrealtype DirectTimeSpan() { return SUN_RCONST(1e-10) / SUN_UNIT_ROUNDOFF; }
 
+// Whether the stop time, if one is set, leaves a call ending at t (within direct_tmax) as it is:
+// more than a step beyond t, where EvolveTarget's round-off margin (at most 1e-8 h there) cannot
+// reach.
+inline bool StopBeyond(const CEodeMemRec* ce, sunrealtype t) {
+  return !ce->tstop_set || ce->tstop - t > ce->h;
+}
+
 // StepMem::steps without the lean loop: one TakeStep.
 int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, long int* taken) {
   const int flag = TakeStep(ce);
@@ -485,8 +492,9 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
   const bool direct = ce->started && std::fabs(ce->tcur) <= ce->step->direct_tmax &&
-                      DirectOptions(ce) && SerialOfLength(xout, ce->n) &&
-                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
+                      DirectOptions(ce) && StopBeyond(ce, ce->tcur + ce->h) &&
+                      SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
+                      tret != nullptr && std::isfinite(tout);
   if (!direct) return OneStepChecked(ce, tout, xout, vout, tret);
   const int flag = LeanOneStep<false>(ce);
   // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
@@ -509,7 +517,7 @@ int NormalEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout
   const bool direct = itask == CE_NORMAL && ce->started && std::fabs(ce->tcur) <= sm->direct_tmax &&
                       std::fabs(tout) <= sm->direct_tmax && tout >= ce->tcur &&
                       tout - ce->tcur <= kLeanMinSteps * ce->h && ce->mxstep > kLeanMinSteps &&
-                      DirectOptions(ce) && SerialOfLength(xout, ce->n) &&
+                      DirectOptions(ce) && StopBeyond(ce, tout) && SerialOfLength(xout, ce->n) &&
                       SerialOfLength(vout, ce->n) && tret != nullptr;
   if (!direct) return EvolveNormalGeneral(ce, tout, xout, vout, tret, itask);
   while (tout - ce->tcur > sm->grid_remain) {  // StepsRemain
