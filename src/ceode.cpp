@@ -64,6 +64,7 @@ int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
 
 void Restart(CEodeMemRec* ce) {
   ce->started = false;
+  StepRestart(ce);
   ce->adapters.history_preset = false;  // it holds for the configuration it was made for
 }
 

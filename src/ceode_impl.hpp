@@ -421,6 +421,9 @@ __attribute__((visibility("hidden"))) int NormalEvolve(CEodeMemRec* ce, sunrealt
 // start (restart: the vectors are in their first configuration) and after an update option
 // changes (the run goes on from the current vectors).
 void ChooseStep(CEodeMemRec* ce, bool restart);
+// The step module's part of a restart (Restart): the direct paths close until the next start's
+// ChooseStep, so that direct_tmax alone says whether the run is started.
+void StepRestart(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,

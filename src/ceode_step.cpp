@@ -491,10 +491,11 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
 // tests hold by themselves (see DirectTimeSpan), so that the call tests none.
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
-  const bool direct = ce->started && std::fabs(ce->tcur) <= ce->step->direct_tmax &&
-                      DirectOptions(ce) && StopBeyond(ce, ce->tcur + ce->h) &&
-                      SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
-                      tret != nullptr && std::isfinite(tout);
+  // direct_tmax is negative but on a started run with a direct path (StepRestart, ChooseStep);
+  // an initialised memory has the step record (AllocVectors).
+  const bool direct = std::fabs(ce->tcur) <= ce->step->direct_tmax && DirectOptions(ce) &&
+                      StopBeyond(ce, ce->tcur + ce->h) && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
   if (!direct) return OneStepChecked(ce, tout, xout, vout, tret);
   const int flag = LeanOneStep<false>(ce);
   // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
@@ -540,6 +541,10 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
 }
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
+
+void StepRestart(CEodeMemRec* ce) {
+  if (ce->step != nullptr) ce->step->direct_tmax = -1;
+}
 
 // The step of each path of docs/theory.md: TakeStep with the solve of the kind,
 //   kExplicit     SolveExplicit (above; section 4.1),
