@@ -41,15 +41,14 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 namespace {
 
 // Access's report, out of line: the guard itself is two tests.
-__attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* func) {
+__attribute__((noinline, cold)) void AccessFailed(CEodeMemRec* ce, const char* func) {
   if (ce == nullptr) {
     ProcessError(nullptr, CE_MEM_NULL, func,
                  "The CEODE memory is NULL: create it with CEodeCreate first.");
-    return CE_MEM_NULL;
+    return;
   }
   ProcessError(ce, CE_NO_MALLOC, func,
                "The CEODE memory is not initialised: call CEodeInit first.");
-  return CE_NO_MALLOC;
 }
 
 }  // namespace
@@ -57,11 +56,15 @@ __attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* fu
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
   *ce = static_cast<CEodeMemRec*>(mem);
   if (*ce != nullptr && (!need_init || (*ce)->initialized)) return CE_SUCCESS;
-  return AccessFailed(*ce, func);
+  // The flag here, not AccessFailed's: the caller's compiler sees that it is never CE_SUCCESS
+  // and keeps nothing live across the report (CEodeEvolve's entry is then the two tests).
+  AccessFailed(*ce, func);
+  return *ce == nullptr ? CE_MEM_NULL : CE_NO_MALLOC;
 }
 
 void Restart(CEodeMemRec* ce) {
   ce->started = false;
+  StepRestart(ce);
   ce->adapters.history_preset = false;  // it holds for the configuration it was made for
 }
 
@@ -312,19 +315,18 @@ inline int EvolveToTout(CEodeMemRec* ce, const char* func, sunrealtype tout, N_V
   return ReturnAtTarget(ce, func, tout, xout, vout, tret, false);
 }
 
-// CE_NORMAL (and any other itask, which the general path refuses): the direct path where the
-// call has its form, else the general one. Out of line, so that CEodeEvolve's CE_ONE_STEP call is
-// the guard and a jump.
-__attribute__((noinline)) int EvolveNormal(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                           N_Vector xout, N_Vector vout, sunrealtype* tret,
-                                           int itask) {
+}  // namespace
+
+// CE_NORMAL (and any other itask, which the general path refuses) where NormalEvolve has no
+// direct form: the direct path where the call has its form, else the general one.
+int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                        sunrealtype* tret, int itask) {
+  static const char* func = "CEodeEvolve";
   if (itask == CE_NORMAL && DirectEvolve(ce, tout, xout, vout, tret)) {
     return EvolveToTout(ce, func, tout, xout, vout, tret);
   }
   return Evolve(ce, func, tout, xout, vout, tret, itask);
 }
-
-}  // namespace
 
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret) {
@@ -473,7 +475,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
-  return ceode::EvolveNormal(ce, __func__, tout, xout, vout, tret, itask);
+  return ceode::NormalEvolve(ce, tout, xout, vout, tret, itask);
 }
 
 int CEodeGetDky(void* mem, sunrealtype t, int k, N_Vector dky) {

@@ -399,17 +399,31 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
 // false: no direct form, nothing done.
 bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 // CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run has the lean configuration
-// on serial vectors (chosen at the start), the call has DirectEvolve's form and the outputs are
-// serial: the step (TakeDirectStep's) and x, x' at its end copied into xout, vout, tested as they
-// are written; otherwise EvolveOneStepGeneral, and after a failed step or an end that is not
-// tcur + h to round-off, OneStepRest.
-int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret);
+// on serial vectors (chosen at the start) within the span of times where the grid needs no test,
+// the call has DirectEvolve's form and the outputs are serial: the step (TakeDirectStep's) and
+// x, x' at its end copied into xout, vout, tested as they are written; otherwise
+// EvolveOneStepGeneral, and after a failed step or outputs that are not finite, OneStepRest.
+// Hidden: CEodeEvolve reaches it by a jump, not through the library's symbol table.
+__attribute__((visibility("hidden"))) int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout,
+                                                        N_Vector xout, N_Vector vout,
+                                                        sunrealtype* tret);
+// CEodeEvolve's other calls (CE_NORMAL, or an itask the general path refuses) after the access
+// guard. A CE_NORMAL call a few steps ahead (no more than the lean loop's minimum) on the same
+// direct path as OneStepEvolve's, with tout also in its span: the steps (TakeDirectStep's), then
+// the outputs at tout (the method's values on the grid, else the dense output), tested as they are
+// written; otherwise EvolveNormalGeneral, and after a failed step or outputs that are not finite,
+// OneStepRest.
+__attribute__((visibility("hidden"))) int NormalEvolve(CEodeMemRec* ce, sunrealtype tout,
+                                                       N_Vector xout, N_Vector vout,
+                                                       sunrealtype* tret, int itask);
 // The step of the run, once: its solve (the implicit one as ceode_pc.cpp chose it), the update
 // plans from the current vectors with their kernel, and the many-step loop. At the end of every
 // start (restart: the vectors are in their first configuration) and after an update option
 // changes (the run goes on from the current vectors).
 void ChooseStep(CEodeMemRec* ce, bool restart);
+// The step module's part of a restart (Restart): the direct paths close until the next start's
+// ChooseStep, so that direct_tmax alone says whether the run is started.
+void StepRestart(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
@@ -626,7 +640,8 @@ const char* LongRunAdvice(const char* current, sunrealtype Omega, char* buf, siz
 int FirstOrderRhs(sunrealtype t, N_Vector x, N_Vector v, N_Vector a, void* mem);
 void FirstOrderFree(CEodeMemRec* ce);
 // The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
-inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) {
+__attribute__((always_inline)) inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x,
+                                                  N_Vector v, N_Vector f) {
   return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
                                      : ce->adapters.rhs(t, x, v, f, ce);
 }
@@ -669,8 +684,12 @@ int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vect
 // TakeSteps or TakeDirectStep, the outputs): where OneStepEvolve has no direct form.
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret);
-// The end of a CE_ONE_STEP call after OneStepEvolve's step towards target, flag its result: a
-// failed step's last good state, or the steps left and the outputs at target (ReturnAtTarget).
+// CEodeEvolve's call that NormalEvolve does not take directly (ceode.cpp).
+int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                        sunrealtype* tret, int itask);
+// The end of a fixed-step call after the direct paths' steps towards target (OneStepEvolve,
+// NormalEvolve), flag their result: a failed step's last good state, or the steps left and the
+// outputs at target (ReturnAtTarget).
 int OneStepRest(CEodeMemRec* ce, int flag, sunrealtype target, N_Vector xout, N_Vector vout,
                 sunrealtype* tret);
 

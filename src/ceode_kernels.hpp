@@ -168,9 +168,14 @@ inline sunindextype VectorLength(N_Vector v) {
 // before one. Arguments that CheckEvolveArgs would refuse take the general path, which reports
 // them.
 // DirectConfiguration: the memory's part of the test, on a started run.
+// DirectOptions: its part that the start does not decide (the options set between calls and a
+// pending guard check) but the stop time, which ceode_step.cpp's direct paths admit where it lies
+// beyond the call's end; mxstep is always positive (CEodeSetMaxNumSteps).
+inline bool DirectOptions(const CEodeMemRec* ce) {
+  return ce->root == nullptr && ce->adapt == nullptr && !ce->guard.pending;
+}
 inline bool DirectConfiguration(const CEodeMemRec* ce) {
-  return ce->h > 0 && !ce->tstop_set && ce->root == nullptr && ce->adapt == nullptr &&
-         !ce->guard.pending && ce->mxstep > 0;
+  return ce->h > 0 && !ce->tstop_set && DirectOptions(ce);
 }
 inline bool DirectEvolve(const CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          const sunrealtype* tret) {

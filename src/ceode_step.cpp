@@ -82,8 +82,8 @@ inline sunrealtype GrowthBound(const CEodeMemRec* ce) {
   constexpr sunrealtype kGrowthLimit = 1e15;
   return kGrowthLimit * (1 + ce->xl1_start);
 }
+constexpr sunrealtype kAbsoluteLimit = 1e150;
 inline bool Exploded(sunrealtype xl1, sunrealtype bound) {
-  constexpr sunrealtype kAbsoluteLimit = 1e150;
   return xl1 > kAbsoluteLimit || xl1 > bound;
 }
 
@@ -185,7 +185,7 @@ inline void SwapSlots(N_Vector* a, N_Vector* b) {
 // move as a few vector moves instead of a loop; the slots at and above the degree are spare
 // buffers and D[0] is unused.
 // Two rotations of the history and three of the positions are the identity.
-inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
+__attribute__((always_inline)) inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   if (sm.in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
@@ -196,19 +196,19 @@ inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   }
   if (ce->compensated) std::swap(ce->comp, ce->compnew);
 }
-inline void RotatePositions(CEodeMemRec* ce) {
+__attribute__((always_inline)) inline void RotatePositions(CEodeMemRec* ce) {
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
   ce->xnew = old;
 }
-inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
+__attribute__((always_inline)) inline void RotateVectors(CEodeMemRec* ce, StepMem* sm) {
   RotateHistory(ce, *sm);
   RotatePositions(ce);
   sm->plan_ix = sm->plan_ix == kNumPlans - 1 ? 0 : sm->plan_ix + 1;
 }
 
-inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
+__attribute__((always_inline)) inline void Commit(CEodeMemRec* ce, StepMem* sm, sunrealtype t) {
   RotateVectors(ce, sm);
   ce->tcur = t;
   ++ce->nsteps_h;
@@ -442,6 +442,20 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   return LeanExit(ce, sm, ip, e, taken);
 }
 
+// The direct paths' span of the grid, in steps: where |tcur| + |t_start_h| <= DirectTimeSpan() h,
+// every time of the grid (t_start_h + k h, and tcur + h) is within 5 rounding units of it,
+// 2.5e-10 h, of its exact value, and the grid tolerance is 1e-8 h (64 rounding units of tcur are
+// less): one step always remains before tcur + h (StepsRemain) and ends on it (OnGrid), with a
+// margin of 40. Never in single precision (below one step).
+constexpr sunrealtype DirectTimeSpan() { return SUN_RCONST(1e-10) / SUN_UNIT_ROUNDOFF; }
+
+// Whether the stop time, if one is set, leaves a call ending at t (within direct_tmax) as it is:
+// more than a step beyond t, where EvolveTarget's round-off margin (at most 1e-8 h there) cannot
+// reach.
+inline bool StopBeyond(const CEodeMemRec* ce, sunrealtype t) {
+  return !ce->tstop_set || ce->tstop - t > ce->h;
+}
+
 // StepMem::steps without the lean loop: one TakeStep.
 int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, long int* taken) {
   const int flag = TakeStep(ce);
@@ -463,7 +477,7 @@ __attribute__((always_inline)) inline int LeanOneStep(CEodeMemRec* ce) {
   const int ip = sm->plan_ix;
   UpdateResult r = {CE_SUCCESS, sm->kernels[ip](sm->fused_plans[ip], sm->len)};
   if constexpr (kMpi) r = GlobalL1(ce->xnext, r.xl1);
-  if (!std::isfinite(r.xl1) || Exploded(r.xl1, GrowthBound(ce))) {
+  if (!(r.xl1 <= sm->growth_limit)) {  // not finite, or Exploded: TakeStep's test in one compare
     const int flag = CheckState(ce, t, r, func);
     if (flag != CE_SUCCESS) return flag;
   }
@@ -499,7 +513,8 @@ namespace {
 
 // xout = x(tcur), vout = D_1 on serial vectors, and whether they are finite: at one unknown
 // without a loop's set-up, the test on the two values.
-inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector vout) {
+__attribute__((always_inline)) inline bool CopyPairFiniteSerial(const CEodeMemRec* ce,
+                                                                N_Vector xout, N_Vector vout) {
   const sunrealtype* x = NV_DATA_S(ce->xcur);
   const sunrealtype* v = NV_DATA_S(ce->D[1]);
   if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
@@ -512,27 +527,74 @@ inline bool CopyPairFiniteSerial(const CEodeMemRec* ce, N_Vector xout, N_Vector 
 
 }  // namespace
 
-// The whole call in one function, after the configuration and arguments (DirectEvolve, the
-// outputs' kind) and the interval (StepsRemain): the call of f, the update's kernel, the commit and
-// the outputs' copy, as many instructions as the lean loop's step and the copy; every other case,
-// and every failure, is the caller's module's (EvolveOneStepGeneral, OneStepRest).
-int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret) {
+namespace {
+
+// OneStepEvolve outside direct_tmax's span: the same path with its tests of the configuration and
+// of the grid (a step must remain before tcur + h and end on it to round-off), taken where h is
+// near the round-off of t or the run has no direct path.
+__attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
+                                             N_Vector vout, sunrealtype* tret) {
   const sunrealtype target = ce->tcur + ce->h;
   const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
                       tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
                       DirectConfiguration(ce) && StepsRemain(ce, target);
   if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
-  const int flag = LeanOneStep<false>(ce);
-  // One step reaches tcur + h to round-off (then no step remains); anything else is
-  // ReturnAtTarget's.
-  if (flag != CE_SUCCESS || !OnGrid(ce, target)) {
+  const int flag = ce->step->one(ce);  // LeanOneStep, not inlined here: OneStepEvolve's alone
+  if (flag != CE_SUCCESS || !OnGrid(ce, target) || !CopyPairFiniteSerial(ce, xout, vout)) {
     return OneStepRest(ce, flag, target, xout, vout, tret);
   }
-  if (!CopyPairFiniteSerial(ce, xout, vout)) {  // reported as ReturnAtTarget reports it
-    return OneStepRest(ce, CE_SUCCESS, target, xout, vout, tret);
+  *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
+// The whole call in one function (the run's direct path, decided at the start: direct_tmax;
+// DirectOptions and the outputs' kind): the call of f, the update's kernel, the commit and the
+// outputs' copy, as many instructions as the lean loop's step and the copy; every other case is
+// OneStepChecked's, every failure the caller's module's (OneStepRest). Below direct_tmax the grid
+// tests hold by themselves (see DirectTimeSpan), so that the call tests none.
+int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  // direct_tmax is negative but on a started run with a direct path (StepRestart, ChooseStep);
+  // an initialised memory has the step record (AllocVectors).
+  const bool direct = std::fabs(ce->tcur) <= ce->step->direct_tmax && DirectOptions(ce) &&
+                      StopBeyond(ce, ce->tcur + ce->h) && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
+  if (!direct) return OneStepChecked(ce, tout, xout, vout, tret);
+  const int flag = LeanOneStep<false>(ce);
+  // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
+  // ended on tcur, the target, to round-off).
+  if (flag != CE_SUCCESS || !CopyPairFiniteSerial(ce, xout, vout)) {
+    return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
   }
   *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
+// As OneStepEvolve, for CE_NORMAL: a call at most the lean loop's minimum of steps ahead (from
+// further the lean loop runs, on EvolveNormalGeneral's path, as it would there), tout in the span
+// too (every time of the call is then where GridTolerance is grid_tol), and more steps allowed
+// than it can take. The steps as StepTo takes them (LeanOrOneStep's one by one, while StepsRemain),
+// and the outputs as ReturnAtTarget gives them.
+int NormalEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
+                 int itask) {
+  const StepMem* sm = ce->step.get();
+  const bool direct = itask == CE_NORMAL && ce->started && std::fabs(ce->tcur) <= sm->direct_tmax &&
+                      std::fabs(tout) <= sm->direct_tmax && tout >= ce->tcur &&
+                      tout - ce->tcur <= kLeanMinSteps * ce->h && ce->mxstep > kLeanMinSteps &&
+                      DirectOptions(ce) && StopBeyond(ce, tout) && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr;
+  if (!direct) return EvolveNormalGeneral(ce, tout, xout, vout, tret, itask);
+  while (tout - ce->tcur > sm->grid_remain) {  // StepsRemain
+    const int flag = LeanOneStep<false>(ce);
+    if (flag != CE_SUCCESS) return OneStepRest(ce, flag, tout, xout, vout, tret);
+  }
+  const sunrealtype s = std::fabs(tout - ce->tcur) <= sm->grid_tol ? 0 : tout - ce->tcur;
+  const bool finite =
+      s == 0 ? CopyPairFiniteSerial(ce, xout, vout) : OutputState(ce, s, xout, vout);
+  if (!finite) return OneStepRest(ce, CE_SUCCESS, tout, xout, vout, tret);
+  *tret = ce->tretlast = s == 0 ? ce->tcur : tout;
   return CE_SUCCESS;
 }
 
@@ -544,6 +606,10 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
 }
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
+
+void StepRestart(CEodeMemRec* ce) {
+  if (ce->step != nullptr) ce->step->direct_tmax = -1;
+}
 
 // The step of each path of docs/theory.md: TakeStep with the solve of the kind,
 //   kExplicit     SolveExplicit (above; section 4.1),
@@ -573,6 +639,10 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
   sm->one_call = lean && serial;
+  sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's
+  sm->grid_tol = SUN_RCONST(1e-8) * ce->h;                       // GridTolerance's second term
+  sm->grid_remain = ce->h - sm->grid_tol;
+  sm->direct_tmax = sm->one_call ? DirectTimeSpan() * ce->h - std::fabs(ce->t_start_h) : -1;
 }
 
 }  // namespace ceode

@@ -36,6 +36,17 @@ struct StepMem {
   StepsFn steps = nullptr;                // TakeSteps: the lean loop or one TakeStep
   int (*one)(CEodeMemRec* ce) = nullptr;  // TakeDirectStep: TakeStep of the lean configuration
   bool one_call = false;                  // OneStepCall: the lean configuration on serial vectors
+  // OneStepEvolve's direct path: while |tcur| stays at or below it, the grid's times are exact to
+  // far inside GridTolerance (one step always remains before tcur + h and ends on it); negative
+  // where the run has no direct path (not one_call).
+  sunrealtype direct_tmax = -1;
+  // The step's growth check in one test (LeanOneStep): ||x(t + h)||_1 passes while it is at or
+  // below this, the lesser of GrowthBound and the absolute limit (NaN and Inf do not).
+  sunrealtype growth_limit = 0;
+  // Within direct_tmax, GridTolerance(ce, h) is 1e-8 h: that value (grid_tol) and h less it
+  // (grid_remain, StepsRemain's bound), computed as those functions compute them (NormalEvolve).
+  sunrealtype grid_tol = 0;
+  sunrealtype grid_remain = 0;
 
   // The update plans (ceode_step_plans.cpp)
   bool in_place_active = false;  // the plans update InPlaceLevel derivatives in place

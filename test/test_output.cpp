@@ -196,6 +196,58 @@ TEST(OneStepMode, ReturnsBitwiseTheStatesOfNormalModeOnALargeSystem) {
   }
 }
 
+// One call, one step, wherever t is: t0 = 4499.9 and -4500.1 with h = 0.01 cross |t| = 4.5e5 h,
+// the edge of the span where the call tests no grid (the grid's times there are exact to 2.5e-10 h,
+// the tolerance 1e-8 h); every return is the grid's time t0 + k h and the states are CE_NORMAL's
+// on the same grid bit for bit.
+TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallAcrossTheDirectSpan) {
+  for (const sunrealtype t0 : {SUN_RCONST(4499.9), SUN_RCONST(-4500.1)}) {
+    std::vector<sunrealtype> xs, vs;
+    for (const int itask : {CE_ONE_STEP, CE_NORMAL}) {
+      Vector x0 = SerialVector(1, ctx_, prob_.x0);
+      Vector v0 = SerialVector(1, ctx_, prob_.v0);
+      ASSERT_EQ(CEodeReInit(mem(), t0, x0.get(), v0.get()), CE_SUCCESS);
+      sunrealtype t = t0;
+      for (int k = 1; k <= 30; ++k) {
+        const sunrealtype tk = t0 + static_cast<sunrealtype>(k) * SUN_RCONST(0.01);  // the grid's
+        ASSERT_EQ(Evolve(itask == CE_ONE_STEP ? t0 + 1 : tk, &t, itask), CE_SUCCESS);
+        EXPECT_EQ(t, tk) << "t0 " << t0 << " step " << k;
+        if (itask == CE_ONE_STEP) {
+          xs.push_back(X());
+          vs.push_back(V());
+        } else {
+          EXPECT_EQ(X(), xs[k - 1]) << "t0 " << t0 << " step " << k;
+          EXPECT_EQ(V(), vs[k - 1]) << "t0 " << t0 << " step " << k;
+        }
+      }
+      long int nst = 0;
+      CEodeGetNumSteps(mem(), &nst);
+      EXPECT_EQ(nst, 30) << "t0 " << t0;
+    }
+  }
+}
+
+// h = 1e-9 at t = 1e6 lies below the grid tolerance of t's round-off (64 units, 1.4e-8): a step is
+// always taken before tcur + h, and after the start every CE_ONE_STEP call still takes exactly one.
+TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallBelowTheRoundOffOfT) {
+  Vector x0 = SerialVector(1, ctx_, prob_.x0);
+  Vector v0 = SerialVector(1, ctx_, prob_.v0);
+  ASSERT_EQ(CEodeReInit(mem(), SUN_RCONST(1e6), x0.get(), v0.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-9)), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(Evolve(2e6, &t, CE_ONE_STEP), CE_SUCCESS);  // the start
+  long int nst0 = 0;
+  CEodeGetNumSteps(mem(), &nst0);
+  for (int k = 1; k <= 30; ++k) {
+    const sunrealtype tlast = t;
+    ASSERT_EQ(Evolve(2e6, &t, CE_ONE_STEP), CE_SUCCESS);
+    EXPECT_GT(t, tlast) << "call " << k;
+    long int nst = 0;
+    CEodeGetNumSteps(mem(), &nst);
+    EXPECT_EQ(nst, nst0 + k) << "call " << k;
+  }
+}
+
 TEST_F(HarmonicRun, StopTimeIsHitExactlyAndReturnsTstopReturn) {
   ASSERT_EQ(CEodeSetStopTime(mem(), SUN_RCONST(0.377)), CE_SUCCESS);
   sunrealtype t = 0;
