@@ -20,9 +20,8 @@ void NewtonBasis(const AdaptMem& am, int p, sunrealtype (*w)[kMaxDegree]) {
   w[0][0] = 1;
   for (int j = 1; j < p; ++j) {
     const sunrealtype delta = am.tnode[j - 1] - am.tnode[0];
-    for (int i = j; i >= 0; --i) {
-      w[i][j] = (i > 0 ? w[i - 1][j - 1] : 0) - delta * w[i][j - 1];
-    }
+    for (int i = j; i > 0; --i) w[i][j] = w[i - 1][j - 1] - delta * w[i][j - 1];
+    w[0][j] = 0 - delta * w[0][j - 1];  // 0 - x: the sign of a zero as in the rows above
   }
 }
 
@@ -108,7 +107,7 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   }
   // The top derivative one step of h back, for the position's blend: yd = (z_n - z(t_n - h)) / h.
   // D_3 .. D_{d-1} and yd (the last row of c), in one call.
-  sunrealtype c[kMaxDegree][kMaxDegree] = {};
+  sunrealtype c[kMaxDegree][kMaxDegree];  // rows < nout, columns < p: all written below
   N_Vector out[kMaxDegree];
   int nout = 0;
   sunrealtype cz[kMaxDegree];
