@@ -197,6 +197,10 @@ sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
 // The kernel UpdateSerial runs on the plan at length n, for a caller that runs it many times.
 using SerialKernelFn = sunrealtype (*)(const FusedPlan&, sunindextype);
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
+// Systems smaller than this take the entry-by-entry kernels of the plan's shape, whose cost is a
+// few instructions per call; from this length on G3_CD's plan takes the leapfrog's form, whose
+// kernels save one vector's traffic per step (LeapForm).
+constexpr sunindextype kSmallSystem = 16;
 // G3_CD's step on its plan in the leapfrog's form (ceode_step_plans.cpp, LeapForm): v = (v_old +
 // c a_old) + c a, u = v + c a, x(t + h) = x(t) + h u. The next step's first rounding, v + c a, is
 // this step's u (the half-step velocity), so a run of steps can store u where v was and read

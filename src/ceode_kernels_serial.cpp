@@ -826,9 +826,6 @@ constexpr std::array<PairKernelFn, kNumShapes> PairTable(std::index_sequence<I..
 constexpr std::array<PairKernelFn, kNumShapes> kPairs =
     PairTable(std::make_index_sequence<kNumShapes>{});
 
-// Systems smaller than this take the entry-by-entry kernel.
-constexpr sunindextype kSmallSystem = 16;
-
 sunrealtype UpdateOne(const FusedPlan& fp, sunindextype /*n*/) {
   return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
 }

@@ -374,11 +374,12 @@ void PrepareLeapRun(const StepMem& sm, const PhaseVectors* pv, int ip, long int 
 
 // Step `steps` of the lean loop's update after f: the in-place plan (over) or the out-of-place
 // one, with G3_CD's half-step velocity carried the kernel of the first, a middle or the last step.
+template <bool kLeap>
 inline sunrealtype LeanUpdate(const PhaseVectors& p, const StepMem& sm, const LeapRun& run,
                               long int steps, bool over) {
   const sunindextype len = sm.len;
-  if (!over) return (sm.leap && steps > 0 ? p.leap.last : p.update)(*p.plan, len);
-  if (!sm.leap) return p.update_over(*p.plan_over, len);
+  if constexpr (!kLeap) return over ? p.update_over(*p.plan_over, len) : p.update(*p.plan, len);
+  if (!over) return (steps > 0 ? p.leap.last : p.update)(*p.plan, len);
   if (steps == 0) return p.leap.first(*p.plan_over, len);
   return run.a != nullptr ? p.leap.mid(run.mid, len) : p.leap.mid(*p.plan_over, len);
 }
@@ -388,7 +389,7 @@ inline sunrealtype LeanUpdate(const PhaseVectors& p, const StepMem& sm, const Le
 // from a table of the six configurations and the vectors rotate once at the end, so that a step
 // at n = 1 is f, the update and a few tests (bench_step). With in-place plans every step but the
 // last writes x(t + 2h) over x(t + h), as a hand loop does (docs/theory.md, "In-place update").
-template <bool kMpi>
+template <bool kMpi, bool kLeap>
 __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, sunrealtype target,
                                                 long int max_steps, long int* taken) {
   PhaseVectors pv[kNumPlans];
@@ -408,25 +409,25 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
   void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
   const long int count = LeanStepCount(ce, target, max_steps);
   LeapRun run;
-  PrepareLeapRun(*sm, pv, ip, count, &run);
+  if constexpr (kLeap) PrepareLeapRun(*sm, pv, ip, count, &run);
   LeanEnd e;
   while (e.steps < count) {
     e.t = StepTime(ce, 1);
     const PhaseVectors& p = pv[ip];
-    const N_Vector a = run.a != nullptr && e.steps > 0 ? run.a : p.a;
+    const N_Vector a = kLeap && run.a != nullptr && e.steps > 0 ? run.a : p.a;
     e.rv = rhs(e.t, p.x, p.v, a, rhs_data);
     ++ce->nfe;
     if (e.rv != 0) {
-      e.accel_lost = a == run.a && (e.steps > 1 || run.a == run.first_a);
+      e.accel_lost = kLeap && a == run.a && (e.steps > 1 || run.a == run.first_a);
       break;
     }
     const bool over = p.plan_over != nullptr && e.steps + 1 < count;
-    e.update.xl1 = LeanUpdate(p, *sm, run, e.steps, over);
+    e.update.xl1 = LeanUpdate<kLeap>(p, *sm, run, e.steps, over);
     if constexpr (kMpi) e.update = GlobalL1(p.x, e.update.xl1);  // one allreduce, as TakeStep's
     e.state_ok = std::isfinite(e.update.xl1) && !Exploded(e.update.xl1, bound);
     if (!e.state_ok) {
       e.failed_over = over;
-      e.failed_carried = over && sm->leap;
+      e.failed_carried = kLeap && over;
       e.failed_a = a;
       break;
     }
@@ -435,7 +436,7 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     ++ce->nst;
     ++e.steps;
     e.over = over;
-    e.carried = over && sm->leap;
+    e.carried = kLeap && over;
     e.moved += over ? 0 : 1;
     ip = (ip + (over ? 3 : 1)) % kNumPlans;  // over: the positions keep their buffers
   }
@@ -488,10 +489,10 @@ __attribute__((always_inline)) inline int LeanOneStep(CEodeMemRec* ce) {
 
 // StepMem::steps with the lean loop: it runs unless only a few steps remain (CE_ONE_STEP calls
 // decide on the distance alone); those are taken here one by one, as StepTo would ask for them.
-template <bool kMpi>
+template <bool kMpi, bool kLeap>
 int LeanOrOneStep(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
   if (target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps) {
-    return LeanExplicitSteps<kMpi>(ce, ce->step.get(), target, max_steps, taken);
+    return LeanExplicitSteps<kMpi, kLeap>(ce, ce->step.get(), target, max_steps, taken);
   }
   long int k = 0;
   int flag = CE_SUCCESS;
@@ -636,7 +637,10 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->update = serial ? UpdateOnSerial : (mpi ? UpdateOnMpi : UpdateOnReference);
   const bool lean = (serial || mpi) && sm->solve_kind == SolveKind::kExplicit &&
                     ce->ls.mfn == nullptr && ce->ls.M == nullptr;
-  sm->steps = !lean ? OneStep : (mpi ? LeanOrOneStep<true> : LeanOrOneStep<false>);
+  // G3_CD's carried half-step velocity (StepMem::leap) is a variant of the loop, chosen here.
+  constexpr StepsFn kLean[2][2] = {{LeanOrOneStep<false, false>, LeanOrOneStep<false, true>},
+                                   {LeanOrOneStep<true, false>, LeanOrOneStep<true, true>}};
+  sm->steps = !lean ? OneStep : kLean[mpi ? 1 : 0][sm->leap ? 1 : 0];
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
   sm->one_call = lean && serial;
   sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's

@@ -57,11 +57,12 @@ namespace {
 // (h c = h^2/2), v = (v_old + c a_old) + c a, u = v + c a, x(t + h) = x(t) + h u, with u the
 // half-step velocity, formed in the work vector tmp3. Its first rounding, v_old + c a_old, is the
 // last step's u: the lean loop carries u in place of v and reads a_old in its first step alone
-// (LeapKernels), with the bits of the steps one by one. Every backend runs the plans so; the
-// compensated sums and the implicit steps keep the general form.
+// (LeapKernels), with the bits of the steps one by one. Every backend runs the plans so from
+// kSmallSystem unknowns on, where the traffic matters; smaller systems, the compensated sums and
+// the implicit steps keep the general form, whose shape kernel is cheaper per call.
 bool LeapForm(const CEodeMemRec* ce, const StepMem* sm) {
   const StepCoeffs& co = ce->co;
-  if (ce->degree != 3 || co.wz_old != 0 || ce->compensated ||
+  if (ce->degree != 3 || co.wz_old != 0 || ce->compensated || ce->n < kSmallSystem ||
       sm->solve_kind != SolveKind::kExplicit) {
     return false;
   }
