@@ -40,6 +40,16 @@ struct RunResult {
   std::vector<sunrealtype> v;
 };
 
+// The chain's initial state on n masses: smooth positions and velocities without symmetry.
+void ChainStart(SUNContext ctx, sunindextype n, N_Vector* x, N_Vector* v) {
+  *x = N_VNew_Serial(n, ctx);
+  *v = N_VNew_Serial(n, ctx);
+  for (sunindextype i = 0; i < n; ++i) {
+    N_VGetArrayPointer(*x)[i] = std::sin(0.3 * static_cast<sunrealtype>(i));
+    N_VGetArrayPointer(*v)[i] = 0.1 * std::cos(0.7 * static_cast<sunrealtype>(i));
+  }
+}
+
 // n >= ceode::kInPlaceMinLen: the fused explicit step updates the history in place (unless
 // in_place is false or compensated). The state at each of touts, one after the other;
 // guard_every > 0 checks the stability guard every so many steps (an early exit of the lean loop).
@@ -48,12 +58,9 @@ RunResult RunChain(const std::string& method, bool fused, bool compensated, suni
                    long guard_every = 0) {
   SUNContext ctx = nullptr;
   SUNContext_Create(SUN_COMM_NULL, &ctx);
-  N_Vector x = N_VNew_Serial(kN, ctx);
-  N_Vector v = N_VNew_Serial(kN, ctx);
-  for (sunindextype i = 0; i < kN; ++i) {
-    N_VGetArrayPointer(x)[i] = std::sin(0.3 * static_cast<sunrealtype>(i));
-    N_VGetArrayPointer(v)[i] = 0.1 * std::cos(0.7 * static_cast<sunrealtype>(i));
-  }
+  N_Vector x = nullptr;
+  N_Vector v = nullptr;
+  ChainStart(ctx, kN, &x, &v);
   void* mem = CEodeCreate(ctx);
   EXPECT_EQ(CEodeInit(mem, ChainRhs, 0, x, v), CE_SUCCESS);
   EXPECT_EQ(CEodeSetMethodByName(mem, method.c_str()), CE_SUCCESS);
@@ -154,12 +161,9 @@ TEST(LeanExplicitLoop, HandsFThePreviousVelocityWhenTheIndependenceIsDeclared) {
   for (int fused = 0; fused < 2; ++fused) {
     SUNContext ctx = nullptr;
     SUNContext_Create(SUN_COMM_NULL, &ctx);
-    N_Vector x = N_VNew_Serial(kN, ctx);
-    N_Vector v = N_VNew_Serial(kN, ctx);
-    for (sunindextype i = 0; i < kN; ++i) {
-      N_VGetArrayPointer(x)[i] = std::sin(0.3 * static_cast<sunrealtype>(i));
-      N_VGetArrayPointer(v)[i] = 0.1 * std::cos(0.7 * static_cast<sunrealtype>(i));
-    }
+    N_Vector x = nullptr;
+    N_Vector v = nullptr;
+    ChainStart(ctx, kN, &x, &v);
     void* mem = CEodeCreate(ctx);
     EXPECT_EQ(CEodeInit(mem, DampedChainRhs, 0, x, v), CE_SUCCESS);
     EXPECT_EQ(CEodeSetMethodByName(mem, "G3_CD"), CE_SUCCESS);
