@@ -4,8 +4,8 @@
 //
 // Problem: n independent springs x_i'' = -k_i x_i, k_i = 1 + i/n, x(0) = 1, v(0) = 0, h = 1e-3
 // (far inside every stability limit). Methods G3_CD and G4_A34 at n = 1, 10^4, 3*10^4, 10^5,
-// 3*10^5, 10^6 and G8_O8 at n = 1, 10^3, 10^4 (G6_O5 for --count). Variants (one benchmark
-// iteration = K steps; the time shown is per iteration, the ratios table is per step):
+// 3*10^5, 10^6 and G8_O8 at n = 1, 10^3, 10^4 (G6_O5 and G7_O7 for --count). Variants (one
+// benchmark iteration = K steps; the time shown is per iteration, the ratios table is per step):
 //   ceode       CEodeEvolve(tout K steps ahead, CE_NORMAL): no output copy per step;
 //   ceode_1step CEodeEvolve(CE_ONE_STEP) K times: two output copies per step (the API's);
 //   ceode_freq  CEodeEvolve(CE_NORMAL) with an output every 4 steps on the step grid;
@@ -70,6 +70,10 @@ const Method kMethods[] = {
      6,
      {7.8581049690442608, 3.2003060015391878, 2.306472520152492, 1.445972372099134,
       0.78920709629572905}},
+    {"G7_O7",
+     7,
+     {19.362993681325158, 15.310841926671563, 8.7099568711498723, 3.9685609709725753,
+      2.3539640770647496, 0.90130820250696653}},
     {"G8_O8",
      8,
      {399.99982239054896, 278.28678067794129, 134.15990720943549, 51.039413540261052,
