@@ -370,6 +370,17 @@ int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   return CE_SUCCESS;
 }
 
+int CollapseError(CEodeMemRec* ce, const char* func, sunrealtype h) {
+  const AdaptMem& am = *ce->adapt;
+  return ProcessError(ce, CE_ERR_FAILURE, func,
+                      "The error test kept failing and the step fell to h = %g at t = %.17g: "
+                      "the tolerances (rtol = %g, atol = %g) lie below the round-off the "
+                      "solution attains here; loosen them.",
+                      static_cast<double>(h), static_cast<double>(ce->tcur),
+                      static_cast<double>(am.rtol),
+                      static_cast<double>(am.tol_kind == 0 ? am.atol : am.atol_min));
+}
+
 }  // namespace
 
 int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
@@ -401,6 +412,8 @@ int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
   am.hprev = 0;
   sunrealtype h = am.h_restart > 0 ? am.h_restart : am.hin;
   am.h_restart = 0;
+  const bool after_failures = am.fail_restart;
+  am.fail_restart = false;
   if (h == 0) {
     // The constrained acceleration needs the start's own solve (M may be singular): the first
     // step then comes from x and v alone.
@@ -416,6 +429,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
   }
   if (am.hmax > 0) h = std::min(h, am.hmax);
   h = std::max(h, am.hmin);
+  if (after_failures && !(ce->tcur + h > ce->tcur)) return CollapseError(ce, func, h);
   if (!(h > 0) || !std::isfinite(h) || !(ce->tcur + h > ce->tcur)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "No usable first step (h = %g at t = %.17g): give one with "
@@ -427,6 +441,29 @@ int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
   am.hmap = h;
   am.h_plan = h;
   return CE_SUCCESS;
+}
+
+// With constraints the velocity is a difference quotient of positions solved to round-off: it
+// carries about eps |x| / h. Once that is far above the velocity's own tolerance scale (rtol |v|
+// + atol), a smaller step only adds round-off; the error estimate, which meets the same round-off
+// in the position solve, keeps asking for one, and the step would fall to the round-off of t.
+constexpr sunrealtype kVelocityRoundOff = 100;
+int AdaptCheckVelocityRoundOff(CEodeMemRec* ce, sunrealtype h, const char* func) {
+  const AdaptMem& am = *ce->adapt;
+  if (am.tol_kind == 2) return CE_SUCCESS;  // the user's weights: no velocity scale to compare
+  const sunrealtype atol = am.tol_kind == 0 ? am.atol : am.atol_min;
+  const sunrealtype xmax = N_VMaxNorm(ce->xcur);
+  const sunrealtype vscale = am.rtol * N_VMaxNorm(ce->D[1]) + atol;
+  if (SUN_UNIT_ROUNDOFF * xmax <= kVelocityRoundOff * vscale * h) return CE_SUCCESS;
+  return ProcessError(ce, CE_ERR_FAILURE, func,
+                      "The step fell to h = %g at t = %.17g, where the velocity's round-off "
+                      "(eps |x| / h = %g) exceeds its tolerance scale (rtol |v| + atol = %g) "
+                      "%g times: the tolerances (rtol = %g, atol = %g) lie below what the "
+                      "constrained solve attains here; loosen them.",
+                      static_cast<double>(h), static_cast<double>(ce->tcur),
+                      static_cast<double>(SUN_UNIT_ROUNDOFF * xmax / h),
+                      static_cast<double>(vscale), static_cast<double>(kVelocityRoundOff),
+                      static_cast<double>(am.rtol), static_cast<double>(atol));
 }
 
 void AdaptStartHistory(CEodeMemRec* ce) {

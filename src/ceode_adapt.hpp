@@ -100,6 +100,7 @@ struct AdaptMem {
   bool capped_last = false;    // the stable step decided the last step
   long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
+  bool fail_restart = false;  // the start again comes after failed error tests
   // A step that keeps h takes no log (ceode_adapt.cpp, BandKeepsStep): whether lerr_prev is
   // set, and log(err_prev / the target) within 1e-4 (ApproxLog).
   bool lerr_prev_exact = false;
@@ -154,6 +155,9 @@ inline bool AdaptEstimated(const AdaptMem& am) {
 // one from the initial data, which costs one f); clears the run's state. *accel: D_2 holds
 // M^{-1} f(t0, x0, v0) from that f, which the start then does not evaluate again.
 int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel);
+// With constraints: CE_ERR_FAILURE when the step h leaves the velocity (a difference quotient of
+// solved positions) with round-off far above its tolerance scale.
+int AdaptCheckVelocityRoundOff(CEodeMemRec* ce, sunrealtype h, const char* func);
 // After the start's history exists: the divided differences at t0 from the start's derivatives.
 void AdaptStartHistory(CEodeMemRec* ce);
 // The error weights from x (the tolerances or the user's function).

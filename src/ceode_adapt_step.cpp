@@ -415,6 +415,7 @@ int RetryAfterFailure(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealty
   if ((am->first || constrained) && am->start_fails + 1 < am->maxnef) {
     ++am->start_fails;
     am->h_restart = AdaptRetryStep(ce, err);
+    am->fail_restart = true;
     return kStartAgain;
   }
   if (constrained) return ErrFailure(ce, func, t, err, am->start_fails + 1);
@@ -444,6 +445,8 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
   if (constrained) {
     h = am->h_plan;
     am->h_plan = AdaptNextStep(ce, err, h, ce->tcur + h, tlimit, &capped);
+    const int flag = AdaptCheckVelocityRoundOff(ce, h, func);
+    if (flag != CE_SUCCESS) return flag;
   } else {
     h = AdaptNextStep(ce, err, ce->h, ce->tcur, tlimit, &capped);
     if (nef > 0) h = std::min(h, ce->h);  // no growth right after a failed test
