@@ -388,9 +388,17 @@ inline sunrealtype GridTolerance(const CEodeMemRec* ce, sunrealtype h) {
 inline bool OnGrid(const CEodeMemRec* ce, sunrealtype t) {
   return std::fabs(t - ce->tcur) <= GridTolerance(ce, ce->h);
 }
+// How far beyond tcur a target lies when a step remains before it: h less the grid's tolerance,
+// and at least half a step, so that with h below the round-off of t (a tolerance above h) a
+// target one step ahead takes one step, not as many as the tolerance spans.
+inline sunrealtype StepReach(const CEodeMemRec* ce) {
+  const sunrealtype reach = ce->h - GridTolerance(ce, ce->h);
+  const sunrealtype half = SUN_RCONST(0.5) * ce->h;
+  return reach > half ? reach : half;
+}
 // Whether the step interval [tcur, tcur + h] ends before target (CEodeEvolve steps while it does).
 inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
-  return target - ce->tcur > ce->h - GridTolerance(ce, ce->h);
+  return target - ce->tcur > StepReach(ce);
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);

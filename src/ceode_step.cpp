@@ -261,7 +261,7 @@ long int LeanStepCount(const CEodeMemRec* ce, sunrealtype target, long int max_s
   const auto remains = [&](long int j) {
     const sunrealtype tj =
         j == 0 ? ce->tcur : ce->t_start_h + static_cast<sunrealtype>(ce->nsteps_h + j) * ce->h;
-    return target - tj > ce->h - GridTolerance(ce, ce->h);
+    return target - tj > StepReach(ce);
   };
   const sunrealtype guess = std::floor((target - ce->tcur) / ce->h);
   long int j =

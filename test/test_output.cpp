@@ -227,17 +227,25 @@ TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallAcrossTheDirectSpan) {
   }
 }
 
-// h = 1e-9 at t = 1e6 lies below the grid tolerance of t's round-off (64 units, 1.4e-8): a step is
-// always taken before tcur + h, and after the start every CE_ONE_STEP call still takes exactly one.
+// h = 1e-9 at t = 1e6 lies below the grid tolerance of t's round-off (64 units, 7.5e-9): every
+// CE_ONE_STEP call takes exactly one step, the first (with the start) too, and a CE_NORMAL call
+// 100 steps ahead takes 100.
 TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallBelowTheRoundOffOfT) {
   Vector x0 = SerialVector(1, ctx_, prob_.x0);
   Vector v0 = SerialVector(1, ctx_, prob_.v0);
-  ASSERT_EQ(CEodeReInit(mem(), SUN_RCONST(1e6), x0.get(), v0.get()), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetFixedStep(mem(), SUN_RCONST(1e-9)), CE_SUCCESS);
+  const sunrealtype t0 = SUN_RCONST(1e6);
+  const sunrealtype h = SUN_RCONST(1e-9);
+  ASSERT_EQ(CEodeReInit(mem(), t0, x0.get(), v0.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem(), h), CE_SUCCESS);
   sunrealtype t = 0;
-  ASSERT_EQ(Evolve(2e6, &t, CE_ONE_STEP), CE_SUCCESS);  // the start
+  ASSERT_EQ(Evolve(t0 + 100 * h, &t, CE_NORMAL), CE_SUCCESS);
   long int nst0 = 0;
   CEodeGetNumSteps(mem(), &nst0);
+  EXPECT_EQ(nst0, 100);
+  ASSERT_EQ(CEodeReInit(mem(), t0, x0.get(), v0.get()), CE_SUCCESS);
+  ASSERT_EQ(Evolve(2e6, &t, CE_ONE_STEP), CE_SUCCESS);  // the start and one step
+  CEodeGetNumSteps(mem(), &nst0);
+  EXPECT_EQ(nst0, 1);
   for (int k = 1; k <= 30; ++k) {
     const sunrealtype tlast = t;
     ASSERT_EQ(Evolve(2e6, &t, CE_ONE_STEP), CE_SUCCESS);
