@@ -534,14 +534,15 @@ namespace {
 // StepMem::fast_until from the current step on: the first k >= nsteps_h at which a call starting
 // at StepTime's time for k would leave direct_tmax's span, come within a step of the stop time or
 // end its step on a guard check (0 where the current call does). |t| <= direct_tmax and the stop
-// time's margin are the tests OneStepEvolve made on every call, here on the times the steps will
-// set; both are monotone in k (as those times are) from a k where they hold, so that they hold on
-// one run of k, whose end the distances in steps give to within a step or two.
+// time's margin are the direct path's conditions on a call's start, here on the times the steps
+// will set; both are monotone in k (as those times are) from a k where they hold, so that they
+// hold on one run of k, whose end the distances in steps give to within a step or two.
 long int FastSpanEnd(const CEodeMemRec* ce, const StepMem& sm) {
   const long int k0 = ce->nsteps_h;
   const long int every = ce->guard.every;
   // nst = nst - nsteps_h + k at every k of the run: the steps keep the two counts together.
-  const long int end = every > 0 ? k0 + (every - (ce->nst + 1) % every) % every : LONG_MAX;
+  const long int to_check = every > 0 ? (every - (ce->nst + 1) % every) % every : LONG_MAX;
+  const long int end = k0 + std::min(to_check, LONG_MAX - k0);  // no overflow for any period
   const auto holds = [&](long int k) {
     const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(k) * ce->h;  // StepTime's
     return std::fabs(t) <= sm.direct_tmax && StopBeyond(ce, t + ce->h);
