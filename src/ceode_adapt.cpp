@@ -118,6 +118,7 @@ sunrealtype ErrorConstant(int d, const sunrealtype* p, int order,
 
 bool AllocAdaptRecord(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) ce->adapt.reset(new (std::nothrow) AdaptMem);
+  StepOptionsChanged(ce);
   return ce->adapt != nullptr;
 }
 

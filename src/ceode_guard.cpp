@@ -678,7 +678,10 @@ void GuardReset(CEodeMemRec* ce, bool counters) {
 
 void GuardMethodChanged(CEodeMemRec* ce) { ce->guard.omega_limit = 0; }
 
-void GuardRequestCheck(CEodeMemRec* ce) { ce->guard.pending = true; }
+void GuardRequestCheck(CEodeMemRec* ce) {
+  ce->guard.pending = true;
+  StepOptionsChanged(ce);  // the one-step fast path leaves the check to CEodeEvolve's general path
+}
 
 void GuardStartAccel(CEodeMemRec* ce) {
   ce->guard.accel = true;
@@ -791,8 +794,8 @@ int CEodeSetGuardMass(void* mem, N_Vector mass) {
     N_VScale(1, mass, g->wts);
   }
   ce->guard.warned = false;
-  ce->guard.carried = false;  // other masses, other frequencies
-  ce->guard.pending = true;   // checked again at the next CEodeEvolve
+  ce->guard.carried = false;     // other masses, other frequencies
+  ceode::GuardRequestCheck(ce);  // checked again at the next CEodeEvolve
   return CE_SUCCESS;
 }
 
@@ -835,7 +838,7 @@ int CEodeSetStabilityGuard(void* mem, int mode, long int every) {
   ce->guard.mode = mode;
   ce->guard.every = every;
   ce->guard.warned = false;
-  ce->guard.pending = true;
+  ceode::GuardRequestCheck(ce);
   return CE_SUCCESS;
 }
 
@@ -850,7 +853,7 @@ int CEodeSetMaxFrequency(void* mem, sunrealtype omega_max) {
   }
   ce->guard.omega_user = omega_max;
   ce->guard.warned = false;
-  ce->guard.pending = true;  // a new estimate is checked at the next CEodeEvolve
+  ceode::GuardRequestCheck(ce);  // a new estimate is checked at the next CEodeEvolve
   return CE_SUCCESS;
 }
 

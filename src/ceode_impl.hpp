@@ -408,8 +408,10 @@ int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int*
 bool TakeDirectStep(CEodeMemRec* ce, int* flag);
 // CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run has the lean configuration
 // on serial vectors (chosen at the start) within the span of times where the grid needs no test,
-// the call has DirectEvolve's form and the outputs are serial: the step (TakeDirectStep's) and
-// x, x' at its end copied into xout, vout, tested as they are written; otherwise
+// with no option set that needs the general path, the first call opens a fast path for the steps
+// up to the span's end, the stop time's margin or the guard's next check (closed by a restart and
+// StepOptionsChanged); on it a call with serial outputs is the step (TakeDirectStep's) and x, x'
+// at its end copied into xout, vout, tested as they are written; otherwise
 // EvolveOneStepGeneral, and after a failed step or outputs that are not finite, OneStepRest.
 // Hidden: CEodeEvolve reaches it by a jump, not through the library's symbol table.
 __attribute__((visibility("hidden"))) int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout,
@@ -432,6 +434,10 @@ void ChooseStep(CEodeMemRec* ce, bool restart);
 // The step module's part of a restart (Restart): the direct paths close until the next start's
 // ChooseStep, so that direct_tmax alone says whether the run is started.
 void StepRestart(CEodeMemRec* ce);
+// Closes OneStepEvolve's fast path (StepMem::fast_until) until its next checked call: called by
+// whatever sets an option the path depends on (the stop time, root functions, error control, the
+// guard's mode, period or pending check).
+void StepOptionsChanged(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
 int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,

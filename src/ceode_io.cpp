@@ -192,6 +192,7 @@ int CEodeSetStopTime(void* mem, sunrealtype tstop) {
   if ((flag = ceode::ValidateTime(ce, __func__, "tstop", tstop)) != CE_SUCCESS) return flag;
   ce->tstop = tstop;
   ce->tstop_set = true;
+  ceode::StepOptionsChanged(ce);
   return CE_SUCCESS;
 }
 
@@ -200,6 +201,7 @@ int CEodeClearStopTime(void* mem) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->tstop_set = false;
+  ceode::StepOptionsChanged(ce);
   return CE_SUCCESS;
 }
 

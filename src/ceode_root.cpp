@@ -277,6 +277,7 @@ int CEodeRootInit(void* mem, int nrtfn, CEodeRootFn g) {
   const bool warn = ce->root == nullptr || ce->root->warn_inactive;
   if (nrtfn == 0) {
     ce->root.reset();
+    ceode::StepOptionsChanged(ce);
     return CE_SUCCESS;
   }
   if (g == nullptr) {
@@ -299,6 +300,7 @@ int CEodeRootInit(void* mem, int nrtfn, CEodeRootFn g) {
   rm->nrtfn = nrtfn;
   rm->warn_inactive = warn;
   ce->root = std::move(rm);
+  ceode::StepOptionsChanged(ce);
   return CE_SUCCESS;
 }
 

@@ -7,6 +7,7 @@
 #include "ceode_step.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -530,11 +531,38 @@ __attribute__((always_inline)) inline bool CopyPairFiniteSerial(const CEodeMemRe
 
 namespace {
 
-// OneStepEvolve outside direct_tmax's span: the same path with its tests of the configuration and
+// StepMem::fast_until from the current step on: the first k >= nsteps_h at which a call starting
+// at StepTime's time for k would leave direct_tmax's span, come within a step of the stop time or
+// end its step on a guard check (0 where the current call does). |t| <= direct_tmax and the stop
+// time's margin are the direct path's conditions on a call's start, here on the times the steps
+// will set; both are monotone in k (as those times are) from a k where they hold, so that they
+// hold on one run of k, whose end the distances in steps give to within a step or two.
+long int FastSpanEnd(const CEodeMemRec* ce, const StepMem& sm) {
+  const long int k0 = ce->nsteps_h;
+  const long int every = ce->guard.every;
+  // nst = nst - nsteps_h + k at every k of the run: the steps keep the two counts together.
+  const long int to_check = every > 0 ? (every - (ce->nst + 1) % every) % every : LONG_MAX;
+  const long int end = k0 + std::min(to_check, LONG_MAX - k0);  // no overflow for any period
+  const auto holds = [&](long int k) {
+    const sunrealtype t = ce->t_start_h + static_cast<sunrealtype>(k) * ce->h;  // StepTime's
+    return std::fabs(t) <= sm.direct_tmax && StopBeyond(ce, t + ce->h);
+  };
+  if (end <= k0 || !DirectOptions(ce) || !holds(k0)) return 0;
+  sunrealtype room = (sm.direct_tmax - ce->tcur) / ce->h;  // at most 2 DirectTimeSpan()
+  if (ce->tstop_set) room = std::min(room, (ce->tstop - ce->tcur) / ce->h);
+  long int k = k0 + static_cast<long int>(std::min(room, static_cast<sunrealtype>(end - 1 - k0)));
+  while (k > k0 && !holds(k)) --k;
+  while (k + 1 < end && holds(k + 1)) ++k;
+  return k + 1;
+}
+
+// OneStepEvolve outside its fast path: the same path with its tests of the configuration and
 // of the grid (a step must remain before tcur + h and end on it to round-off), taken where h is
-// near the round-off of t or the run has no direct path.
+// near the round-off of t or the run has no direct path. Opens the fast path where the run
+// allows it from here on (FastSpanEnd).
 __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
                                              N_Vector vout, sunrealtype* tret) {
+  ce->step->fast_until = FastSpanEnd(ce, *ce->step);
   const sunrealtype target = ce->tcur + ce->h;
   const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
                       tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
@@ -550,26 +578,96 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
 
 }  // namespace
 
-// The whole call in one function (the run's direct path, decided at the start: direct_tmax;
-// DirectOptions and the outputs' kind): the call of f, the update's kernel, the commit and the
-// outputs' copy, as many instructions as the lean loop's step and the copy; every other case is
-// OneStepChecked's, every failure the caller's module's (OneStepRest). Below direct_tmax the grid
-// tests hold by themselves (see DirectTimeSpan), so that the call tests none.
+namespace {
+
+// StepMem::fast_phases and swap from the current vectors: six commits' rotations (the
+// identity), each configuration's outputs read after its own. At degree 3 the fast commit swaps
+// the two derivatives alone: RotateHistory's other two slots are D_0 (unused) and a spare.
+void BuildFastPhases(CEodeMemRec* ce, StepMem* sm) {
+  const bool plain = !sm->in_place_active && !ce->compensated;
+  sm->swap = plain && ce->degree == 3 ? 2 : (plain && ce->degree == 4 ? 4 : 0);
+  if (!sm->one_call) return;  // serial vectors: their data directly
+  for (int j = 0; j < kNumPlans; ++j) {
+    const int ip = sm->plan_ix;
+    RotateVectors(ce, sm);
+    sm->fast_phases[ip] = {NV_DATA_S(ce->xcur), NV_DATA_S(ce->D[1]), sm->plan_ix};
+  }
+}
+
+// f failed on the fast path: reported as LeanOneStep reports it, then the last good state
+// (OneStepRest). Out of line: the fast path keeps nothing of its own across the report.
+__attribute__((noinline, cold)) int FastRhsFailed(CEodeMemRec* ce, int rv, sunrealtype t,
+                                                  N_Vector xout, N_Vector vout, sunrealtype* tret) {
+  const int flag = RhsFailed(ce, rv, t, "CEodeEvolve");
+  return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
+}
+
+// The update's kernel on the current configuration (UpdateOnSerial's): ||x(t + h)||_1.
+__attribute__((always_inline)) inline sunrealtype FastUpdate(const CEodeMemRec* ce) {
+  const StepMem* sm = ce->step.get();
+  const int ip = sm->plan_ix;
+  return sm->kernels[ip](sm->fused_plans[ip], sm->len);
+}
+
+// Commit on the fast path, then xout = x(tcur), vout = D_1 and whether they are finite. At one
+// unknown only the velocity is tested: x(tcur) was this step's x(t), the accumulated term of the
+// position it wrote (BuildUpdatePlan), so a NaN or Inf in it failed the growth check already.
+__attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* sm, sunrealtype t,
+                                                      N_Vector xout, N_Vector vout) {
+  const StepMem::FastPhase& ph = sm->fast_phases[sm->plan_ix];
+  if (__builtin_expect(sm->swap == 2, 1)) {
+    SwapSlots<2>(ce->D + 1, ce->Dnew + 1);
+  } else if (sm->swap == 4) {
+    SwapSlots<4>(ce->D, ce->Dnew);
+  } else {
+    RotateHistory(ce, *sm);
+  }
+  RotatePositions(ce);
+  sm->plan_ix = ph.next;
+  ce->tcur = t;
+  ++ce->nsteps_h;
+  ++ce->nst;
+  if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  const sunrealtype v = ph.v[0];
+  NV_DATA_S(xout)[0] = ph.x[0];
+  NV_DATA_S(vout)[0] = v;
+  return !std::isnan(v - v);  // v - v is NaN exactly where v is not finite
+}
+
+}  // namespace
+
+// The whole call in one function on the fast path (StepMem::fast_until, opened by
+// OneStepChecked): the call of f, the update's kernel, the commit and the outputs' copy, as many
+// instructions as the lean loop's step and the copy, with the tests of the call's arguments
+// alone; every other case is OneStepChecked's, every failure the caller's module's (OneStepRest).
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
-  // direct_tmax is negative but on a started run with a direct path (StepRestart, ChooseStep);
-  // an initialised memory has the step record (AllocVectors).
-  const bool direct = std::fabs(ce->tcur) <= ce->step->direct_tmax && DirectOptions(ce) &&
-                      StopBeyond(ce, ce->tcur + ce->h) && SerialOfLength(xout, ce->n) &&
-                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout);
-  if (!direct) return OneStepChecked(ce, tout, xout, vout, tret);
-  const int flag = LeanOneStep<false>(ce);
-  // A failure, or outputs that are not finite: reported as ReturnAtTarget reports them (the step
-  // ended on tcur, the target, to round-off).
-  if (flag != CE_SUCCESS || !CopyPairFiniteSerial(ce, xout, vout)) {
-    return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
+  static const char* func = "CEodeEvolve";
+  // tout - tout is NaN exactly where tout is not finite (which the general path refuses).
+  const bool fast = ce->nsteps_h < ce->step->fast_until && SerialOfLength(xout, ce->n) &&
+                    SerialOfLength(vout, ce->n) && tret != nullptr && !std::isnan(tout - tout);
+  if (!fast) return OneStepChecked(ce, tout, xout, vout, tret);
+  // LeanOneStep without its guard test (the span ends before a step with a check).
+  const sunrealtype t = StepTime(ce, 1);
+  const bool own_f = __builtin_expect(ce->adapters.rhs == nullptr, 1);
+  const int rv = own_f ? ce->f(t, ce->xnext, ce->D[1], ce->Dnew[2], ce->user_data)
+                       : CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
+  ++ce->nfe;
+  if (rv != 0) return FastRhsFailed(ce, rv, t, xout, vout, tret);
+  const sunrealtype xl1 = FastUpdate(ce);
+  // Not finite, or Exploded: TakeStep's test in one compare.
+  if (!(xl1 <= ce->step->growth_limit)) {
+    const int flag = CheckState(ce, t, {CE_SUCCESS, xl1}, func);
+    if (flag != CE_SUCCESS) return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
   }
-  *tret = ce->tretlast = ce->tcur;
+  // Read after the calls: a value fewer kept across them, so the function saves fewer registers.
+  StepMem* sm = ce->step.get();
+  // Outputs that are not finite: reported as ReturnAtTarget reports them (the step ended on
+  // tcur, the target, to round-off).
+  if (!FastCommit(ce, sm, t, xout, vout)) {
+    return OneStepRest(ce, CE_SUCCESS, ce->tcur, xout, vout, tret);
+  }
+  *tret = ce->tretlast = t;
   return CE_SUCCESS;
 }
 
@@ -609,7 +707,13 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
 
 void StepRestart(CEodeMemRec* ce) {
-  if (ce->step != nullptr) ce->step->direct_tmax = -1;
+  if (ce->step == nullptr) return;
+  ce->step->direct_tmax = -1;
+  ce->step->fast_until = 0;
+}
+
+void StepOptionsChanged(CEodeMemRec* ce) {
+  if (ce->step != nullptr) ce->step->fast_until = 0;
 }
 
 // The step of each path of docs/theory.md: TakeStep with the solve of the kind,
@@ -647,6 +751,8 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->grid_tol = SUN_RCONST(1e-8) * ce->h;                       // GridTolerance's second term
   sm->grid_remain = ce->h - sm->grid_tol;
   sm->direct_tmax = sm->one_call ? DirectTimeSpan() * ce->h - std::fabs(ce->t_start_h) : -1;
+  sm->fast_until = 0;  // the next checked call opens it for this configuration
+  BuildFastPhases(ce, sm);
 }
 
 }  // namespace ceode

@@ -40,6 +40,22 @@ struct StepMem {
   // far inside GridTolerance (one step always remains before tcur + h and ends on it); negative
   // where the run has no direct path (not one_call).
   sunrealtype direct_tmax = -1;
+  // OneStepEvolve's fast path: while nsteps_h is below it, a call's step is within direct_tmax,
+  // ends more than a step before the stop time, has no guard check at its end, and the options
+  // DirectOptions tests are as they were when OneStepChecked found them so (FastSpanEnd), so
+  // that the call tests nothing but its arguments. 0: closed (StepOptionsChanged).
+  long int fast_until = 0;
+  // The fast path's commit, per configuration (by plan_ix, one_call runs): the data of x(tcur)
+  // and D_1 after its step, the outputs' sources, and the configuration that follows; and the
+  // history's swap where it is a fixed one (swap: 2, D_1 and D_2 at degree 3; 4, RotateHistory's
+  // four slots at degree 4; 0, RotateHistory), one test for the configuration.
+  struct FastPhase {
+    const sunrealtype* x = nullptr;
+    const sunrealtype* v = nullptr;
+    int next = 0;
+  };
+  std::array<FastPhase, kNumPlans> fast_phases{};
+  int swap = 0;
   // The step's growth check in one test (LeanOneStep): ||x(t + h)||_1 passes while it is at or
   // below this, the lesser of GrowthBound and the absolute limit (NaN and Inf do not).
   sunrealtype growth_limit = 0;

@@ -227,6 +227,43 @@ TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallAcrossTheDirectSpan) {
   }
 }
 
+// g = t - 0.2537: a root inside the step from 0.25 to 0.26.
+int RootInStep(sunrealtype t, N_Vector /*x*/, N_Vector /*v*/, sunrealtype* g, void* /*data*/) {
+  g[0] = t - SUN_RCONST(0.2537);
+  return 0;
+}
+
+// After a few one-step calls (those on the grid need no test of their own), a stop time and then
+// a root function set between calls take effect at the next call: the call whose step passes the
+// stop time 0.1537 returns it exactly with CE_TSTOP_RETURN, and with the stop time cleared the
+// call whose interval holds the root returns it with CE_ROOT_RETURN (to the root finder's
+// tolerance, 1e-10 here), each after exactly the steps of the grid (h = 0.01) before it.
+TEST_F(HarmonicRun, OneStepModeHonoursAStopTimeAndRootsSetBetweenCalls) {
+  sunrealtype t = 0;
+  for (int k = 1; k <= 10; ++k) ASSERT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetStopTime(mem(), SUN_RCONST(0.1537)), CE_SUCCESS);
+  for (int k = 11; k <= 15; ++k) {
+    ASSERT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_SUCCESS) << "call " << k;
+    EXPECT_NEAR(t, 0.01 * k, 1e-14) << "call " << k;
+  }
+  EXPECT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_TSTOP_RETURN);
+  EXPECT_EQ(t, SUN_RCONST(0.1537));
+  ASSERT_EQ(CEodeClearStopTime(mem()), CE_SUCCESS);
+  for (int k = 17; k <= 20; ++k) ASSERT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_SUCCESS);
+  ASSERT_EQ(CEodeRootInit(mem(), 1, RootInStep), CE_SUCCESS);
+  int flag = CE_SUCCESS;
+  int calls = 0;
+  while (flag == CE_SUCCESS && calls < 20) {
+    flag = Evolve(10, &t, CE_ONE_STEP);
+    ++calls;
+  }
+  EXPECT_EQ(flag, CE_ROOT_RETURN);
+  EXPECT_NEAR(t, 0.2537, 1e-10);
+  long int nst = 0;
+  CEodeGetNumSteps(mem(), &nst);
+  EXPECT_EQ(nst, 25);  // to t = 0.25: the roots of [0.25, 0.26] are found before its step
+}
+
 // h = 1e-9 at t = 1e6 lies below the grid tolerance of t's round-off (64 units, 7.5e-9): every
 // CE_ONE_STEP call takes exactly one step, the first (with the start) too, and a CE_NORMAL call
 // 100 steps ahead takes 100.
