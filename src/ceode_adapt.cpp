@@ -348,9 +348,10 @@ void ClearRun(CEodeMemRec* ce) {
   }
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
-  am->cw_h = am->est_h = am->pos_h = am->spec_h = 0;  // the method or the start's coefficients
-  am->spec_ready = false;                             // may be new
-  am->after.fused_key = am->pos.fused_key = -1;       // and the backend (CEodeSetFusedKernel)
+  // The method or the start's coefficients may be new, and the backend (CEodeSetFusedKernel).
+  am->cw_h = am->est_h = am->pos_h = am->spec_h = am->shape_h = 0;
+  am->spec_ready = false;
+  am->after.fused_key = am->pos.fused_key = -1;
   am->ewt_next_ready = false;
 }
 

@@ -121,7 +121,9 @@ struct AdaptMem {
   // weights for (pos_h, pos_hprev, pos_hmap).
   AdaptAfterF after;
   AdaptPosition pos;
-  sunrealtype cw_h = 0;  // the step after.cw belongs to
+  sunrealtype shape_h = 0;   // the step after's shape belongs to (AfterFShape; 0: none yet)
+  bool after_fused = false;  // that shape runs in one serial pass (AfterFIsFused)
+  sunrealtype cw_h = 0;      // the step after.cw belongs to
   sunrealtype est_h = 0;
   sunrealtype est_scale = 0;
   sunrealtype pos_h = 0;

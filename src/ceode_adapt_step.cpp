@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 #include "ceode_adapt.hpp"
@@ -157,23 +158,16 @@ void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
   w.full = full;
 }
 
-// The estimate's source: the last of the new divided differences a[t, t_n, ..., t_{n+2-p}]
-// (dd[1 - cur]); one difference short (the first step of the sets of order d), the top
-// difference available over the step stands in for the missing one: an overestimate while h is
-// below the solution's time scale, so the first step is tested too; none while the history is
-// shorter still.
-void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
+// The estimate's shape for the step ce->h (kept while h and the number of differences stay,
+// AfterFShape): the last of the new divided differences a[t, t_n, ..., t_{n+2-p}] scaled; one
+// difference short (the first step of the sets of order d), the top difference available over the
+// step stands in for the missing one: an overestimate while h is below the solution's time scale,
+// so the first step is tested too; none while the history is shorter still.
+void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   const int p = am->order;
   const int jmax = std::min(p - 1, am->ndata);
   w->ndiff = jmax;
-  // (The differences' data: their table and the node's half of it.)
-  w->dd_data = am->dd_data;
-  w->dd_cur = am->cur;
-  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
-    w->r[0] = 1 / (t - am->tnode[0]);
-  } else {
-    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
-  }
+  w->dd_data = am->dd_data;  // the differences' data: their table and the node's half of it
   const sunrealtype h = ce->h;
   if (h != am->est_h) {
     am->est_h = h;
@@ -183,13 +177,26 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   w->est_kind = AdaptAfterF::kEstLast;
   if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
     w->est_kind = AdaptAfterF::kEstCopy;
-    w->est_src = ce->Dnew[2];
   } else if (jmax == p - 2 && jmax >= 1) {
     w->est_kind = AdaptAfterF::kEstCopy;
-    w->est_src = am->dd[1 - am->cur][jmax];
     w->scale /= h;
   } else if (jmax < p - 1) {
     w->est_kind = AdaptAfterF::kEstNone;
+  }
+}
+
+// The estimate's per-step part: the differences' reciprocal intervals to t and the copied
+// difference (kEstCopy), which follow the node.
+void EstimateNodeTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
+  const int jmax = w->ndiff;
+  w->dd_cur = am->cur;
+  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
+    w->r[0] = 1 / (t - am->tnode[0]);
+  } else {
+    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
+  }
+  if (w->est_kind == AdaptAfterF::kEstCopy) {
+    w->est_src = am->order == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][jmax];
   }
 }
 
@@ -221,8 +228,21 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   }
   w->spec_m = am->spec_m;
   w->spec_weights = am->wkind;
-  w->spec_x = am->xspec;
-  w->spec_ewt = am->ewt_spec;
+}
+
+// The fields of AdaptAfterF that depend on the step's h, the number of differences and the
+// weights' kind only, with the pass they choose: most steps keep all three, and the fields stay.
+void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
+  AdaptAfterF& w = am->after;
+  const int ndiff = std::min(am->order - 1, am->ndata);
+  if (ce->h == am->shape_h && ndiff == w.ndiff && weights == w.weights) return;
+  am->shape_h = ce->h;
+  DerivativeWeights(ce, am);
+  EstimateTerms(ce, am, &w);
+  w.yc = 1 / ce->h;
+  w.weights = weights;
+  NextPositionTerms(ce, am, &w);
+  am->after_fused = am->kernels.AfterFIsFused(&w);
 }
 
 // The step's vector work once f is known at its end (AdaptAfterF): the derivatives there, the
@@ -232,21 +252,20 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
 // position of a next step of the same h (NextPositionTerms).
 sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
-  DerivativeWeights(ce, am);
+  // The weights of the new position, unless they came with it (MoveTo).
+  AfterFShape(ce, am, am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind);
   w.D = ce->D;
   w.Dn = ce->Dnew;
-  EstimateTerms(ce, am, t, &w);
+  EstimateNodeTerms(ce, am, t, &w);
   w.est = am->est;
   w.ewt = am->ewt;
-  w.yc = 1 / ce->h;
   w.yd = am->yd_next;
-  // The weights of the new position, unless they came with it (MoveTo).
-  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
-  NextPositionTerms(ce, am, &w);
+  w.spec_x = am->xspec;
+  w.spec_ewt = am->ewt_spec;
   w.kp = nullptr;
-  if (!am->kernels.AfterFIsFused(&w)) {
+  if (!am->after_fused) {
     DifferenceVectors(ce, am, &w);
     w.kp = &DerivativePlan(ce, am);
   }
@@ -360,9 +379,9 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   std::swap(am->ele, am->est);
   am->cur = 1 - am->cur;
   // The differences read tnode[0 .. p - 2]: t enters at the front, the others move back by one
-  // (a rotation through a register, not a memmove call).
-  sunrealtype moving = t;
-  for (int i = 0; i <= std::min(am->order, kMaxDegree); ++i) std::swap(moving, am->tnode[i]);
+  // (the whole array: a move of constant size, a few vector loads and stores, no loop).
+  std::memmove(am->tnode + 1, am->tnode, kMaxDegree * sizeof(sunrealtype));
+  am->tnode[0] = t;
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
