@@ -592,10 +592,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   // On the limit itself (a stop time just reached) the step stays the controller's: the next
   // CEodeEvolve cuts it to its own stop time.
   const sunrealtype rem = limit_t - tfrom;
-  if (rem > 0 && rem <= h * (1 + 1e-4)) {
-    h = rem;  // lands on the limit (a stretch of at most 1e-4)
-  } else if (rem > 0 && rem < 2 * h) {
-    h = rem / 2;  // two even steps instead of a sliver
+  if (rem > 0 && rem < 2 * h) {  // one test while the limit is far (h > 0)
+    // lands on the limit (a stretch of at most 1e-4), or two even steps instead of a sliver
+    h = rem <= h * (1 + 1e-4) ? rem : rem / 2;
   }
   am.eta_prev = h / hold;
   return h;

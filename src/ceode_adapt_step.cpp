@@ -185,6 +185,10 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   }
 }
 
+// From this many differences on, the quotients of every slot cost fewer instructions than a
+// loop over the differences alone.
+constexpr int kWideQuotients = 4;
+
 // The estimate's per-step part: the differences' reciprocal intervals to t and the copied
 // difference (kEstCopy), which follow the node.
 void EstimateNodeTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
@@ -192,8 +196,12 @@ void EstimateNodeTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF
   w->dd_cur = am->cur;
   if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
     w->r[0] = 1 / (t - am->tnode[0]);
-  } else {
+  } else if (jmax < kWideQuotients) {
     for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
+  } else {
+    // Every slot (t follows each node time: finite; the unused ones are not read), a loop of
+    // constant length that runs on pairs.
+    for (int j = 0; j < kMaxDegree; ++j) w->r[j] = 1 / (t - am->tnode[j]);
   }
   if (w->est_kind == AdaptAfterF::kEstCopy) {
     w->est_src = am->order == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][jmax];
