@@ -154,9 +154,13 @@ constexpr sunrealtype kHoldLowHigh = 0.95;
 constexpr sunrealtype kHoldHighLow = 1.5;
 constexpr sunrealtype kHoldHighHigh = 1.1;
 
+// The fast path's margin inside the band's exponents (BandKeepsStep): above the exponents' error,
+// 1.5 kApproxLogError / k (PI, k >= 2) and kApproxLogError / (2 k) (H211b).
+constexpr sunrealtype kKeepSlack = 1e-4;
+
 // The run's band: the user's (hold_lb, hold_ub; 0: the default for degree d), its top lowered to
-// the remap's growth bound (a step that the bound clips is not held), and its exponents for the
-// fast path of both controllers.
+// the remap's growth bound (a step that the bound clips is not held), and its exponents for both
+// controllers, also less the fast path's margin.
 void HoldBand(AdaptMem* am, int d) {
   const bool high = d > 6;
   const sunrealtype ub = am->hold_ub > 0 ? am->hold_ub : (high ? kHoldHighHigh : kHoldHighLow);
@@ -167,6 +171,7 @@ void HoldBand(AdaptMem* am, int d) {
   am->xhold[1] = hi - l9 - kMargin;
   am->xhold[2] = lo + kMargin;
   am->xhold[3] = hi - kMargin;
+  for (int i = 0; i < 4; ++i) am->xkeep[i] = am->xhold[i] + (i % 2 == 0 ? kKeepSlack : -kKeepSlack);
 }
 
 // SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
@@ -500,16 +505,14 @@ sunrealtype ApproxLog(sunrealtype v) {
 // by more than what their error can move it, so that the exact logarithms decide the same; false
 // leaves the decision to them (and to the user's SUNAdaptController when there is one).
 bool BandKeepsStep(const AdaptMem& am, sunrealtype le, sunrealtype lep, sunrealtype k) {
-  // Above the exponents' error: 1.5 kApproxLogError / k (PI, k >= 2), kApproxLogError / (2 k).
-  constexpr sunrealtype kSlack = 1e-4;
   if (am.sun_controller != nullptr) return false;
   if (am.controller == CE_ADAPT_PI) {
     const sunrealtype x = (-0.7 * le + 0.4 * (lep - le)) / k;
-    return x > am.xhold[0] + kSlack && x < am.xhold[1] - kSlack;
+    return x > am.xkeep[0] && x < am.xkeep[1];
   }
   if (am.eta_prev != 1) return false;  // H211b with log(eta_prev) != 0
   const sunrealtype x = -(le + lep) / (kFilterB * k);
-  return x > am.xhold[2] + kSlack && x < am.xhold[3] - kSlack;
+  return x > am.xkeep[2] && x < am.xkeep[3];
 }
 
 // The exact log(err_prev / target), which the last step did not take.

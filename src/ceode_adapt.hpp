@@ -96,6 +96,7 @@ struct AdaptMem {
   sunrealtype hold_lo = 0.97;  // the band's bottom and top for the run (ceode_adapt.cpp,
   sunrealtype hold_hi = 1.5;   // HoldBand)
   sunrealtype xhold[4] = {};   // the band's exponents for the PI controller and for H211b
+  sunrealtype xkeep[4] = {};   // the same less the fast path's margin (BandKeepsStep)
   bool first = true;           // no step has passed an error test since the start
   bool capped_last = false;    // the stable step decided the last step
   long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
@@ -127,6 +128,7 @@ struct AdaptMem {
   AdaptPosition pos;
   sunrealtype shape_h = 0;   // the step after's shape belongs to (AfterFShape; 0: none yet)
   bool after_fused = false;  // that shape runs in one serial pass (AfterFIsFused)
+  bool spec_pass = false;    // and forms the next position there (AdaptAfterF 7.)
   sunrealtype cw_h = 0;      // the step after.cw belongs to
   sunrealtype est_h = 0;
   sunrealtype est_scale = 0;

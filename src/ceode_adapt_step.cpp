@@ -267,6 +267,7 @@ void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
   w.weights = weights;
   NextPositionTerms(ce, am, &w);
   am->after_fused = am->kernels.AfterFIsFused(&w);
+  am->spec_pass = w.spec_m > 0 && am->after_fused;
 }
 
 // The step's vector work once f is known at its end (AdaptAfterF): the derivatives there, the
@@ -295,7 +296,7 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
     DifferenceVectors(ce, am, &w);
     w.kp = &DerivativePlan(ce, am);
   }
-  am->spec_ready = w.spec_m > 0 && w.kp == nullptr;
+  am->spec_ready = am->spec_pass;
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
@@ -411,7 +412,7 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
-  am->first = am->first && !AdaptEstimated(*am);  // until a step passes a test: on trial
+  if (am->first) am->first = !AdaptEstimated(*am);  // until a step passes a test: on trial
   ce->tcur = t;
   ++ce->nst;
   ++ce->nsteps_h;
