@@ -233,7 +233,7 @@ void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[k
 bool AdaptEnabled(const CEodeMemRec* ce) { return ce->adapt->on; }
 
 sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
-  return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
+  return GuardOn(ce) ? GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety) : SUN_BIG_REAL;
 }
 
 int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func) {
