@@ -518,6 +518,32 @@ bool BandKeepsStep(const AdaptMem& am, sunrealtype le, sunrealtype lep, sunrealt
 // The exact log(err_prev / target), which the last step did not take.
 sunrealtype PrevLog(const AdaptMem& am) { return std::log(std::max(am.err_prev, 1e-10) / kTarget); }
 
+// The controller's ratio from exact logarithms (the band's fast path did not decide): le of
+// v = err / target, lep the last step's (had_prev: there was one). Out of line: the step that
+// keeps h runs without its calls (log, exp, the user's controller) and the registers they need.
+__attribute__((noinline)) sunrealtype ExactRatio(CEodeMemRec* ce, sunrealtype err,
+                                                 sunrealtype hbase, sunrealtype v, bool had_prev) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  const sunrealtype le = std::log(v);
+  const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
+  am.lerr_prev_approx = le;
+  am.lerr_prev_exact = true;
+  sunrealtype eta = 1;
+  if (SunControllerRatio(ce, err, hbase, &eta)) {
+    // the user's SUNAdaptController chose
+  } else if (am.controller == CE_ADAPT_PI) {
+    eta =
+        RatioOfExponent(am, (-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
+  } else {
+    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+    eta = RatioOfExponent(am, -(le + lep) / (kFilterB * k) - lr / kFilterB, false);
+  }
+  am.err_prev = err;
+  am.lerr_prev = le;
+  return eta;
+}
+
 // The controller's ratio from the error norm err of the last accepted step of hbase.
 sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
   AdaptMem& am = *ce->adapt;
@@ -549,23 +575,7 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
     am.lerr_prev_exact = false;
     return 1;
   }
-  const sunrealtype le = std::log(v);
-  const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
-  am.lerr_prev_approx = le;
-  am.lerr_prev_exact = true;
-  sunrealtype eta = 1;
-  if (SunControllerRatio(ce, err, hbase, &eta)) {
-    // the user's SUNAdaptController chose
-  } else if (am.controller == CE_ADAPT_PI) {
-    eta =
-        RatioOfExponent(am, (-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
-  } else {
-    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
-    eta = RatioOfExponent(am, -(le + lep) / (kFilterB * k) - lr / kFilterB, false);
-  }
-  am.err_prev = err;
-  am.lerr_prev = le;
-  return eta;
+  return ExactRatio(ce, err, hbase, v, had_prev);
 }
 
 }  // namespace
