@@ -147,29 +147,30 @@ inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
 // than it saves (the L1 sums of n < 4 entries are the same either way).
 constexpr sunindextype kPairsFrom = 4;
 
-// The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate):
-// the histories' and the differences' from their tables (indexed as D and the differences), the
-// others from their vectors.
+// The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
 template <int D, int ND>
 struct AfterFArrays {
   sunrealtype* xs;  // the next position (spec_x) and its weights
   sunrealtype* ewts;
-  const sunrealtype* const* Do;  // the node's history, 1 .. D - 1
-  sunrealtype* const* Dn;        // the new node's (Dn[2] = a)
-  const sunrealtype* const* ddo;
-  sunrealtype* const* ddn;
-  sunrealtype* est;
+  const sunrealtype* Do[D];  // the node's history, 1 .. D - 1
+  sunrealtype* Dn[D];        // the new node's (Dn[2] = a)
+  const sunrealtype* ddo[ND + 1];
+  sunrealtype* ddn[ND + 1];  // ddn[ND]: the estimate
   const sunrealtype* ewt;
   sunrealtype* yd;
   const sunrealtype* x;
   const sunrealtype* atolv;
   sunrealtype* ewt_next;
-  explicit AfterFArrays(const AdaptAfterF& w)
-      : Do(w.hist_data[0]),
-        Dn(w.hist_data[1]),
-        ddo(w.dd_data[w.dd_cur]),
-        ddn(w.dd_data[1 - w.dd_cur]) {
-    est = NV_DATA_S(w.est);
+  explicit AfterFArrays(const AdaptAfterF& w) {
+    for (int k = 1; k < D; ++k) {
+      Do[k] = NV_DATA_S(w.D[k]);
+      Dn[k] = NV_DATA_S(w.Dn[k]);
+    }
+    for (int j = 1; j < ND; ++j) {
+      ddo[j] = w.dd_data[w.dd_cur][j];
+      ddn[j] = w.dd_data[1 - w.dd_cur][j];
+    }
+    ddn[ND] = NV_DATA_S(w.est);
     ewt = NV_DATA_S(w.ewt);
     yd = NV_DATA_S(w.yd);
     x = NV_DATA_S(w.x);
@@ -259,7 +260,7 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     V e = co.r(j - 1) * (prev_new - prev_old);
     if (j == ND) {
       e = co.scale() * e;
-      Store(p.est + i, e);
+      Store(p.ddn[ND] + i, e);
       // 4. the weighted square
       const V q = e * Load(p.ewt + i, tag);
       AddInOrder(ssq, q * q);
