@@ -353,6 +353,7 @@ void ClearRun(CEodeMemRec* ce) {
   }
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
+  am->hist_key[0] = am->hist_key[1] = nullptr;
   // The method or the start's coefficients may be new, and the backend (CEodeSetFusedKernel).
   am->cw_h = am->est_h = am->pos_h = am->spec_h = am->shape_h = 0;
   am->spec_ready = false;

@@ -116,6 +116,10 @@ struct AdaptMem {
   sunrealtype plan_h[2] = {};
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
+  // The serial pass's data of D and Dnew (AdaptAfterF::hist_data) for the two configurations of
+  // the buffers, keyed by D_1's buffer as the plans.
+  sunrealtype* hist_data[2][2][kMaxDegree] = {};
+  N_Vector hist_key[2] = {};
 
   // The fused passes' descriptions (ceode_adapt_step.cpp), kept so that a step fills only what
   // changed: the derivatives' weights for cw_h, the estimate's scale for est_h, the position's

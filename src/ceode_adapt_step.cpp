@@ -130,6 +130,22 @@ const KernelPlan& DerivativePlan(CEodeMemRec* ce, AdaptMem* am) {
   return kp;
 }
 
+// The data of D and Dnew for the serial pass (AdaptAfterF::hist_data), looked up once for each
+// configuration of the buffers; a third one (the vectors changed) starts the table again.
+sunrealtype* const (*HistoryData(CEodeMemRec* ce, AdaptMem* am))[kMaxDegree] {
+  const N_Vector key = ce->D[1];
+  if (key == am->hist_key[0]) return am->hist_data[0];
+  if (key == am->hist_key[1]) return am->hist_data[1];
+  const int c = am->hist_key[0] == nullptr || am->hist_key[1] != nullptr ? 0 : 1;
+  if (c == 0) am->hist_key[1] = nullptr;
+  for (int k = 1; k < ce->degree; ++k) {
+    am->hist_data[c][0][k] = NV_DATA_S(ce->D[k]);
+    am->hist_data[c][1][k] = NV_DATA_S(ce->Dnew[k]);
+  }
+  am->hist_key[c] = key;
+  return am->hist_data[c];
+}
+
 // The derivatives' weights of the serial pass (AdaptAfterF::cw) for the step's h, once per h:
 // BuildUpdatePlan's values in its order, and whether none is zero (full).
 void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
@@ -274,7 +290,9 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   w.spec_x = am->xspec;
   w.spec_ewt = am->ewt_spec;
   w.kp = nullptr;
-  if (!am->after_fused) {
+  if (am->after_fused) {
+    w.hist_data = HistoryData(ce, am);
+  } else {
     DifferenceVectors(ce, am, &w);
     w.kp = &DerivativePlan(ce, am);
   }
