@@ -261,6 +261,8 @@ void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
   const int ndiff = std::min(am->order - 1, am->ndata);
   if (ce->h == am->shape_h && ndiff == w.ndiff && weights == w.weights) return;
   am->shape_h = ce->h;
+  w.D = ce->D;  // the arrays themselves: the buffers trade places inside them
+  w.Dn = ce->Dnew;
   DerivativeWeights(ce, am);
   EstimateTerms(ce, am, &w);
   w.yc = 1 / ce->h;
@@ -279,8 +281,6 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
   // The weights of the new position, unless they came with it (MoveTo).
   AfterFShape(ce, am, am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind);
-  w.D = ce->D;
-  w.Dn = ce->Dnew;
   EstimateNodeTerms(ce, am, t, &w);
   w.est = am->est;
   w.ewt = am->ewt;
