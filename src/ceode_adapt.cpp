@@ -155,9 +155,13 @@ constexpr sunrealtype kHoldLowHigh = 0.95;
 constexpr sunrealtype kHoldHighLow = 1.5;
 constexpr sunrealtype kHoldHighHigh = 1.1;
 
+// The fast path's margin inside the band's exponents (BandKeepsStep): above the exponents' error,
+// 1.5 kApproxLogError / k (PI, k >= 2) and kApproxLogError / (2 k) (H211b).
+constexpr sunrealtype kKeepSlack = 1e-4;
+
 // The run's band: the user's (hold_lb, hold_ub; 0: the default for degree d), its top lowered to
-// the remap's growth bound (a step that the bound clips is not held), and its exponents for the
-// fast path of both controllers.
+// the remap's growth bound (a step that the bound clips is not held), and its exponents for both
+// controllers, also less the fast path's margin.
 void HoldBand(AdaptMem* am, int d) {
   const bool high = d > 6;
   const sunrealtype ub = am->hold_ub > 0 ? am->hold_ub : (high ? kHoldHighHigh : kHoldHighLow);
@@ -168,6 +172,7 @@ void HoldBand(AdaptMem* am, int d) {
   am->xhold[1] = hi - l9 - kMargin;
   am->xhold[2] = lo + kMargin;
   am->xhold[3] = hi - kMargin;
+  for (int i = 0; i < 4; ++i) am->xkeep[i] = am->xhold[i] + (i % 2 == 0 ? kKeepSlack : -kKeepSlack);
 }
 
 // SUNDIALS 7: the ratio from the user's SUNAdaptController for an accepted step of hbase with
@@ -229,7 +234,7 @@ void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[k
 bool AdaptEnabled(const CEodeMemRec* ce) { return ce->adapt->on; }
 
 sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
-  return GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety);
+  return GuardOn(ce) ? GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety) : SUN_BIG_REAL;
 }
 
 int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func) {
@@ -349,9 +354,11 @@ void ClearRun(CEodeMemRec* ce) {
   }
   am->plan_h[0] = am->plan_h[1] = 0;  // the vectors may have been cloned again
   am->plan_key[0] = am->plan_key[1] = nullptr;
-  am->cw_h = am->est_h = am->pos_h = am->spec_h = 0;  // the method or the start's coefficients
-  am->spec_ready = false;                             // may be new
-  am->after.fused_key = am->pos.fused_key = -1;       // and the backend (CEodeSetFusedKernel)
+  am->hist_key[0] = am->hist_key[1] = nullptr;
+  // The method or the start's coefficients may be new, and the backend (CEodeSetFusedKernel).
+  am->cw_h = am->est_h = am->pos_h = am->spec_h = am->shape_h = 0;
+  am->spec_ready = false;
+  am->after.fused_key = am->pos.fused_key = -1;
   am->ewt_next_ready = false;
 }
 
@@ -536,20 +543,44 @@ sunrealtype ApproxLog(sunrealtype v) {
 // by more than what their error can move it, so that the exact logarithms decide the same; false
 // leaves the decision to them (and to the user's SUNAdaptController when there is one).
 bool BandKeepsStep(const AdaptMem& am, sunrealtype le, sunrealtype lep, sunrealtype k) {
-  // Above the exponents' error: 1.5 kApproxLogError / k (PI, k >= 2), kApproxLogError / (2 k).
-  constexpr sunrealtype kSlack = 1e-4;
   if (am.sun_controller != nullptr) return false;
   if (am.controller == CE_ADAPT_PI) {
     const sunrealtype x = (-0.7 * le + 0.4 * (lep - le)) / k;
-    return x > am.xhold[0] + kSlack && x < am.xhold[1] - kSlack;
+    return x > am.xkeep[0] && x < am.xkeep[1];
   }
   if (am.eta_prev != 1) return false;  // H211b with log(eta_prev) != 0
   const sunrealtype x = -(le + lep) / (kFilterB * k);
-  return x > am.xhold[2] + kSlack && x < am.xhold[3] - kSlack;
+  return x > am.xkeep[2] && x < am.xkeep[3];
 }
 
 // The exact log(err_prev / target), which the last step did not take.
 sunrealtype PrevLog(const AdaptMem& am) { return std::log(std::max(am.err_prev, 1e-10) / kTarget); }
+
+// The controller's ratio from exact logarithms (the band's fast path did not decide): le of
+// v = err / target, lep the last step's (had_prev: there was one). Out of line: the step that
+// keeps h runs without its calls (log, exp, the user's controller) and the registers they need.
+__attribute__((noinline)) sunrealtype ExactRatio(CEodeMemRec* ce, sunrealtype err,
+                                                 sunrealtype hbase, sunrealtype v, bool had_prev) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  const sunrealtype le = std::log(v);
+  const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
+  am.lerr_prev_approx = le;
+  am.lerr_prev_exact = true;
+  sunrealtype eta = 1;
+  if (SunControllerRatio(ce, err, hbase, &eta)) {
+    // the user's SUNAdaptController chose
+  } else if (am.controller == CE_ADAPT_PI) {
+    eta =
+        RatioOfExponent(am, (-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
+  } else {
+    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
+    eta = RatioOfExponent(am, -(le + lep) / (kFilterB * k) - lr / kFilterB, false);
+  }
+  am.err_prev = err;
+  am.lerr_prev = le;
+  return eta;
+}
 
 // The controller's ratio from the error norm err of the last accepted step of hbase.
 sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
@@ -582,23 +613,7 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
     am.lerr_prev_exact = false;
     return 1;
   }
-  const sunrealtype le = std::log(v);
-  const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
-  am.lerr_prev_approx = le;
-  am.lerr_prev_exact = true;
-  sunrealtype eta = 1;
-  if (SunControllerRatio(ce, err, hbase, &eta)) {
-    // the user's SUNAdaptController chose
-  } else if (am.controller == CE_ADAPT_PI) {
-    eta =
-        RatioOfExponent(am, (-0.7 * le + 0.4 * (lep - le)) / k, true);  // e^(-0.7/k) (ep/e)^(0.4/k)
-  } else {
-    const sunrealtype lr = am.eta_prev == 1 ? 0 : std::log(am.eta_prev);
-    eta = RatioOfExponent(am, -(le + lep) / (kFilterB * k) - lr / kFilterB, false);
-  }
-  am.err_prev = err;
-  am.lerr_prev = le;
-  return eta;
+  return ExactRatio(ce, err, hbase, v, had_prev);
 }
 
 }  // namespace
@@ -629,10 +644,9 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   // On the limit itself (a stop time just reached) the step stays the controller's: the next
   // CEodeEvolve cuts it to its own stop time.
   const sunrealtype rem = limit_t - tfrom;
-  if (rem > 0 && rem <= h * (1 + 1e-4)) {
-    h = rem;  // lands on the limit (a stretch of at most 1e-4)
-  } else if (rem > 0 && rem < 2 * h) {
-    h = rem / 2;  // two even steps instead of a sliver
+  if (rem > 0 && rem < 2 * h) {  // one test while the limit is far (h > 0)
+    // lands on the limit (a stretch of at most 1e-4), or two even steps instead of a sliver
+    h = rem <= h * (1 + 1e-4) ? rem : rem / 2;
   }
   am.eta_prev = h / hold;
   return h;

@@ -96,6 +96,7 @@ struct AdaptMem {
   sunrealtype hold_lo = 0.97;  // the band's bottom and top for the run (ceode_adapt.cpp,
   sunrealtype hold_hi = 1.5;   // HoldBand)
   sunrealtype xhold[4] = {};   // the band's exponents for the PI controller and for H211b
+  sunrealtype xkeep[4] = {};   // the same less the fast path's margin (BandKeepsStep)
   bool first = true;           // no step has passed an error test since the start
   bool capped_last = false;    // the stable step decided the last step
   long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
@@ -116,13 +117,20 @@ struct AdaptMem {
   sunrealtype plan_h[2] = {};
   N_Vector plan_key[2] = {};
   int plan_last = 1;  // the slot the last step ran
+  // The serial pass's data of D and Dnew (AdaptAfterF::hist_data) for the two configurations of
+  // the buffers, keyed by D_1's buffer as the plans.
+  sunrealtype* hist_data[2][2][kMaxDegree] = {};
+  N_Vector hist_key[2] = {};
 
   // The fused passes' descriptions (ceode_adapt_step.cpp), kept so that a step fills only what
   // changed: the derivatives' weights for cw_h, the estimate's scale for est_h, the position's
   // weights for (pos_h, pos_hprev, pos_hmap).
   AdaptAfterF after;
   AdaptPosition pos;
-  sunrealtype cw_h = 0;  // the step after.cw belongs to
+  sunrealtype shape_h = 0;   // the step after's shape belongs to (AfterFShape; 0: none yet)
+  bool after_fused = false;  // that shape runs in one serial pass (AfterFIsFused)
+  bool spec_pass = false;    // and forms the next position there (AdaptAfterF 7.)
+  sunrealtype cw_h = 0;      // the step after.cw belongs to
   sunrealtype est_h = 0;
   sunrealtype est_scale = 0;
   sunrealtype pos_h = 0;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 #include "ceode_adapt.hpp"
@@ -129,6 +130,22 @@ const KernelPlan& DerivativePlan(CEodeMemRec* ce, AdaptMem* am) {
   return kp;
 }
 
+// The data of D and Dnew for the serial pass (AdaptAfterF::hist_data), looked up once for each
+// configuration of the buffers; a third one (the vectors changed) starts the table again.
+sunrealtype* const (*HistoryData(CEodeMemRec* ce, AdaptMem* am))[kMaxDegree] {
+  const N_Vector key = ce->D[1];
+  if (key == am->hist_key[0]) return am->hist_data[0];
+  if (key == am->hist_key[1]) return am->hist_data[1];
+  const int c = am->hist_key[0] == nullptr || am->hist_key[1] != nullptr ? 0 : 1;
+  if (c == 0) am->hist_key[1] = nullptr;
+  for (int k = 1; k < ce->degree; ++k) {
+    am->hist_data[c][0][k] = NV_DATA_S(ce->D[k]);
+    am->hist_data[c][1][k] = NV_DATA_S(ce->Dnew[k]);
+  }
+  am->hist_key[c] = key;
+  return am->hist_data[c];
+}
+
 // The derivatives' weights of the serial pass (AdaptAfterF::cw) for the step's h, once per h:
 // BuildUpdatePlan's values in its order, and whether none is zero (full).
 void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
@@ -157,23 +174,16 @@ void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
   w.full = full;
 }
 
-// The estimate's source: the last of the new divided differences a[t, t_n, ..., t_{n+2-p}]
-// (dd[1 - cur]); one difference short (the first step of the sets of order d), the top
-// difference available over the step stands in for the missing one: an overestimate while h is
-// below the solution's time scale, so the first step is tested too; none while the history is
-// shorter still.
-void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
+// The estimate's shape for the step ce->h (kept while h and the number of differences stay,
+// AfterFShape): the last of the new divided differences a[t, t_n, ..., t_{n+2-p}] scaled; one
+// difference short (the first step of the sets of order d), the top difference available over the
+// step stands in for the missing one: an overestimate while h is below the solution's time scale,
+// so the first step is tested too; none while the history is shorter still.
+void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   const int p = am->order;
   const int jmax = std::min(p - 1, am->ndata);
   w->ndiff = jmax;
-  // (The differences' data: their table and the node's half of it.)
-  w->dd_data = am->dd_data;
-  w->dd_cur = am->cur;
-  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
-    w->r[0] = 1 / (t - am->tnode[0]);
-  } else {
-    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
-  }
+  w->dd_data = am->dd_data;  // the differences' data: their table and the node's half of it
   const sunrealtype h = ce->h;
   if (h != am->est_h) {
     am->est_h = h;
@@ -183,13 +193,34 @@ void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w)
   w->est_kind = AdaptAfterF::kEstLast;
   if (p == 1) {  // a set of first order: y'' itself, the new node's acceleration, no difference
     w->est_kind = AdaptAfterF::kEstCopy;
-    w->est_src = ce->Dnew[2];
   } else if (jmax == p - 2 && jmax >= 1) {
     w->est_kind = AdaptAfterF::kEstCopy;
-    w->est_src = am->dd[1 - am->cur][jmax];
     w->scale /= h;
   } else if (jmax < p - 1) {
     w->est_kind = AdaptAfterF::kEstNone;
+  }
+}
+
+// From this many differences on, the quotients of every slot cost fewer instructions than a
+// loop over the differences alone.
+constexpr int kWideQuotients = 4;
+
+// The estimate's per-step part: the differences' reciprocal intervals to t and the copied
+// difference (kEstCopy), which follow the node.
+void EstimateNodeTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF* w) {
+  const int jmax = w->ndiff;
+  w->dd_cur = am->cur;
+  if (jmax == 1) {  // degree 3: one difference, no loop set-up for a single quotient
+    w->r[0] = 1 / (t - am->tnode[0]);
+  } else if (jmax < kWideQuotients) {
+    for (int j = 1; j <= jmax; ++j) w->r[j - 1] = 1 / (t - am->tnode[j - 1]);
+  } else {
+    // Every slot (t follows each node time: finite; the unused ones are not read), a loop of
+    // constant length that runs on pairs.
+    for (int j = 0; j < kMaxDegree; ++j) w->r[j] = 1 / (t - am->tnode[j]);
+  }
+  if (w->est_kind == AdaptAfterF::kEstCopy) {
+    w->est_src = am->order == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][jmax];
   }
 }
 
@@ -221,8 +252,24 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   }
   w->spec_m = am->spec_m;
   w->spec_weights = am->wkind;
-  w->spec_x = am->xspec;
-  w->spec_ewt = am->ewt_spec;
+}
+
+// The fields of AdaptAfterF that depend on the step's h, the number of differences and the
+// weights' kind only, with the pass they choose: most steps keep all three, and the fields stay.
+void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
+  AdaptAfterF& w = am->after;
+  const int ndiff = std::min(am->order - 1, am->ndata);
+  if (ce->h == am->shape_h && ndiff == w.ndiff && weights == w.weights) return;
+  am->shape_h = ce->h;
+  w.D = ce->D;  // the arrays themselves: the buffers trade places inside them
+  w.Dn = ce->Dnew;
+  DerivativeWeights(ce, am);
+  EstimateTerms(ce, am, &w);
+  w.yc = 1 / ce->h;
+  w.weights = weights;
+  NextPositionTerms(ce, am, &w);
+  am->after_fused = am->kernels.AfterFIsFused(&w);
+  am->spec_pass = w.spec_m > 0 && am->after_fused;
 }
 
 // The step's vector work once f is known at its end (AdaptAfterF): the derivatives there, the
@@ -232,25 +279,24 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
 // position of a next step of the same h (NextPositionTerms).
 sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
-  DerivativeWeights(ce, am);
-  w.D = ce->D;
-  w.Dn = ce->Dnew;
-  EstimateTerms(ce, am, t, &w);
+  // The weights of the new position, unless they came with it (MoveTo).
+  AfterFShape(ce, am, am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind);
+  EstimateNodeTerms(ce, am, t, &w);
   w.est = am->est;
   w.ewt = am->ewt;
-  w.yc = 1 / ce->h;
   w.yd = am->yd_next;
-  // The weights of the new position, unless they came with it (MoveTo).
-  w.weights = am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind;
   w.x = ce->xnext;
   w.ewt_next = am->ewt_next;
-  NextPositionTerms(ce, am, &w);
+  w.spec_x = am->xspec;
+  w.spec_ewt = am->ewt_spec;
   w.kp = nullptr;
-  if (!am->kernels.AfterFIsFused(&w)) {
+  if (am->after_fused) {
+    w.hist_data = HistoryData(ce, am);
+  } else {
     DifferenceVectors(ce, am, &w);
     w.kp = &DerivativePlan(ce, am);
   }
-  am->spec_ready = w.spec_m > 0 && w.kp == nullptr;
+  am->spec_ready = am->spec_pass;
   sunrealtype dmin = 1;
   const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
@@ -360,13 +406,16 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   std::swap(am->ele, am->est);
   am->cur = 1 - am->cur;
   // The differences read tnode[0 .. p - 2]: t enters at the front, the others move back by one
-  // (a rotation through a register, not a memmove call).
-  sunrealtype moving = t;
-  for (int i = 0; i <= std::min(am->order, kMaxDegree); ++i) std::swap(moving, am->tnode[i]);
+  // (the whole array through registers: copies of constant size without overlap compile to a few
+  // vector loads and stores, where an overlapping move is a library call).
+  sunrealtype moving[kMaxDegree];
+  std::memcpy(moving, am->tnode, sizeof moving);
+  std::memcpy(am->tnode + 1, moving, sizeof moving);
+  am->tnode[0] = t;
   am->ndata = std::min(am->ndata + 1, kMaxDegree);
   am->hprev = am->hmap = am->hlast = h;
   am->err = err;
-  am->first = am->first && !AdaptEstimated(*am);  // until a step passes a test: on trial
+  if (am->first) am->first = !AdaptEstimated(*am);  // until a step passes a test: on trial
   ce->tcur = t;
   ++ce->nst;
   ++ce->nsteps_h;

@@ -690,7 +690,7 @@ void GuardStartAccel(CEodeMemRec* ce) {
 
 sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety) {
   const sunrealtype omega = ce->guard.omega_est;
-  if (ce->guard.mode == CE_GUARD_OFF || !(omega > 0) || !std::isfinite(omega)) return SUN_BIG_REAL;
+  if (!GuardOn(ce) || !(omega > 0) || !std::isfinite(omega)) return SUN_BIG_REAL;
   const sunrealtype lim = Limit(ce);
   return lim > 0 ? safety * lim / omega : SUN_BIG_REAL;
 }

@@ -604,6 +604,9 @@ void GuardStartAccel(CEodeMemRec* ce);     // the start left f(tcur, xcur, D_1) 
 int GuardCheckPending(CEodeMemRec* ce, const char* func);  // the requested check, once
 // safety * Omega_max / omega_max from the last estimate; SUN_BIG_REAL when none is known.
 sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety);
+// Whether the guard is on, so that GuardStableStep can know a step: callers on a step's path test
+// it before the call.
+inline bool GuardOn(const CEodeMemRec* ce) { return ce->guard.mode != CE_GUARD_OFF; }
 
 // ceode_stability.cpp
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);

@@ -320,6 +320,10 @@ struct AdaptAfterF {
   int d = 0;
   N_Vector* D = nullptr;   // the node's history (index 1 .. d - 1)
   N_Vector* Dn = nullptr;  // the new node's (Dn[2] = a, the plan writes the others)
+  // The serial pass on fewer entries than its pair loop takes reads the histories' data instead
+  // from hist_data[0][k] (D's) and hist_data[1][k] (Dn's), 1 <= k < d: the adaptive step looks
+  // them up once for each of the two configurations of the buffers.
+  sunrealtype* const (*hist_data)[kMaxDegree] = nullptr;
   int ndiff = 0;
   sunrealtype r[kMaxDegree] = {};
   // dnew[j] = j == 0 ? Dn[2] : the node's new difference j (dout[j - 1]); dold[j] = j == 0 ? D[2]

@@ -147,30 +147,52 @@ inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
 // than it saves (the L1 sums of n < 4 entries are the same either way).
 constexpr sunindextype kPairsFrom = 4;
 
+// The slots of the histories and the differences in AfterFArrays: copied into the object
+// (Small false: the entry loop keeps them in registers or on the stack; read through the tables,
+// they would be loaded again for every entry), or the tables themselves (Small: on fewer entries
+// than a pair loop takes the copies are most of the pass's set-up).
+template <typename T, int M, bool Small>
+struct Slots {
+  using type = T[M];
+};
+template <typename T, int M>
+struct Slots<T, M, true> {
+  using type = T const*;
+};
+
 // The raw arrays of an AdaptAfterF of degree D with ND differences (the last one the estimate).
-template <int D, int ND>
+template <int D, int ND, bool Small>
 struct AfterFArrays {
   sunrealtype* xs;  // the next position (spec_x) and its weights
   sunrealtype* ewts;
-  const sunrealtype* Do[D];  // the node's history, 1 .. D - 1
-  sunrealtype* Dn[D];        // the new node's (Dn[2] = a)
-  const sunrealtype* ddo[ND + 1];
-  sunrealtype* ddn[ND + 1];  // ddn[ND]: the estimate
+  typename Slots<const sunrealtype*, D, Small>::type Do;  // the node's history, 1 .. D - 1
+  typename Slots<sunrealtype*, D, Small>::type Dn;        // the new node's (Dn[2] = a)
+  typename Slots<const sunrealtype*, ND + 1, Small>::type ddo;
+  typename Slots<sunrealtype*, ND + 1, Small>::type ddn;  // copied: ddn[ND] is the estimate
   const sunrealtype* ewt;
   sunrealtype* yd;
   const sunrealtype* x;
   const sunrealtype* atolv;
   sunrealtype* ewt_next;
+  sunrealtype* est;  // the estimate (Small)
   explicit AfterFArrays(const AdaptAfterF& w) {
-    for (int k = 1; k < D; ++k) {
-      Do[k] = NV_DATA_S(w.D[k]);
-      Dn[k] = NV_DATA_S(w.Dn[k]);
+    if constexpr (Small) {
+      Do = w.hist_data[0];
+      Dn = w.hist_data[1];
+      ddo = w.dd_data[w.dd_cur];
+      ddn = w.dd_data[1 - w.dd_cur];
+      est = NV_DATA_S(w.est);
+    } else {
+      for (int k = 1; k < D; ++k) {
+        Do[k] = NV_DATA_S(w.D[k]);
+        Dn[k] = NV_DATA_S(w.Dn[k]);
+      }
+      for (int j = 1; j < ND; ++j) {
+        ddo[j] = w.dd_data[w.dd_cur][j];
+        ddn[j] = w.dd_data[1 - w.dd_cur][j];
+      }
+      ddn[ND] = NV_DATA_S(w.est);
     }
-    for (int j = 1; j < ND; ++j) {
-      ddo[j] = w.dd_data[w.dd_cur][j];
-      ddn[j] = w.dd_data[1 - w.dd_cur][j];
-    }
-    ddn[ND] = NV_DATA_S(w.est);
     ewt = NV_DATA_S(w.ewt);
     yd = NV_DATA_S(w.yd);
     x = NV_DATA_S(w.x);
@@ -178,6 +200,13 @@ struct AfterFArrays {
     ewt_next = w.weights != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt_next) : nullptr;
     xs = w.spec_m > 0 ? NV_DATA_S(w.spec_x) : nullptr;
     ewts = w.spec_m > 0 ? NV_DATA_S(w.spec_ewt) : nullptr;
+  }
+  sunrealtype* Estimate() const {
+    if constexpr (Small) {
+      return est;
+    } else {
+      return ddn[ND];
+    }
   }
 };
 
@@ -206,8 +235,8 @@ struct AfterFCoeffs {
 
 // 7. of AdaptAfterF: the next position of SM terms from x and the new history nw (its values
 // as written) and the rate yd, PositionEntry's arithmetic; its weights (SWK) follow.
-template <int D, int ND, int SM, int SWK, typename V, typename C>
-inline void NextPositionEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i,
+template <int D, int ND, bool S, int SM, int SWK, typename V, typename C>
+inline void NextPositionEntry(const AfterFArrays<D, ND, S>& p, const C& co, sunindextype i,
                               const V* nw, V yd, V* l1) {
   const V tag{};
   V acc = Load(p.x + i, tag);
@@ -223,9 +252,9 @@ inline void NextPositionEntry(const AfterFArrays<D, ND>& p, const C& co, suninde
 // One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
 // from the plan's sums) with ND differences; C yields the coefficients (V values). SM > 0: the
 // next position of SM terms (7.), its L1 norm summed into *l1.
-template <int D, int ND, int WK, int SM, int SWK, typename V, typename C>
-inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype i, sunrealtype* ssq,
-                        V* l1) {
+template <int D, int ND, bool S, int WK, int SM, int SWK, typename V, typename C>
+inline void AfterFEntry(const AfterFArrays<D, ND, S>& p, const C& co, sunindextype i,
+                        sunrealtype* ssq, V* l1) {
   const V tag{};
   const V a = Load(p.Dn[2] + i, tag);
   V old[D];
@@ -260,7 +289,7 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     V e = co.r(j - 1) * (prev_new - prev_old);
     if (j == ND) {
       e = co.scale() * e;
-      Store(p.ddn[ND] + i, e);
+      Store(p.Estimate() + i, e);
       // 4. the weighted square
       const V q = e * Load(p.ewt + i, tag);
       AddInOrder(ssq, q * q);
@@ -279,7 +308,7 @@ inline void AfterFEntry(const AfterFArrays<D, ND>& p, const C& co, sunindextype 
     const V den = co.rtol() * Abs(Load(p.x + i, tag)) + at;
     Store(p.ewt_next + i, Splat(1, tag) / den);
   }
-  if constexpr (SM > 0) NextPositionEntry<D, ND, SM, SWK, V>(p, co, i, nw, yd, l1);
+  if constexpr (SM > 0) NextPositionEntry<D, ND, S, SM, SWK, V>(p, co, i, nw, yd, l1);
 }
 
 // Coefficient access for the entry: splatted values (pairs) or the plan's own (the tail, n = 1).
@@ -306,25 +335,26 @@ struct PlanCo {
 };
 
 // The weights' denominators are positive (FusedAfterF): no smallest one to find. The next
-// position's L1 norm (SM > 0) is summed as PositionLoop sums it.
-template <int D, int ND, int WK, int SM, int SWK>
+// position's L1 norm (SM > 0) is summed as PositionLoop sums it. S: fewer entries than the pair
+// loop takes (AfterFArrays' tables, no pair loop).
+template <int D, int ND, int WK, int SM, int SWK, bool S = false>
 sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
-  const AfterFArrays<D, ND> p(w);
+  const AfterFArrays<D, ND, S> p(w);
   sunrealtype ssq = 0;
   sunrealtype sum = 0;
   sunindextype i = 0;
-  if constexpr (kPairs) {
+  if constexpr (kPairs && !S) {
     if (n >= kPairsFrom) {
       const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
       const SplatCo<D, ND, Pair> co{k};
       Pair l1p = Splat(0, Pair{});
 #pragma GCC unroll 2
-      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, WK, SM, SWK, Pair>(p, co, i, &ssq, &l1p);
+      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, S, WK, SM, SWK, Pair>(p, co, i, &ssq, &l1p);
       sum = l1p[0] + l1p[1];
     }
   }
   const PlanCo co{w};
-  for (; i < n; ++i) AfterFEntry<D, ND, WK, SM, SWK, sunrealtype>(p, co, i, &ssq, &sum);
+  for (; i < n; ++i) AfterFEntry<D, ND, S, WK, SM, SWK, sunrealtype>(p, co, i, &ssq, &sum);
   *dmin = 1;
   *l1 = sum;
   return std::sqrt(ssq / static_cast<sunrealtype>(n));
@@ -332,24 +362,29 @@ sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin,
 
 using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
 
-// With the next position: SM terms, its weights of kind SWK.
+// With the next position: SM terms, its weights of kind SWK; small: fewer entries than the pair
+// loop takes.
 template <int D, int ND, int SM>
-AfterFFn AfterFNextOf(int spec_weights) {
+AfterFFn AfterFNextOf(int spec_weights, bool small) {
   constexpr int kNone = AdaptAfterF::kWeightsNone;
-  if (spec_weights == AdaptAfterF::kWeightsVector) {
-    return &AfterFFused<D, ND, kNone, SM, AdaptAfterF::kWeightsVector>;
+  constexpr int kVector = AdaptAfterF::kWeightsVector;
+  constexpr int kScalar = AdaptAfterF::kWeightsScalar;
+  if (spec_weights == kVector) {
+    return small ? &AfterFFused<D, ND, kNone, SM, kVector, true>
+                 : &AfterFFused<D, ND, kNone, SM, kVector>;
   }
-  return &AfterFFused<D, ND, kNone, SM, AdaptAfterF::kWeightsScalar>;
+  return small ? &AfterFFused<D, ND, kNone, SM, kScalar, true>
+               : &AfterFFused<D, ND, kNone, SM, kScalar>;
 }
 
 // The named sets' shapes: (degree, differences = order - 1).
 template <int D, int ND>
-AfterFFn AfterFOf(const AdaptAfterF& w) {
+AfterFFn AfterFOf(const AdaptAfterF& w, bool small) {
   constexpr int kNone = AdaptAfterF::kWeightsNone;
   if (w.spec_m > 0) {  // the next position's sum has d or d + 1 terms (AdaptPosition)
     if (w.weights != kNone || w.spec_weights == kNone || !w.positive) return nullptr;
-    if (w.spec_m == D) return AfterFNextOf<D, ND, D>(w.spec_weights);
-    return w.spec_m == D + 1 ? AfterFNextOf<D, ND, D + 1>(w.spec_weights) : nullptr;
+    if (w.spec_m == D) return AfterFNextOf<D, ND, D>(w.spec_weights, small);
+    return w.spec_m == D + 1 ? AfterFNextOf<D, ND, D + 1>(w.spec_weights, small) : nullptr;
   }
   switch (w.weights) {
     case AdaptAfterF::kWeightsScalar:
@@ -361,24 +396,24 @@ AfterFFn AfterFOf(const AdaptAfterF& w) {
   }
 }
 
-AfterFFn FusedAfterF(const AdaptAfterF& w) {
+AfterFFn FusedAfterF(const AdaptAfterF& w, bool small) {
   if (!w.full || w.est_kind != AdaptAfterF::kEstLast) return nullptr;
   if (w.weights != AdaptAfterF::kWeightsNone && !w.positive) return nullptr;
   const int d = w.d;
   const int key = 10 * d + w.ndiff;
   switch (key) {
     case 31:
-      return AfterFOf<3, 1>(w);
+      return AfterFOf<3, 1>(w, small);
     case 42:
-      return AfterFOf<4, 2>(w);
+      return AfterFOf<4, 2>(w, small);
     case 53:
-      return AfterFOf<5, 3>(w);
+      return AfterFOf<5, 3>(w, small);
     case 64:
-      return AfterFOf<6, 4>(w);
+      return AfterFOf<6, 4>(w, small);
     case 76:
-      return AfterFOf<7, 6>(w);
+      return AfterFOf<7, 6>(w, small);
     case 87:
-      return AfterFOf<8, 7>(w);
+      return AfterFOf<8, 7>(w, small);
     default:
       return nullptr;
   }
@@ -388,7 +423,7 @@ AfterFFn FusedAfterF(const AdaptAfterF& w) {
 
 void AdaptKernels::ChooseAfterF(AdaptAfterF* w, int key) const {
   w->fused_key = key;
-  w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w)) : nullptr;
+  w->fused = serial ? reinterpret_cast<void*>(FusedAfterF(*w, n < kPairsFrom)) : nullptr;
 }
 
 sunrealtype AdaptKernels::AfterFByOperations(const AdaptAfterF& w, sunrealtype* dmin) const {
