@@ -55,9 +55,10 @@ void RefreshWeights(const AdaptMem& am, sunrealtype h, sunrealtype scale,
   constexpr int R = AdaptMem::kRefreshRows;
   const int p = am.order;
   const sunrealtype hinv = 1 / h;
-  sunrealtype g[kMaxDegree][R];  // g[t][r] = L_r^t(u_j), t < p - j
-  std::copy(&am.refresh_k[0][0], &am.refresh_k[0][0] + p * R, &g[0][0]);
-  sunrealtype col[kMaxDegree][R];  // col[j][r] = L_r(u_j)
+  // g[t][r] = L_r^t(u_j), t < p - j; col[j][r] = L_r(u_j) (fixed sizes: copies without calls)
+  sunrealtype g[kMaxDegree][R];
+  for (int t = 0; t < kMaxDegree; ++t) std::copy(am.refresh_k[t], am.refresh_k[t] + R, g[t]);
+  sunrealtype col[kMaxDegree][R];
   std::copy(g[0], g[0] + R, col[0]);
   for (int j = 1; j < p; ++j) {
     const sunrealtype rho = (am.tnode[j - 1] - am.tnode[0]) * hinv;
@@ -66,12 +67,14 @@ void RefreshWeights(const AdaptMem& am, sunrealtype h, sunrealtype scale,
     }
     std::copy(g[0], g[0] + R, col[j]);
   }
-  sunrealtype pw[kMaxDegree];  // h^k
+  // c[r][j] = h^(j - e) col[j][r], j >= e; below e col is zero (no term of L_r reaches it)
+  sunrealtype pw[kMaxDegree];
   pw[0] = 1;
   for (int k = 1; k < p; ++k) pw[k] = pw[k - 1] * h;
   for (int r = 0; r < am.refresh_rows; ++r) {
     const int e = am.refresh_e[r];
-    for (int j = 0; j < p; ++j) c[r][j] = j < e ? 0 : col[j][r] * pw[j - e];  // col is 0 below e
+    std::fill(c[r], c[r] + kMaxDegree, SUN_RCONST(0.0));
+    for (int j = e; j < p; ++j) c[r][j] = col[j][r] * pw[j - e];
     c[r][p - 1] /= scale;
   }
 }
