@@ -373,6 +373,7 @@ int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   }
   am.pfac = Factorial(am.order - 1);
   am.refresh = ce->degree >= 6 && !HasConstraints(ce);
+  RefreshTables(&am, ce->degree);
   am.eta_grow = am.refresh ? kEtaMax : GrowthBound(ce->degree, am.remap, am.nremap);
   HoldBand(&am, ce->degree);
   return CE_SUCCESS;

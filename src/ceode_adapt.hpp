@@ -60,12 +60,13 @@ struct AdaptMem {
   // constraints: the constrained solve's position weights follow the remap, 12.6).
   bool refresh = false;
   sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
-  // The refresh's last powers h^j (pow): the step it leaves is the one it came to last time.
-  static constexpr int kPowMemo = 4;
-  sunrealtype pow_x[kPowMemo] = {};
-  sunrealtype pow_r[kPowMemo] = {};
-  int pow_e[kPowMemo] = {};
-  int pow_next = 0;
+  // The refresh's rows as polynomials in h (RefreshTables, with the coefficients): row r
+  // (D_3 .. D_{d-1}, then yd) weighs the interpolant's power coefficient i by
+  // refresh_k[i][r] h^(i - refresh_e[r]); by coefficient, so that one pass serves all rows.
+  static constexpr int kRefreshRows = kMaxDegree - 2;
+  int refresh_rows = 0;
+  int refresh_e[kRefreshRows] = {};
+  sunrealtype refresh_k[kMaxDegree][kRefreshRows] = {};
 
   // The run
   AdaptKernels kernels;         // the backend of its vector work, chosen at the start
@@ -200,6 +201,8 @@ void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[k
 // accelerations (docs/theory.md 12.5); false (nothing changed) while fewer are known or the
 // refresh is off, when the remap applies instead.
 bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h);
+// The refresh's rows from gamma and the order, once per method (none when the refresh is off).
+void RefreshTables(AdaptMem* am, int d);
 
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past

@@ -247,8 +247,14 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
     return;
   }
   if (am->spec_h != ce->h) {  // after the step: hprev = hmap = h (CommitNode)
-    PositionTerms(ce, *am, ce->h, ce->h, w->spec_c, &am->spec_m);  // kept in w while h stays
-    am->spec_h = ce->h;
+    const sunrealtype h = ce->h;
+    if (am->pos_h == h && am->pos_hprev == h && am->pos_hmap == h) {  // a refreshed node's own
+      std::copy(am->pos.c, am->pos.c + am->pos.m, w->spec_c);
+      am->spec_m = am->pos.m;
+    } else {
+      PositionTerms(ce, *am, h, h, w->spec_c, &am->spec_m);  // kept in w while h stays
+    }
+    am->spec_h = h;
   }
   w->spec_m = am->spec_m;
   w->spec_weights = am->wkind;

@@ -31,6 +31,40 @@ void AdaptKernels::Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) c
   }
 }
 
+namespace {
+
+// LinMany on few entries: each entry's inputs are read once for all outputs, the sums in
+// CombineEntriesOf's order (the same values); there the calls per output are most of the cost.
+constexpr sunindextype kLinManyFew = 64;
+template <int M>
+void LinManyEntries(sunindextype n, int nout, const sunrealtype (*c)[kMaxDegree],
+                    const sunrealtype* const* x, sunrealtype* const* out) {
+  for (sunindextype i = 0; i < n; ++i) {
+    sunrealtype xi[M];
+    for (int j = 0; j < M; ++j) xi[j] = x[j][i];
+    for (int k = 0; k < nout; ++k) {
+      sunrealtype s = c[k][0] * xi[0];
+      for (int j = 1; j < M; ++j) s += c[k][j] * xi[j];
+      out[k][i] = s;
+    }
+  }
+}
+
+// LinManyEntries for 3 <= m <= kMaxDegree terms; false for other m.
+bool LinManyFew(sunindextype n, int nout, int m, const sunrealtype (*c)[kMaxDegree],
+                const sunrealtype* const* x, sunrealtype* const* out) {
+  static_assert(kMaxDegree == 8, "LinManyFew lists every term count");
+  using Fn = void (*)(sunindextype, int, const sunrealtype(*)[kMaxDegree],
+                      const sunrealtype* const*, sunrealtype* const*);
+  static constexpr Fn kFns[] = {LinManyEntries<3>, LinManyEntries<4>, LinManyEntries<5>,
+                                LinManyEntries<6>, LinManyEntries<7>, LinManyEntries<8>};
+  if (m < 3 || m > kMaxDegree) return false;
+  kFns[m - 3](n, nout, c, x, out);
+  return true;
+}
+
+}  // namespace
+
 void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                            N_Vector* out) const {
   if (!serial || m < 3) {  // Lin's special case of two terms
@@ -40,6 +74,11 @@ void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], 
   // Lin's CombineSerial with the inputs' data looked up once
   const sunrealtype* x[kMaxDegree];
   SerialDataOf(m, X, x);
+  if (n <= kLinManyFew) {
+    sunrealtype* o[kMaxDegree];
+    for (int k = 0; k < nout; ++k) o[k] = NV_DATA_S(out[k]);
+    if (LinManyFew(n, nout, m, c, x, o)) return;
+  }
   for (int k = 0; k < nout; ++k) CombineSerial(n, m, c[k], x, NV_DATA_S(out[k]));
 }
 
