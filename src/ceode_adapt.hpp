@@ -155,6 +155,21 @@ struct AdaptMem {
 
 // Whether the last step's error was estimated (then its norm may be exactly 0: a solution the
 // method integrates exactly); false while the history is too short for an estimate.
+// The remap terms' weights gamma (h^j - hmap^j), the powers by repeated multiplication (IntPow's
+// values), into rc[0 .. nremap - 1].
+inline void RemapWeights(const AdaptMem& am, int d, sunrealtype h, sunrealtype* rc) {
+  sunrealtype hp[kMaxDegree + 1];
+  sunrealtype mp[kMaxDegree + 1];
+  hp[0] = mp[0] = 1;
+  for (int j = 1; j <= d; ++j) {
+    hp[j] = hp[j - 1] * h;
+    mp[j] = mp[j - 1] * am.hmap;
+  }
+  for (int i = 0; i < am.nremap; ++i) {
+    rc[i] = am.remap[i].gamma * (hp[am.remap[i].j] - mp[am.remap[i].j]);
+  }
+}
+
 inline bool AdaptEstimated(const AdaptMem& am) {
   return am.after.est_kind != AdaptAfterF::kEstNone;
 }

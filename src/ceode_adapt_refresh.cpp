@@ -92,18 +92,11 @@ sunrealtype TopScale(const AdaptMem& am) {
 // from hmap to h with the remap's own terms, from the history before it is rebuilt.
 void MoveVelocity(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
-  sunrealtype hp[kMaxDegree + 1];  // h^j and hmap^j by multiplication
-  sunrealtype mp[kMaxDegree + 1];
-  hp[0] = mp[0] = 1;
-  for (int j = 1; j <= d; ++j) {
-    hp[j] = hp[j - 1] * h;
-    mp[j] = mp[j - 1] * am->hmap;
-  }
+  sunrealtype rc[kMaxDegree * kMaxDegree];
+  RemapWeights(*am, d, h, rc);
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    if (r.k != 1) continue;
-    am->kernels.Axpy(r.gamma * (hp[r.j] - mp[r.j]), 1 + r.j == d ? am->yd : ce->D[1 + r.j],
-                     ce->D[1]);
+    if (r.k == 1) am->kernels.Axpy(rc[i], 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
 }
 

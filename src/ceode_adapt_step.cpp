@@ -33,17 +33,9 @@ void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) 
   w->nremap = 0;
   if (h == am->hmap || RefreshHistory(ce, am, h)) return;
   const int d = ce->degree;
-  // h^j and hmap^j, j <= d, by the multiplications IntPow makes (the same values)
-  sunrealtype hp[kMaxDegree + 1];
-  sunrealtype mp[kMaxDegree + 1];
-  hp[0] = mp[0] = 1;
-  for (int j = 1; j <= d; ++j) {
-    hp[j] = hp[j - 1] * h;
-    mp[j] = mp[j - 1] * am->hmap;
-  }
+  RemapWeights(*am, d, h, w->rc);
   for (int i = 0; i < am->nremap; ++i) {
     const RemapTerm& r = am->remap[i];
-    w->rc[i] = r.gamma * (hp[r.j] - mp[r.j]);
     w->rY[i] = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
     w->rD[i] = ce->D[r.k];
   }
