@@ -336,9 +336,10 @@ struct PlanCo {
 
 // The weights' denominators are positive (FusedAfterF): no smallest one to find. The next
 // position's L1 norm (SM > 0) is summed as PositionLoop sums it. S: fewer entries than the pair
-// loop takes (AfterFArrays' tables, no pair loop).
-template <int D, int ND, int WK, int SM, int SWK, bool S = false>
-sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
+// loop takes (AfterFArrays' tables, no pair loop). Inlined into each instruction set's entry.
+template <int D, int ND, int WK, int SM, int SWK, bool S>
+__attribute__((always_inline)) inline sunrealtype AfterFPass(const AdaptAfterF& w, sunindextype n,
+                                                             sunrealtype* dmin, sunrealtype* l1) {
   const AfterFArrays<D, ND, S> p(w);
   sunrealtype ssq = 0;
   sunrealtype sum = 0;
@@ -360,7 +361,34 @@ sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin,
   return std::sqrt(ssq / static_cast<sunrealtype>(n));
 }
 
+template <int D, int ND, int WK, int SM, int SWK, bool S = false>
+sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
+  return AfterFPass<D, ND, WK, SM, SWK, S>(w, n, dmin, l1);
+}
+
 using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
+
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)) && \
+    defined(SUNDIALS_DOUBLE_PRECISION)
+#define CEODE_AFTERF_AVX 1
+// The pair loop's entry keeps about 30 values live: in SSE2's two-operand form a product whose
+// factor is read again copies the factor first (some 16 copies per entry at degree 8); AVX's
+// three-operand encoding of the same 128-bit operations needs none and rounds alike.
+template <int D, int ND, int WK, int SM, int SWK>
+__attribute__((target("avx"))) sunrealtype AfterFFusedAvx(const AdaptAfterF& w, sunindextype n,
+                                                          sunrealtype* dmin, sunrealtype* l1) {
+  return AfterFPass<D, ND, WK, SM, SWK, false>(w, n, dmin, l1);
+}
+#endif
+
+// The pair loop's pass in the best encoding the processor runs.
+template <int D, int ND, int WK, int SM, int SWK>
+AfterFFn AfterFPairs() {
+#if defined(CEODE_AFTERF_AVX)
+  if (__builtin_cpu_supports("avx")) return &AfterFFusedAvx<D, ND, WK, SM, SWK>;
+#endif
+  return &AfterFFused<D, ND, WK, SM, SWK>;
+}
 
 // With the next position: SM terms, its weights of kind SWK; small: fewer entries than the pair
 // loop takes.
@@ -371,10 +399,10 @@ AfterFFn AfterFNextOf(int spec_weights, bool small) {
   constexpr int kScalar = AdaptAfterF::kWeightsScalar;
   if (spec_weights == kVector) {
     return small ? &AfterFFused<D, ND, kNone, SM, kVector, true>
-                 : &AfterFFused<D, ND, kNone, SM, kVector>;
+                 : AfterFPairs<D, ND, kNone, SM, kVector>();
   }
   return small ? &AfterFFused<D, ND, kNone, SM, kScalar, true>
-               : &AfterFFused<D, ND, kNone, SM, kScalar>;
+               : AfterFPairs<D, ND, kNone, SM, kScalar>();
 }
 
 // The named sets' shapes: (degree, differences = order - 1).
@@ -388,11 +416,11 @@ AfterFFn AfterFOf(const AdaptAfterF& w, bool small) {
   }
   switch (w.weights) {
     case AdaptAfterF::kWeightsScalar:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar, 0, kNone>;
+      return AfterFPairs<D, ND, AdaptAfterF::kWeightsScalar, 0, kNone>();
     case AdaptAfterF::kWeightsVector:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector, 0, kNone>;
+      return AfterFPairs<D, ND, AdaptAfterF::kWeightsVector, 0, kNone>();
     default:
-      return &AfterFFused<D, ND, kNone, 0, kNone>;
+      return AfterFPairs<D, ND, kNone, 0, kNone>();
   }
 }
 
