@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <utility>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -182,6 +183,44 @@ constexpr bool kPairs = false;
 using Pair = sunrealtype;
 #endif
 inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
+// The L1 norm's lanes: a pair's two, one entry's one.
+inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
+inline void AddLanes(Pair* s, Pair v) { *s += v; }
+
+#if defined(__GNUC__) && defined(__SSE2__) && (defined(__x86_64__) || defined(__i386__)) && \
+    defined(SUNDIALS_DOUBLE_PRECISION)
+#define CEODE_AFTERF_AVX 1
+// Four entries in AVX's 256-bit registers, in generic vector operations. Every function that
+// takes or returns one is inlined (always_inline) into the AVX entry: out of line it would not
+// be AVX code, and no call passes a 256-bit value (the ABI GCC warns of is never used).
+#pragma GCC diagnostic ignored "-Wpsabi"
+using Quad = double __attribute__((vector_size(32)));
+using QuadBits = long long __attribute__((vector_size(32)));
+__attribute__((always_inline)) inline Quad Load(const sunrealtype* p, const Quad& /*tag*/) {
+  Quad v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+__attribute__((always_inline)) inline void Store(sunrealtype* p, const Quad& v) {
+  std::memcpy(p, &v, sizeof v);
+}
+__attribute__((always_inline)) inline Quad Abs(const Quad& v) {
+  constexpr long long kMagnitude = 0x7fffffffffffffffLL;
+  return reinterpret_cast<Quad>(reinterpret_cast<QuadBits>(v) &
+                                QuadBits{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
+}
+__attribute__((always_inline)) inline void AddInOrder(sunrealtype* s, const Quad& v) {
+  for (int l = 0; l < 4; ++l) *s += v[l];
+}
+__attribute__((always_inline)) inline Quad Splat(sunrealtype c, const Quad& /*tag*/) {
+  return Quad{c, c, c, c};
+}
+// Into the pair loop's two lanes, entries 0 and 2 into the first: the pairs' order of additions.
+__attribute__((always_inline)) inline void AddLanes(Pair* s, const Quad& v) {
+  *s += Pair{v[0], v[1]};
+  *s += Pair{v[2], v[3]};
+}
+#endif
 // The pair loops start at this many entries: below it splatting their coefficients costs more
 // than it saves (the L1 sums of n < 4 entries are the same either way).
 constexpr sunindextype kPairsFrom = 4;
@@ -256,7 +295,7 @@ struct AfterFCoeffs {
   V r[ND];
   V pc[D + 1];  // spec_c
   V scale, yc, rtol, atol;
-  AfterFCoeffs(const AdaptAfterF& w, V tag) {
+  __attribute__((always_inline)) AfterFCoeffs(const AdaptAfterF& w, const V& tag) {
     const int nsum = D > 3 ? D - 2 : 1;
     for (int s = 0; s < nsum; ++s) {
       // sum 0 has D - 1 terms (z, or D_1 when D = 3), the sum of D_k has D - k
@@ -274,16 +313,17 @@ struct AfterFCoeffs {
 
 // 7. of AdaptAfterF: the next position of SM terms from x and the new history nw (its values
 // as written) and the rate yd, PositionEntry's arithmetic; its weights (SWK) follow.
-template <int D, int ND, bool S, int SM, int SWK, typename V, typename C>
-inline void NextPositionEntry(const AfterFArrays<D, ND, S>& p, const C& co, sunindextype i,
-                              const V* nw, V yd, V* l1) {
+template <int D, int ND, bool S, int SM, int SWK, typename V, typename C, typename L>
+__attribute__((always_inline)) inline void NextPositionEntry(const AfterFArrays<D, ND, S>& p,
+                                                             const C& co, sunindextype i,
+                                                             const V* nw, const V& yd, L* l1) {
   const V tag{};
   V acc = Load(p.x + i, tag);
   for (int j = 1; j < (SM < D ? SM : D); ++j) acc += co.pc(j) * nw[j];
   if constexpr (SM > D) acc += co.pc(D) * yd;
   Store(p.xs + i, acc);
   const V ax = Abs(acc);
-  *l1 += ax;
+  AddLanes(l1, ax);
   const V at = SWK == AdaptAfterF::kWeightsVector ? Load(p.atolv + i, tag) : co.atol();
   Store(p.ewts + i, Splat(1, tag) / (co.rtol() * ax + at));
 }
@@ -291,9 +331,9 @@ inline void NextPositionEntry(const AfterFArrays<D, ND, S>& p, const C& co, suni
 // One entry (or pair) i of AdaptAfterF for the full shape of degree D (no zero weight dropped
 // from the plan's sums) with ND differences; C yields the coefficients (V values). SM > 0: the
 // next position of SM terms (7.), its L1 norm summed into *l1.
-template <int D, int ND, bool S, int WK, int SM, int SWK, typename V, typename C>
-inline void AfterFEntry(const AfterFArrays<D, ND, S>& p, const C& co, sunindextype i,
-                        sunrealtype* ssq, V* l1) {
+template <int D, int ND, bool S, int WK, int SM, int SWK, typename V, typename C, typename L>
+__attribute__((always_inline)) inline void AfterFEntry(const AfterFArrays<D, ND, S>& p, const C& co,
+                                                       sunindextype i, sunrealtype* ssq, L* l1) {
   const V tag{};
   const V a = Load(p.Dn[2] + i, tag);
   V old[D];
@@ -354,13 +394,13 @@ inline void AfterFEntry(const AfterFArrays<D, ND, S>& p, const C& co, sunindexty
 template <int D, int ND, typename V>
 struct SplatCo {
   const AfterFCoeffs<D, ND, V>& k;
-  V c(int s, int j) const { return k.c[s][j]; }
-  V r(int j) const { return k.r[j]; }
-  V pc(int j) const { return k.pc[j]; }
-  V scale() const { return k.scale; }
-  V yc() const { return k.yc; }
-  V rtol() const { return k.rtol; }
-  V atol() const { return k.atol; }
+  const V& c(int s, int j) const { return k.c[s][j]; }
+  const V& r(int j) const { return k.r[j]; }
+  const V& pc(int j) const { return k.pc[j]; }
+  const V& scale() const { return k.scale; }
+  const V& yc() const { return k.yc; }
+  const V& rtol() const { return k.rtol; }
+  const V& atol() const { return k.atol; }
 };
 struct PlanCo {
   const AdaptAfterF& w;
@@ -373,22 +413,39 @@ struct PlanCo {
   sunrealtype atol() const { return w.atol; }
 };
 
+// Entries i, i + 1, ... of AdaptAfterF in vectors of type V while whole ones fit in n; returns
+// the first entry left.
+template <int D, int ND, int WK, int SM, int SWK, typename V>
+__attribute__((always_inline)) inline sunindextype AfterFVectors(
+    const AfterFArrays<D, ND, false>& p, const AdaptAfterF& w, sunindextype i, sunindextype n,
+    sunrealtype* ssq, Pair* l1p) {
+  constexpr sunindextype kWidth = sizeof(V) / sizeof(sunrealtype);
+  const AfterFCoeffs<D, ND, V> k(w, V{});
+  const SplatCo<D, ND, V> co{k};
+#pragma GCC unroll 2
+  for (; i + kWidth <= n; i += kWidth)
+    AfterFEntry<D, ND, false, WK, SM, SWK, V>(p, co, i, ssq, l1p);
+  return i;
+}
+
 // The weights' denominators are positive (FusedAfterF): no smallest one to find. The next
 // position's L1 norm (SM > 0) is summed as PositionLoop sums it. S: fewer entries than the pair
-// loop takes (AfterFArrays' tables, no pair loop).
-template <int D, int ND, int WK, int SM, int SWK, bool S = false>
-sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
+// loop takes (AfterFArrays' tables, no pair loop). W: the widest vector, Pair or (in the AVX
+// entry) Quad, whose loop the pair loop follows. Inlined into each instruction set's entry.
+template <int D, int ND, int WK, int SM, int SWK, bool S, typename W = Pair>
+__attribute__((always_inline)) inline sunrealtype AfterFPass(const AdaptAfterF& w, sunindextype n,
+                                                             sunrealtype* dmin, sunrealtype* l1) {
   const AfterFArrays<D, ND, S> p(w);
   sunrealtype ssq = 0;
   sunrealtype sum = 0;
   sunindextype i = 0;
   if constexpr (kPairs && !S) {
     if (n >= kPairsFrom) {
-      const AfterFCoeffs<D, ND, Pair> k(w, Pair{});
-      const SplatCo<D, ND, Pair> co{k};
       Pair l1p = Splat(0, Pair{});
-#pragma GCC unroll 2
-      for (; i + 2 <= n; i += 2) AfterFEntry<D, ND, S, WK, SM, SWK, Pair>(p, co, i, &ssq, &l1p);
+      if constexpr (sizeof(W) > sizeof(Pair)) {
+        i = AfterFVectors<D, ND, WK, SM, SWK, W>(p, w, i, n, &ssq, &l1p);
+      }
+      i = AfterFVectors<D, ND, WK, SM, SWK, Pair>(p, w, i, n, &ssq, &l1p);
       sum = l1p[0] + l1p[1];
     }
   }
@@ -399,7 +456,32 @@ sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin,
   return std::sqrt(ssq / static_cast<sunrealtype>(n));
 }
 
+template <int D, int ND, int WK, int SM, int SWK, bool S = false>
+sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin, sunrealtype* l1) {
+  return AfterFPass<D, ND, WK, SM, SWK, S>(w, n, dmin, l1);
+}
+
 using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
+
+#if defined(CEODE_AFTERF_AVX)
+// The same operations on four entries at a time, in AVX's three-operand encoding (SSE2's
+// two-operand form copies every factor that is read again first: some 16 copies per entry at
+// degree 8), then on a pair and on single entries as the pair loop does: the same values.
+template <int D, int ND, int WK, int SM, int SWK>
+__attribute__((target("avx"))) sunrealtype AfterFFusedAvx(const AdaptAfterF& w, sunindextype n,
+                                                          sunrealtype* dmin, sunrealtype* l1) {
+  return AfterFPass<D, ND, WK, SM, SWK, false, Quad>(w, n, dmin, l1);
+}
+#endif
+
+// The pair loop's pass in the best encoding the processor runs.
+template <int D, int ND, int WK, int SM, int SWK>
+AfterFFn AfterFPairs() {
+#if defined(CEODE_AFTERF_AVX)
+  if (__builtin_cpu_supports("avx")) return &AfterFFusedAvx<D, ND, WK, SM, SWK>;
+#endif
+  return &AfterFFused<D, ND, WK, SM, SWK>;
+}
 
 // With the next position: SM terms, its weights of kind SWK; small: fewer entries than the pair
 // loop takes.
@@ -410,10 +492,10 @@ AfterFFn AfterFNextOf(int spec_weights, bool small) {
   constexpr int kScalar = AdaptAfterF::kWeightsScalar;
   if (spec_weights == kVector) {
     return small ? &AfterFFused<D, ND, kNone, SM, kVector, true>
-                 : &AfterFFused<D, ND, kNone, SM, kVector>;
+                 : AfterFPairs<D, ND, kNone, SM, kVector>();
   }
   return small ? &AfterFFused<D, ND, kNone, SM, kScalar, true>
-               : &AfterFFused<D, ND, kNone, SM, kScalar>;
+               : AfterFPairs<D, ND, kNone, SM, kScalar>();
 }
 
 // The named sets' shapes: (degree, differences = order - 1).
@@ -427,11 +509,11 @@ AfterFFn AfterFOf(const AdaptAfterF& w, bool small) {
   }
   switch (w.weights) {
     case AdaptAfterF::kWeightsScalar:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsScalar, 0, kNone>;
+      return AfterFPairs<D, ND, AdaptAfterF::kWeightsScalar, 0, kNone>();
     case AdaptAfterF::kWeightsVector:
-      return &AfterFFused<D, ND, AdaptAfterF::kWeightsVector, 0, kNone>;
+      return AfterFPairs<D, ND, AdaptAfterF::kWeightsVector, 0, kNone>();
     default:
-      return &AfterFFused<D, ND, kNone, 0, kNone>;
+      return AfterFPairs<D, ND, kNone, 0, kNone>();
   }
 }
 
