@@ -12,6 +12,7 @@
 #endif
 
 #include "ceode_kernels.hpp"
+#include "ceode_lanes.hpp"
 
 namespace ceode {
 
@@ -158,62 +159,26 @@ namespace ceode {
 
 namespace {
 
-// Entry-wise arithmetic on one double or, with SSE2, on a pair: the same IEEE operations per
-// entry either way, so a pair loop with a scalar tail gives the scalar loop's values.
-inline sunrealtype Load(const sunrealtype* p, sunrealtype /*tag*/) { return *p; }
-inline void Store(sunrealtype* p, sunrealtype v) { *p = v; }
-inline sunrealtype Abs(sunrealtype v) { return std::fabs(v); }
 // s += each entry of v in the order of the entries (the reference's sums are sequential).
 inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
 
 #if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
 constexpr bool kPairs = true;
-using Pair =
-    double __attribute__((vector_size(16)));  // __m128d without may_alias: a template argument
-inline Pair Load(const sunrealtype* p, Pair /*tag*/) { return _mm_loadu_pd(p); }
-inline void Store(sunrealtype* p, Pair v) { _mm_storeu_pd(p, v); }
-inline Pair Abs(Pair v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
 inline void AddInOrder(sunrealtype* s, Pair v) {
   *s += _mm_cvtsd_f64(v);
   *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
 }
-inline Pair Splat(sunrealtype c, Pair /*tag*/) { return _mm_set1_pd(c); }
 #else
 constexpr bool kPairs = false;
 using Pair = sunrealtype;
 #endif
-inline sunrealtype Splat(sunrealtype c, sunrealtype /*tag*/) { return c; }
 // The L1 norm's lanes: a pair's two, one entry's one.
 inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
 inline void AddLanes(Pair* s, Pair v) { *s += v; }
 
-#if defined(__GNUC__) && defined(__SSE2__) && (defined(__x86_64__) || defined(__i386__)) && \
-    defined(SUNDIALS_DOUBLE_PRECISION)
-#define CEODE_AFTERF_AVX 1
-// Four entries in AVX's 256-bit registers, in generic vector operations. Every function that
-// takes or returns one is inlined (always_inline) into the AVX entry: out of line it would not
-// be AVX code, and no call passes a 256-bit value (the ABI GCC warns of is never used).
-#pragma GCC diagnostic ignored "-Wpsabi"
-using Quad = double __attribute__((vector_size(32)));
-using QuadBits = long long __attribute__((vector_size(32)));
-__attribute__((always_inline)) inline Quad Load(const sunrealtype* p, const Quad& /*tag*/) {
-  Quad v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-__attribute__((always_inline)) inline void Store(sunrealtype* p, const Quad& v) {
-  std::memcpy(p, &v, sizeof v);
-}
-__attribute__((always_inline)) inline Quad Abs(const Quad& v) {
-  constexpr long long kMagnitude = 0x7fffffffffffffffLL;
-  return reinterpret_cast<Quad>(reinterpret_cast<QuadBits>(v) &
-                                QuadBits{kMagnitude, kMagnitude, kMagnitude, kMagnitude});
-}
+#if defined(CEODE_AVX)
 __attribute__((always_inline)) inline void AddInOrder(sunrealtype* s, const Quad& v) {
   for (int l = 0; l < 4; ++l) *s += v[l];
-}
-__attribute__((always_inline)) inline Quad Splat(sunrealtype c, const Quad& /*tag*/) {
-  return Quad{c, c, c, c};
 }
 // Into the pair loop's two lanes, entries 0 and 2 into the first: the pairs' order of additions.
 __attribute__((always_inline)) inline void AddLanes(Pair* s, const Quad& v) {
@@ -463,7 +428,7 @@ sunrealtype AfterFFused(const AdaptAfterF& w, sunindextype n, sunrealtype* dmin,
 
 using AfterFFn = sunrealtype (*)(const AdaptAfterF&, sunindextype, sunrealtype*, sunrealtype*);
 
-#if defined(CEODE_AFTERF_AVX)
+#if defined(CEODE_AVX)
 // The same operations on four entries at a time, in AVX's three-operand encoding (SSE2's
 // two-operand form copies every factor that is read again first: some 16 copies per entry at
 // degree 8), then on a pair and on single entries as the pair loop does: the same values.
@@ -477,7 +442,7 @@ __attribute__((target("avx"))) sunrealtype AfterFFusedAvx(const AdaptAfterF& w, 
 // The pair loop's pass in the best encoding the processor runs.
 template <int D, int ND, int WK, int SM, int SWK>
 AfterFFn AfterFPairs() {
-#if defined(CEODE_AFTERF_AVX)
+#if defined(CEODE_AVX)
   if (__builtin_cpu_supports("avx")) return &AfterFFusedAvx<D, ND, WK, SM, SWK>;
 #endif
   return &AfterFFused<D, ND, WK, SM, SWK>;

@@ -16,6 +16,7 @@
 #endif
 
 #include "ceode_kernels.hpp"
+#include "ceode_lanes.hpp"
 
 namespace ceode {
 
@@ -422,6 +423,23 @@ sunrealtype UpdateBlocked(const FusedPlan& fp, sunindextype n) {
 }
 
 #if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+// Entries i .. i + 3 through k.At (which stores the step's results on the entries of one vector
+// of type V and returns the new position's), |x| summed into four partial sums, entry i + l into
+// s[l]: two pairs or one quad, the same additions. Returns the first entry left.
+template <typename V, typename K>
+__attribute__((always_inline)) inline sunindextype NormFours(const K& k, sunindextype n,
+                                                             sunrealtype* s) {
+  constexpr int kW = sizeof(V) / sizeof(sunrealtype);
+  V acc[4 / kW];
+  for (V& a : acc) a = Splat(0, V{});
+  sunindextype i = 0;
+  for (; i + 4 <= n; i += 4) {
+    for (int l = 0; l < 4 / kW; ++l) acc[l] += Abs(k.At(i + l * kW));
+  }
+  std::memcpy(s, acc, sizeof acc);
+  return i;
+}
+
 // Entries i, i + 1 of a sum of M terms: the same multiplications and additions in the same order
 // as SumBlock.
 template <int M>
@@ -592,41 +610,49 @@ bool RolesMatch(const FusedPlan& fp) {
   return true;
 }
 
-// The pointers and weights of a plan in its roles, held where the loop keeps them in registers.
-template <int D, unsigned Ones>
+template <int D, unsigned Ones, typename V>
+struct RolePlan;
+template <int D, unsigned Ones, typename V>
+V RolePair(const RolePlan<D, Ones, V>& rp, sunindextype i);
+
+// The pointers and weights of a plan in its roles, held where the loop keeps them in registers;
+// the weights splatted into vectors of type V (Pair or Quad).
+template <int D, unsigned Ones, typename V>
 struct RolePlan {
   static constexpr int kS = StepSums(D);
   const sunrealtype* in[NumRoles(D)] = {};
-  __m128d c[kS][kMaxTerms] = {};
+  V c[kS][kMaxTerms] = {};
   sunrealtype* out[kS] = {};
-  explicit RolePlan(const FusedPlan& fp) {
+  __attribute__((always_inline)) explicit RolePlan(const FusedPlan& fp) {
     for (int s = 0; s < kS; ++s) {
       for (int j = 0; j < StepTerms(D, Ones, s); ++j) {
-        c[s][j] = _mm_set1_pd(fp.terms[s].c[j]);
+        c[s][j] = Splat(fp.terms[s].c[j], V{});
         const int r = TermRole(D, Ones, s, j);
         if (r <= D) in[r] = fp.terms[s].X[j];
       }
       out[s] = fp.terms[s].out;
     }
   }
+  __attribute__((always_inline)) V At(sunindextype i) const { return RolePair(*this, i); }
 };
 
 // Terms J .. of sum S on the role values v, added to acc in the plan's order.
-template <int D, unsigned Ones, int S, int J>
-inline __m128d RoleTerms(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d acc) {
+template <int D, unsigned Ones, int S, int J, typename V>
+__attribute__((always_inline)) inline V RoleTerms(const RolePlan<D, Ones, V>& rp, const V* v,
+                                                  const V& acc) {
   if constexpr (J == StepTerms(D, Ones, S)) {
     return acc;
   } else {
-    const __m128d x = v[TermRole(D, Ones, S, J)];
-    const __m128d t = UnitTerm(D, Ones, S, J) ? x : _mm_mul_pd(rp.c[S][J], x);
-    return RoleTerms<D, Ones, S, J + 1>(rp, v, _mm_add_pd(acc, t));
+    const V x = v[TermRole(D, Ones, S, J)];
+    const V t = UnitTerm(D, Ones, S, J) ? x : rp.c[S][J] * x;
+    return RoleTerms<D, Ones, S, J + 1>(rp, v, acc + t);
   }
 }
 // Sums S .. in order, each result kept as its role; returns the position's.
-template <int D, unsigned Ones, int S>
-inline __m128d RoleSums(const RolePlan<D, Ones>& rp, __m128d* v) {
-  const __m128d first = _mm_mul_pd(rp.c[S][0], v[TermRole(D, Ones, S, 0)]);
-  const __m128d r = RoleTerms<D, Ones, S, 1>(rp, v, first);
+template <int D, unsigned Ones, int S, typename V>
+__attribute__((always_inline)) inline V RoleSums(const RolePlan<D, Ones, V>& rp, V* v) {
+  const V first = rp.c[S][0] * v[TermRole(D, Ones, S, 0)];
+  const V r = RoleTerms<D, Ones, S, 1>(rp, v, first);
   if constexpr (S + 1 < StepSums(D)) {
     v[OutRole(D, S)] = r;
     return RoleSums<D, Ones, S + 1>(rp, v);
@@ -634,55 +660,67 @@ inline __m128d RoleSums(const RolePlan<D, Ones>& rp, __m128d* v) {
     return r;
   }
 }
-template <int D, unsigned Ones, int R>
-inline void LoadRoles(const RolePlan<D, Ones>& rp, __m128d* v, sunindextype i) {
+template <int D, unsigned Ones, int R, typename V>
+__attribute__((always_inline)) inline void LoadRoles(const RolePlan<D, Ones, V>& rp, V* v,
+                                                     sunindextype i) {
   if constexpr (R <= D) {
-    if constexpr (RoleRead(D, Ones, R)) v[R] = _mm_loadu_pd(rp.in[R] + i);
+    if constexpr (RoleRead(D, Ones, R)) v[R] = Load(rp.in[R] + i, V{});
     LoadRoles<D, Ones, R + 1>(rp, v, i);
   }
 }
-template <int D, unsigned Ones, int S>
-inline void StoreRoles(const RolePlan<D, Ones>& rp, const __m128d* v, __m128d x, sunindextype i) {
+template <int D, unsigned Ones, int S, typename V>
+__attribute__((always_inline)) inline void StoreRoles(const RolePlan<D, Ones, V>& rp, const V* v,
+                                                      const V& x, sunindextype i) {
   if constexpr (S + 1 < StepSums(D)) {
-    _mm_storeu_pd(rp.out[S] + i, v[OutRole(D, S)]);
+    Store(rp.out[S] + i, v[OutRole(D, S)]);
     StoreRoles<D, Ones, S + 1>(rp, v, x, i);
   } else {
-    _mm_storeu_pd(rp.out[S] + i, x);
+    Store(rp.out[S] + i, x);
   }
 }
-// Entries i, i + 1 through every sum; returns the new position's.
-template <int D, unsigned Ones>
-inline __m128d RolePair(const RolePlan<D, Ones>& rp, sunindextype i) {
-  __m128d v[NumRoles(D)];
+// The entries of one vector of type V from i through every sum; returns the new position's.
+template <int D, unsigned Ones, typename V>
+__attribute__((always_inline)) inline V RolePair(const RolePlan<D, Ones, V>& rp, sunindextype i) {
+  V v[NumRoles(D)];
   LoadRoles<D, Ones, 0>(rp, v, i);
-  const __m128d x = RoleSums<D, Ones, 0>(rp, v);
+  const V x = RoleSums<D, Ones, 0>(rp, v);
   StoreRoles<D, Ones, 0>(rp, v, x, i);
   return x;
 }
 
 // UpdatePairs (without streaming) on a plan whose roles match: the same operations in the same
-// order on each entry, and the norm's partial sums as UpdatePairs forms them.
-template <int D, unsigned Ones>
-sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
-  const RolePlan<D, Ones> rp(fp);
-  // |x| as x & mask: the position's register is free after its store, so (unlike andnot with the
-  // sign) the mask needs no copy per pair.
-  const __m128d mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-  __m128d s01 = _mm_setzero_pd();
-  __m128d s23 = _mm_setzero_pd();
-  sunindextype i = 0;
-  for (; i + 4 <= n; i += 4) {
-    s01 = _mm_add_pd(s01, _mm_and_pd(RolePair<D, Ones>(rp, i), mask));
-    s23 = _mm_add_pd(s23, _mm_and_pd(RolePair<D, Ones>(rp, i + 2), mask));
-  }
+// order on each entry, and the norm's partial sums as UpdatePairs forms them. Inlined into each
+// instruction set's entry.
+template <int D, unsigned Ones, typename V = Pair>
+__attribute__((always_inline)) inline sunrealtype RolesPass(const FusedPlan& fp, sunindextype n) {
+  const RolePlan<D, Ones, V> rp(fp);
   sunrealtype s[4];
-  _mm_storeu_pd(s, s01);
-  _mm_storeu_pd(s + 2, s23);
+  sunindextype i = NormFours<V>(rp, n, s);
   for (; i < n; ++i) {
     ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
     s[0] += std::fabs(rp.out[StepSums(D) - 1][i]);
   }
   return (s[0] + s[1]) + (s[2] + s[3]);
+}
+template <int D, unsigned Ones>
+sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
+  return RolesPass<D, Ones>(fp, n);
+}
+#if defined(CEODE_AVX)
+// Four entries at a time in AVX's three-operand encoding (SSE2's two-operand form copies each
+// weight and value that is read again first): the same operations per entry, the same sums.
+template <int D, unsigned Ones>
+__attribute__((target("avx"))) sunrealtype UpdateRolesAvx(const FusedPlan& fp, sunindextype n) {
+  return RolesPass<D, Ones, Quad>(fp, n);
+}
+#endif
+// The roles' kernel in the best encoding the processor runs, chosen with the kernel.
+template <int D, unsigned Ones>
+SerialKernelFn RolesKernel() {
+#if defined(CEODE_AVX)
+  if (__builtin_cpu_supports("avx")) return &UpdateRolesAvx<D, Ones>;
+#endif
+  return &UpdateRoles<D, Ones>;
 }
 
 // ---- G3_CD's kick and drift (LeapKernels) ----
@@ -701,11 +739,11 @@ bool IsLeapPlan(const FusedPlan& fp) {
   return v && u && x && tv.old == nullptr && tu.old == nullptr && tx.old == nullptr;
 }
 
-// The step on entries i, i + 1 (TermsAt's operations in its order; the unit products are the
-// values themselves, and c a, formed once, is the same product in both sums). kFromV: the
-// velocity buffer holds v_old (else u = v_old + c a_old, and a_old is not read); kToU: u = v + c a
-// is stored (else v). Returns x(t + h).
-template <bool kFromV, bool kToU, bool kStream>
+// The step on the entries of one vector of type V from i (TermsAt's operations in its order;
+// the unit products are the values themselves, and c a, formed once, is the same product in both
+// sums). kFromV: the velocity buffer holds v_old (else u = v_old + c a_old, and a_old is not
+// read); kToU: u = v + c a is stored (else v). Returns x(t + h).
+template <bool kFromV, bool kToU, bool kStream, typename V>
 struct LeapStep {
   const sunrealtype* vin;
   const sunrealtype* aold;
@@ -713,63 +751,66 @@ struct LeapStep {
   const sunrealtype* x;
   sunrealtype* vout;
   sunrealtype* xout;
-  __m128d c, w;
-  explicit LeapStep(const FusedPlan& fp)
+  V c, w;
+  __attribute__((always_inline)) explicit LeapStep(const FusedPlan& fp)
       : vin(fp.terms[0].X[0]),
         aold(fp.terms[0].X[1]),
         a(fp.terms[0].X[2]),
         x(fp.terms[2].X[0]),
         vout(fp.terms[0].out),
         xout(fp.terms[2].out),
-        c(_mm_set1_pd(fp.terms[0].c[1])),
-        w(_mm_set1_pd(fp.terms[2].c[1])) {}
-  __m128d Pair(sunindextype i) const {
-    __m128d u = _mm_loadu_pd(vin + i);
-    if constexpr (kFromV) u = _mm_add_pd(u, _mm_mul_pd(c, _mm_loadu_pd(aold + i)));
-    const __m128d ca = _mm_mul_pd(c, _mm_loadu_pd(a + i));
-    const __m128d v = _mm_add_pd(u, ca);
-    const __m128d un = _mm_add_pd(v, ca);
-    const __m128d xn = _mm_add_pd(_mm_loadu_pd(x + i), _mm_mul_pd(w, un));
-    _mm_storeu_pd(vout + i, kToU ? un : v);
+        c(Splat(fp.terms[0].c[1], V{})),
+        w(Splat(fp.terms[2].c[1], V{})) {}
+  __attribute__((always_inline)) V At(sunindextype i) const {
+    V u = Load(vin + i, V{});
+    if constexpr (kFromV) u = u + c * Load(aold + i, V{});
+    const V ca = c * Load(a + i, V{});
+    const V v = u + ca;
+    const V un = v + ca;
+    const V xn = Load(x + i, V{}) + w * un;
+    Store(vout + i, kToU ? un : v);
     if constexpr (kStream) {
-      _mm_stream_pd(xout + i, xn);
+      _mm_stream_pd(xout + i, xn);  // Pair only (LeapKernel streams in the SSE2 entry)
     } else {
-      _mm_storeu_pd(xout + i, xn);
+      Store(xout + i, xn);
     }
     return xn;
   }
-  sunrealtype One(sunindextype i) const {
-    const sunrealtype k = _mm_cvtsd_f64(c);
+  __attribute__((always_inline)) sunrealtype One(sunindextype i) const {
+    const sunrealtype k = c[0];
     sunrealtype u = vin[i];
     if constexpr (kFromV) u += k * aold[i];
     const sunrealtype ca = k * a[i];
     const sunrealtype v = u + ca;
     const sunrealtype un = v + ca;
-    const sunrealtype xn = x[i] + _mm_cvtsd_f64(w) * un;
+    const sunrealtype xn = x[i] + w[0] * un;
     vout[i] = kToU ? un : v;
     xout[i] = xn;
     return xn;
   }
 };
 
-template <bool kFromV, bool kToU, bool kStream>
-sunrealtype UpdateLeap(const FusedPlan& fp, sunindextype n) {
-  const LeapStep<kFromV, kToU, kStream> st(fp);
-  const __m128d mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-  __m128d s01 = _mm_setzero_pd();
-  __m128d s23 = _mm_setzero_pd();
-  sunindextype i = 0;
-  for (; i + 4 <= n; i += 4) {
-    s01 = _mm_add_pd(s01, _mm_and_pd(st.Pair(i), mask));
-    s23 = _mm_add_pd(s23, _mm_and_pd(st.Pair(i + 2), mask));
-  }
-  if constexpr (kStream) StreamFence();  // visible before f reads x(t + h)
+// Inlined into each instruction set's entry.
+template <bool kFromV, bool kToU, bool kStream, typename V = Pair>
+__attribute__((always_inline)) inline sunrealtype LeapPass(const FusedPlan& fp, sunindextype n) {
+  const LeapStep<kFromV, kToU, kStream, V> st(fp);
   sunrealtype s[4];
-  _mm_storeu_pd(s, s01);
-  _mm_storeu_pd(s + 2, s23);
+  sunindextype i = NormFours<V>(st, n, s);
+  if constexpr (kStream) StreamFence();  // visible before f reads x(t + h)
   for (; i < n; ++i) s[0] += std::fabs(st.One(i));
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
+template <bool kFromV, bool kToU, bool kStream>
+sunrealtype UpdateLeap(const FusedPlan& fp, sunindextype n) {
+  return LeapPass<kFromV, kToU, kStream>(fp, n);
+}
+#if defined(CEODE_AVX)
+// Four entries at a time in AVX's three-operand encoding: the same operations per entry.
+template <bool kFromV, bool kToU>
+__attribute__((target("avx"))) sunrealtype UpdateLeapAvx(const FusedPlan& fp, sunindextype n) {
+  return LeapPass<kFromV, kToU, false, Quad>(fp, n);
+}
+#endif
 
 // Streaming the new position past the cache where it is written out of place (UpdatePairsAuto).
 bool LeapStreams(const FusedPlan& fp, sunindextype n) {
@@ -778,7 +819,11 @@ bool LeapStreams(const FusedPlan& fp, sunindextype n) {
 }
 template <bool kFromV, bool kToU>
 SerialKernelFn LeapKernel(const FusedPlan& fp, sunindextype n) {
-  return LeapStreams(fp, n) ? &UpdateLeap<kFromV, kToU, true> : &UpdateLeap<kFromV, kToU, false>;
+  if (LeapStreams(fp, n)) return &UpdateLeap<kFromV, kToU, true>;
+#if defined(CEODE_AVX)
+  if (__builtin_cpu_supports("avx")) return &UpdateLeapAvx<kFromV, kToU>;
+#endif
+  return &UpdateLeap<kFromV, kToU, false>;
 }
 constexpr bool kHaveLeap = true;
 
@@ -796,7 +841,7 @@ template <int D, unsigned Ones>
 SerialKernelFn PairKernel(const FusedPlan& fp, sunindextype n) {
   const FusedTerms& last = fp.terms[StepSums(D) - 1];
   const bool stream = n >= kStreamSystem && !last.in_place;
-  if (!stream && RolesMatch<D, Ones>(fp)) return &UpdateRoles<D, Ones>;
+  if (!stream && RolesMatch<D, Ones>(fp)) return RolesKernel<D, Ones>();
   return &UpdatePairsAuto<D, Ones>;
 }
 constexpr bool kHavePairs = true;
