@@ -440,46 +440,58 @@ __attribute__((always_inline)) inline sunindextype NormFours(const K& k, suninde
   return i;
 }
 
-// Entries i, i + 1 of a sum of M terms: the same multiplications and additions in the same order
-// as SumBlock.
-template <int M>
-inline __m128d PairAt(const sunrealtype* const* x, const __m128d* c, sunindextype i) {
-  __m128d acc = _mm_mul_pd(c[0], _mm_loadu_pd(x[0] + i));
-  for (int j = 1; j < M; ++j) acc = _mm_add_pd(acc, _mm_mul_pd(c[j], _mm_loadu_pd(x[j] + i)));
+// The entries of one vector of type V from i of a sum of M terms: the same multiplications and
+// additions in the same order as SumBlock.
+template <int M, typename V>
+__attribute__((always_inline)) inline V PairAt(const sunrealtype* const* x, const V* c,
+                                               sunindextype i) {
+  V acc = c[0] * Load(x[0] + i, V{});
+  for (int j = 1; j < M; ++j) acc = acc + c[j] * Load(x[j] + i, V{});
   return acc;
 }
 
-// Pointers and weights of a plan of a known shape, held where the loop keeps them in registers.
-template <int D>
+template <int D, unsigned Ones, bool Stream, typename V>
+struct PairPlan;
+template <int D, unsigned Ones, bool Stream, int S, typename V>
+V PairSums(const PairPlan<D, Ones, Stream, V>& pp, sunindextype i);
+
+// Pointers and weights of a plan of a known shape, held where the loop keeps them in registers;
+// the weights splatted into vectors of type V (Pair or Quad; streaming only with Pair).
+template <int D, unsigned Ones, bool Stream, typename V>
 struct PairPlan {
   static constexpr int kS = StepSums(D);
   // Zeroed: the shape fixes how many terms each sum reads (== FusedTerms::m, ShapeOf).
   const sunrealtype* x[kS][kMaxTerms] = {};
-  __m128d c[kS][kMaxTerms] = {};
+  V c[kS][kMaxTerms] = {};
   sunrealtype* out[kS] = {};
-  explicit PairPlan(const FusedPlan& fp) {
+  __attribute__((always_inline)) explicit PairPlan(const FusedPlan& fp) {
     for (int k = 0; k < kS; ++k) {
       for (int j = 0; j < fp.terms[k].m; ++j) {
         x[k][j] = fp.terms[k].X[j];
-        c[k][j] = _mm_set1_pd(fp.terms[k].c[j]);
+        c[k][j] = Splat(fp.terms[k].c[j], V{});
       }
       out[k] = fp.terms[k].out;
     }
   }
+  __attribute__((always_inline)) V At(sunindextype i) const {
+    return PairSums<D, Ones, Stream, 0>(*this, i);
+  }
 };
 
-// Sums S .. of entries i, i + 1, in the plan's order; returns the last (the new position).
-template <int D, unsigned Ones, bool Stream, int S>
-inline __m128d PairSums(const PairPlan<D>& pp, sunindextype i) {
-  const __m128d r = PairAt<StepTerms(D, Ones, S)>(pp.x[S], pp.c[S], i);
+// Sums S .. of the entries of one vector from i, in the plan's order; returns the last (the new
+// position).
+template <int D, unsigned Ones, bool Stream, int S, typename V>
+__attribute__((always_inline)) inline V PairSums(const PairPlan<D, Ones, Stream, V>& pp,
+                                                 sunindextype i) {
+  const V r = PairAt<StepTerms(D, Ones, S)>(pp.x[S], pp.c[S], i);
   if constexpr (S + 1 < StepSums(D)) {
-    _mm_storeu_pd(pp.out[S] + i, r);
+    Store(pp.out[S] + i, r);
     return PairSums<D, Ones, Stream, S + 1>(pp, i);
   } else {
     if constexpr (Stream) {
       _mm_stream_pd(pp.out[S] + i, r);
     } else {
-      _mm_storeu_pd(pp.out[S] + i, r);
+      Store(pp.out[S] + i, r);
     }
     return r;
   }
@@ -490,32 +502,35 @@ inline void ShapedEntry(const FusedPlan& fp, sunindextype i, std::index_sequence
   (ShapedSum<D, Ones, static_cast<int>(S)>(fp, i), ...);
 }
 
-// Large systems of a known shape without compensation, as a hand loop runs them: two entries at
-// a time through every sum of the plan, the position's |x| summed from the register. No block
-// buffer, so an in-place sum writes its output directly: it reads that entry first, and no later
-// sum reads the old value. Entry by entry the operations and their order are SumBlock's, so the
-// state is bit for bit that of UpdateBlocked (and of the N_Vector reference).
-template <int D, unsigned Ones, bool Stream>
-sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
-  const PairPlan<D> pp(fp);
-  const __m128d sign = _mm_set1_pd(-0.0);
-  __m128d s01 = _mm_setzero_pd();
-  __m128d s23 = _mm_setzero_pd();
-  sunindextype i = 0;
-  for (; i + 4 <= n; i += 4) {
-    s01 = _mm_add_pd(s01, _mm_andnot_pd(sign, PairSums<D, Ones, Stream, 0>(pp, i)));
-    s23 = _mm_add_pd(s23, _mm_andnot_pd(sign, PairSums<D, Ones, Stream, 0>(pp, i + 2)));
-  }
-  if constexpr (Stream) StreamFence();  // visible before f reads x(t + h)
+// Large systems of a known shape without compensation, as a hand loop runs them: a vector of
+// entries at a time through every sum of the plan, the position's |x| summed from the register.
+// No block buffer, so an in-place sum writes its output directly: it reads those entries first,
+// and no later sum reads the old values. Entry by entry the operations and their order are
+// SumBlock's, so the state is bit for bit that of UpdateBlocked (and of the N_Vector reference).
+// Inlined into each instruction set's entry.
+template <int D, unsigned Ones, bool Stream, typename V = Pair>
+__attribute__((always_inline)) inline sunrealtype PairsPass(const FusedPlan& fp, sunindextype n) {
+  const PairPlan<D, Ones, Stream, V> pp(fp);
   sunrealtype s[4];
-  _mm_storeu_pd(s, s01);
-  _mm_storeu_pd(s + 2, s23);
+  sunindextype i = NormFours<V>(pp, n, s);
+  if constexpr (Stream) StreamFence();  // visible before f reads x(t + h)
   for (; i < n; ++i) {
     ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
     s[0] += std::fabs(pp.out[StepSums(D) - 1][i]);
   }
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
+template <int D, unsigned Ones, bool Stream>
+sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
+  return PairsPass<D, Ones, Stream>(fp, n);
+}
+#if defined(CEODE_AVX)
+// Four entries at a time in AVX's three-operand encoding: the same operations per entry.
+template <int D, unsigned Ones>
+__attribute__((target("avx"))) sunrealtype UpdatePairsAvx(const FusedPlan& fp, sunindextype n) {
+  return PairsPass<D, Ones, false, Quad>(fp, n);
+}
+#endif
 
 // ---- Each value read once: the step's update as a hand loop runs it ----
 // UpdatePairs reads every term from memory, so a history vector that several sums weigh (D_{d-1}
@@ -836,13 +851,17 @@ sunrealtype UpdatePairsAuto(const FusedPlan& fp, sunindextype n) {
       n >= kStreamSystem && !last.in_place && reinterpret_cast<std::uintptr_t>(last.out) % 16 == 0;
   return stream ? UpdatePairs<D, Ones, true>(fp, n) : UpdatePairs<D, Ones, false>(fp, n);
 }
-// The kernel of a plan of the shape: the roles' when they match and nothing is to be streamed.
+// The kernel of a plan of the shape: UpdatePairsAuto where the position may be streamed (SSE2),
+// else the roles' when they match, else UpdatePairs, in the best encoding the processor runs.
 template <int D, unsigned Ones>
 SerialKernelFn PairKernel(const FusedPlan& fp, sunindextype n) {
   const FusedTerms& last = fp.terms[StepSums(D) - 1];
-  const bool stream = n >= kStreamSystem && !last.in_place;
-  if (!stream && RolesMatch<D, Ones>(fp)) return RolesKernel<D, Ones>();
-  return &UpdatePairsAuto<D, Ones>;
+  if (n >= kStreamSystem && !last.in_place) return &UpdatePairsAuto<D, Ones>;
+  if (RolesMatch<D, Ones>(fp)) return RolesKernel<D, Ones>();
+#if defined(CEODE_AVX)
+  if (__builtin_cpu_supports("avx")) return &UpdatePairsAvx<D, Ones>;
+#endif
+  return &UpdatePairs<D, Ones, false>;
 }
 constexpr bool kHavePairs = true;
 #else

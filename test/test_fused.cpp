@@ -673,6 +673,10 @@ class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
     return plan;
   }
 
+  int Slot(N_Vector v) const {
+    return static_cast<int>(std::find(pool_, pool_ + kVectors, v) - pool_);
+  }
+
   SUNContext ctx_ = nullptr;
   N_Vector pool_[kVectors] = {};
 };
@@ -707,6 +711,56 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNam
     }
   }
   EXPECT_GE(shaped, 3 * 9) << "plans with a kernel of their own";
+}
+
+// A plan of a named set's shape whose first sum that reads a history vector also read by a later
+// sum reads it from another vector (G3_CD's plan has no such vector): the roles do not match
+// (RolesMatch), and the shape's kernel that reads every term through its pointer (UpdatePairs) runs
+// it. It too must give the reference's outputs bit for bit.
+bool MoveSharedRead(ceode::UpdatePlan* plan, int d, const N_Vector* pool, N_Vector spare) {
+  for (int r = 1; r < d; ++r) {
+    int first = -1;
+    for (int k = 0; k < plan->n; ++k) {
+      ceode::Combo& cb = plan->combos[k];
+      if (std::find(cb.X, cb.X + cb.m, pool[r]) == cb.X + cb.m) continue;
+      if (first >= 0) {
+        ceode::Combo& f = plan->combos[first];
+        std::replace(f.X, f.X + f.m, pool[r], spare);
+        return true;
+      }
+      first = k;
+    }
+  }
+  return false;
+}
+
+TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceWhenTheRolesDoNotMatch) {
+  constexpr int kSpare = ceode::kMaxDegree;  // a slot that no plan reads or writes
+  int moved = 0;
+  for (int s = 0; s < ceode::NumMethodSets(); ++s) {
+    const ceode::MethodSet& set = ceode::MethodSetAt(s);
+    const int d = set.degree;
+    ceode::StepCoeffs co;
+    ceode::ComputeStepCoeffs(d, set.params.data(), 0.01, &co);
+    ceode::UpdatePlan plan = Plan(d, co, false);
+    if (!MoveSharedRead(&plan, d, pool_, pool_[kSpare])) continue;  // each read by one sum
+    ++moved;
+    Fill();
+    ceode::UpdateReference(plan, {});
+    std::vector<std::vector<sunrealtype>> ref;
+    for (int k = 0; k < plan.n; ++k) ref.push_back(Entries(Slot(plan.combos[k].out)));
+    ceode::FusedPlan fp;
+    ASSERT_TRUE(ceode::BuildFusedPlan(plan, {}, &fp)) << set.name;
+    Fill();
+    ceode::UpdateSerial(fp, GetParam());
+    long differing = 0;
+    for (int k = 0; k < plan.n; ++k) {
+      const std::vector<sunrealtype> got = Entries(Slot(plan.combos[k].out));
+      for (size_t i = 0; i < got.size(); ++i) differing += got[i] != ref[k][i] ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0) << set.name;
+  }
+  EXPECT_GE(moved, 8) << "every shape but G3_CD's, whose history vectors feed one sum each";
 }
 
 INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
