@@ -162,19 +162,22 @@ namespace {
 // s += each entry of v in the order of the entries (the reference's sums are sequential).
 inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
 
+// The L1 norm's lanes: a pair's two, one entry's one.
+inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
+[[maybe_unused]] inline sunrealtype LaneSum(sunrealtype v) { return v; }
+
 #if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
 constexpr bool kPairs = true;
 inline void AddInOrder(sunrealtype* s, Pair v) {
   *s += _mm_cvtsd_f64(v);
   *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
 }
+inline void AddLanes(Pair* s, Pair v) { *s += v; }
+inline sunrealtype LaneSum(Pair v) { return v[0] + v[1]; }
 #else
 constexpr bool kPairs = false;
-using Pair = sunrealtype;
+using Pair = sunrealtype;  // the pair loops are discarded (kPairs), their types still checked
 #endif
-// The L1 norm's lanes: a pair's two, one entry's one.
-inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
-inline void AddLanes(Pair* s, Pair v) { *s += v; }
 
 #if defined(CEODE_AVX)
 __attribute__((always_inline)) inline void AddInOrder(sunrealtype* s, const Quad& v) {
@@ -411,7 +414,7 @@ __attribute__((always_inline)) inline sunrealtype AfterFPass(const AdaptAfterF& 
         i = AfterFVectors<D, ND, WK, SM, SWK, W>(p, w, i, n, &ssq, &l1p);
       }
       i = AfterFVectors<D, ND, WK, SM, SWK, Pair>(p, w, i, n, &ssq, &l1p);
-      sum = l1p[0] + l1p[1];
+      sum = LaneSum(l1p);
     }
   }
   const PlanCo co{w};
@@ -592,7 +595,7 @@ sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunind
       Pair l1p = Splat(0, Pair{});
 #pragma GCC unroll 2
       for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i);
-      l1 = l1p[0] + l1p[1];
+      l1 = LaneSum(l1p);
     }
   }
   for (; i < n; ++i) l1 += PositionEntry<M, R, WK>(p, w.c, w.rc, w.rtol, w.atol, i);
