@@ -623,15 +623,19 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
   if (flag != CE_SUCCESS) return flag;
   const auto at_limit = [&] { return ce->tstop_set && ce->tcur >= tlimit - troundoff; };
   int root_flag = CE_SUCCESS;  // each accepted step (and what is left of the last) checked first
+  // Without roots and a stop time a CE_NORMAL call ends on tout alone: one test a step.
+  const sunrealtype tend = tout - troundoff;
+  const bool tout_only = ce->root == nullptr && !ce->tstop_set && itask == CE_NORMAL;
   flag = StepUntil(
       ce, am, tout, tlimit,
       [&](long int nsteps) {
+        if (tout_only) return ce->tcur >= tend;
         if (ce->root != nullptr) {
           root_flag = RootCheck(ce, itask == CE_NORMAL ? std::min(tout, ce->tcur) : ce->tcur, func);
           if (root_flag != CE_SUCCESS) return true;
         }
         if (at_limit()) return true;
-        return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
+        return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tend;
       },
       func);
   if (flag == CE_SUCCESS) flag = root_flag;
