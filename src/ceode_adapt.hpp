@@ -227,9 +227,9 @@ void RefreshTables(AdaptMem* am, int d);
 
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past
-// the stop time.
+// the stop time. *finite: whether the outputs written are finite (unset where none are written).
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
-                sunrealtype* tret, int itask);
+                sunrealtype* tret, int itask, bool* finite);
 
 }  // namespace ceode
 

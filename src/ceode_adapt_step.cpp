@@ -4,6 +4,7 @@
 // and CEodeEvolve's returns by the dense output of the last accepted step.
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -575,44 +576,49 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
 }
 
 // OneStep out of line, for LeanUntil's rare steps.
-__attribute__((noinline)) int OneStepApart(CEodeMemRec* ce, AdaptMem* am, const char* func) {
-  return OneStep(ce, am, SUN_BIG_REAL, func);
+__attribute__((noinline)) int OneStepApart(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit,
+                                           const char* func) {
+  return OneStep(ce, am, tlimit, func);
 }
 
 // AcceptStep out of line, for LeanRetry.
 __attribute__((noinline)) int AcceptStepApart(CEodeMemRec* ce, AdaptMem* am, sunrealtype t,
-                                              sunrealtype err, int nef, const char* func) {
-  return AcceptStep(ce, am, false, t, err, nef, SUN_BIG_REAL, func);
+                                              sunrealtype err, int nef, sunrealtype tlimit,
+                                              const char* func) {
+  return AcceptStep(ce, am, false, t, err, nef, tlimit, func);
 }
 
 // The rest of a LeanStep whose test failed at t: OneStep's retries and acceptance.
 __attribute__((noinline)) int LeanRetry(CEodeMemRec* ce, AdaptMem* am, sunrealtype t,
-                                        sunrealtype err, const char* func) {
+                                        sunrealtype err, sunrealtype tlimit, const char* func) {
   int nef = 0;
-  const int flag = RetryUntilAccepted(ce, am, false, SUN_BIG_REAL, &t, &err, &nef, func);
+  const int flag = RetryUntilAccepted(ce, am, false, tlimit, &t, &err, &nef, func);
   if (flag != CE_SUCCESS) return flag;
-  return AcceptStepApart(ce, am, t, err, nef, func);
+  return AcceptStepApart(ce, am, t, err, nef, tlimit, func);
 }
 
 // OneStep where LeanCall holds for the call and the start is behind (not first): the same
 // operations without the tests that these decide.
-int LeanStep(CEodeMemRec* ce, AdaptMem* am, const char* func) {
+int LeanStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
   sunrealtype err = 0;
-  const sunrealtype t = StepEnd(ce, SUN_BIG_REAL);
+  const sunrealtype t = StepEnd(ce, tlimit);
   int flag = AttemptStep(ce, am, false, t, &err, func);
   if (flag != CE_SUCCESS) return flag;
-  if (!(err <= 1)) return LeanRetry(ce, am, t, err, func);  // NaN fails the test
+  if (!(err <= 1)) return LeanRetry(ce, am, t, err, tlimit, func);  // NaN fails the test
   CommitNode(ce, am, t, err);
   if (!(am->dmin_next > 0)) flag = AdaptWeightsDefined(ce, am->dmin_next, func);
   if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
-  if (flag == CE_SUCCESS) flag = NextStep(ce, am, false, t, err, 0, SUN_BIG_REAL, func);
+  if (flag == CE_SUCCESS) flag = NextStep(ce, am, false, t, err, 0, tlimit, func);
   return flag;
 }
 
-// The k-th derivative at tcur + s, s in [-hlast, 0]: the history at tcur and x at its left end.
-void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+// x and x' at tcur + s, s in [-hlast, 0] (the history at tcur and x at its left end), and whether
+// both are finite: at tcur the method's own values, copied and tested in one pass.
+bool Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+  if (s == 0) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
   Interpolate(ce, s, 0, xout);
   Interpolate(ce, s, 1, vout);
+  return AllFinite(xout) && AllFinite(vout);
 }
 
 }  // namespace
@@ -677,22 +683,23 @@ int StepUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimi
   return CE_SUCCESS;
 }
 
-// Whether a CE_NORMAL call without roots and stop time (tlimit SUN_BIG_REAL) can run LeanUntil:
-// no constraints, weights from the tolerances, no schedule and no periodic guard check, which stay
-// for the call.
-bool LeanCall(const CEodeMemRec* ce, const AdaptMem* am, sunrealtype tlimit) {
-  return ce->step->solve_kind != SolveKind::kConstrained && tlimit == SUN_BIG_REAL &&
+// Whether a call without roots can run LeanUntil: no constraints, weights from the tolerances, no
+// schedule and no periodic guard check, which stay for the call.
+bool LeanCall(const CEodeMemRec* ce, const AdaptMem* am) {
+  return ce->root == nullptr && ce->step->solve_kind != SolveKind::kConstrained &&
          am->tol_kind != 2 && am->schedule == nullptr && ce->guard.every == 0;
 }
 
-// StepUntil for such a call, done when tcur reaches tend: most steps are LeanStep's, the
-// start's first steps OneStep's.
+// StepUntil for such a call, done when tcur reaches tend or after max_steps steps: most steps are
+// LeanStep's, the start's first steps OneStep's.
 __attribute__((noinline, flatten)) int LeanUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout,
-                                                 sunrealtype tend, const char* func) {
+                                                 sunrealtype tend, sunrealtype tlimit,
+                                                 long int max_steps, const char* func) {
   long int nsteps = 0;
-  while (!(ce->tcur >= tend)) {
+  while (nsteps < max_steps && !(ce->tcur >= tend)) {
     if (nsteps >= ce->mxstep) return TooMuchWork(ce, nsteps, tout, func);
-    const int step = am->first ? OneStepApart(ce, am, func) : LeanStep(ce, am, func);
+    const int step =
+        am->first ? OneStepApart(ce, am, tlimit, func) : LeanStep(ce, am, tlimit, func);
     const int flag = AfterStep(ce, am, step, &nsteps);
     if (flag != CE_SUCCESS) return flag;
   }
@@ -709,10 +716,15 @@ bool AtLimit(const CEodeMemRec* ce, sunrealtype tlimit, sunrealtype troundoff) {
 // last) checked for roots first, *root_flag their verdict.
 int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit,
                 sunrealtype troundoff, int itask, int* root_flag, const char* func) {
-  // Without roots and a stop time a CE_NORMAL call ends on tout alone: one test a step.
+  // Without roots a call ends on one time alone, tout's or the stop time's where that comes first
+  // (or after one step): one test a step.
   const sunrealtype tend = tout - troundoff;
+  if (LeanCall(ce, am)) {
+    const sunrealtype tstop_end = ce->tstop_set ? tlimit - troundoff : SUN_BIG_REAL;
+    if (itask == CE_ONE_STEP) return LeanUntil(ce, am, tout, tstop_end, tlimit, 1, func);
+    return LeanUntil(ce, am, tout, std::min(tend, tstop_end), tlimit, LONG_MAX, func);
+  }
   const bool tout_only = ce->root == nullptr && !ce->tstop_set && itask == CE_NORMAL;
-  if (tout_only && LeanCall(ce, am, tlimit)) return LeanUntil(ce, am, tout, tend, func);
   const auto done = [&](long int nsteps) {
     if (tout_only) return ce->tcur >= tend;
     if (ce->root != nullptr) {
@@ -728,8 +740,8 @@ int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tli
 }  // namespace
 
 __attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                         N_Vector xout, N_Vector vout, sunrealtype* tret,
-                                         int itask) {
+                                         N_Vector xout, N_Vector vout, sunrealtype* tret, int itask,
+                                         bool* finite) {
   AdaptMem* am = ce->adapt.get();
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   *tret = ce->tcur;
@@ -748,12 +760,12 @@ __attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunr
   if (flag == CE_SUCCESS) flag = root_flag;
   if (flag == CE_ROOT_RETURN) {
     const sunrealtype tr = RootTime(ce);
-    Output(ce, tr - ce->tcur, xout, vout);
+    *finite = Output(ce, tr - ce->tcur, xout, vout);
     *tret = ce->tretlast = tr;
     return flag;
   }
   if (flag != CE_SUCCESS) {
-    Output(ce, 0, xout, vout);
+    *finite = Output(ce, 0, xout, vout);
     *tret = ce->tretlast = ce->tcur;
     return flag;
   }
@@ -761,7 +773,7 @@ __attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunr
   const bool tout_first = itask == CE_NORMAL && tout < tlimit - troundoff;
   const bool at_stop = AtLimit(ce, tlimit, troundoff) && !tout_first;
   const sunrealtype tr = itask == CE_ONE_STEP || at_stop ? ce->tcur : std::min(tout, ce->tcur);
-  Output(ce, tr - ce->tcur, xout, vout);
+  *finite = Output(ce, tr - ce->tcur, xout, vout);
   *tret = ce->tretlast = tr;
   if (!at_stop) return CE_SUCCESS;
   ce->tstop_set = false;
