@@ -278,8 +278,8 @@ __attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealt
     return flag;
   }
   if (AdaptOn(ce)) {
-    flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask);
-    const bool finite = flag < 0 || (AllFinite(xout) && AllFinite(vout));
+    bool finite = true;
+    flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask, &finite);
     return CheckReturned(ce, func, finite, xout, flag);
   }
   sunrealtype target = 0;
@@ -327,6 +327,26 @@ int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vect
   }
   return Evolve(ce, func, tout, xout, vout, tret, itask);
 }
+
+namespace {
+
+// CEodeEvolve with error control: straight to its steps where Evolve would only check the
+// arguments (serial outputs of the problem's length, tret, a finite tout, a known itask) and find
+// the run started with no guard check pending; Evolve otherwise, which reports what it refuses.
+int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
+              int itask) {
+  static const char* func = "CEodeEvolve";
+  const bool direct = ce->started && !ce->guard.pending && SerialOfLength(xout, ce->n) &&
+                      SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout) &&
+                      (itask == CE_NORMAL || itask == CE_ONE_STEP);
+  if (!direct) return Evolve(ce, func, tout, xout, vout, tret, itask);
+  AdaptSetTarget(ce, tout);
+  bool finite = true;
+  const int flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask, &finite);
+  return CheckReturned(ce, func, finite, xout, flag);
+}
+
+}  // namespace
 
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret) {
@@ -474,6 +494,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
+  if (ceode::AdaptOn(ce)) return ceode::AdaptCall(ce, tout, xout, vout, tret, itask);
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
   return ceode::NormalEvolve(ce, tout, xout, vout, tret, itask);
 }

@@ -233,8 +233,25 @@ void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[k
 
 bool AdaptEnabled(const CEodeMemRec* ce) { return ce->adapt->on; }
 
-sunrealtype AdaptStableStep(const CEodeMemRec* ce) {
-  return GuardOn(ce) ? GuardStableStep(const_cast<CEodeMemRec*>(ce), kStableSafety) : SUN_BIG_REAL;
+namespace {
+
+// GuardStableStep's value, kept with the inputs it came from.
+__attribute__((noinline)) sunrealtype StableStepAgain(CEodeMemRec* ce) {
+  AdaptMem& am = *ce->adapt;
+  am.hs_value = GuardStableStep(ce, kStableSafety);
+  am.hs_omega = ce->guard.omega_est;
+  am.hs_limit = ce->guard.omega_limit;  // after the call: the limit is looked up on first use
+  am.hs_kept = true;
+  return am.hs_value;
+}
+
+}  // namespace
+
+sunrealtype AdaptStableStep(CEodeMemRec* ce) {
+  if (!GuardOn(ce)) return SUN_BIG_REAL;
+  const AdaptMem& am = *ce->adapt;
+  if (am.hs_kept && GuardStableStepInputsAre(ce, am.hs_omega, am.hs_limit)) return am.hs_value;
+  return StableStepAgain(ce);
 }
 
 int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func) {
@@ -583,13 +600,11 @@ __attribute__((noinline)) sunrealtype ExactRatio(CEodeMemRec* ce, sunrealtype er
   return eta;
 }
 
-// The controller's ratio from the error norm err of the last accepted step of hbase.
-sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
-  AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
-  // The envelope of the estimates: y^(p+1) has zeros where the estimate dips although the error
-  // of a longer step would not; the controller reads a value that falls by at most kEnvelope a
-  // step (the test itself uses the estimate).
+// The error norm the controller reads: err, or the envelope of the last ones (kEnvelope a step).
+sunrealtype Enveloped(const AdaptMem& am, sunrealtype err) {
+  // y^(p+1) has zeros where the estimate dips although the error of a longer step would not; the
+  // controller reads a value that falls by at most kEnvelope a step (the test itself uses the
+  // estimate).
   if (am.err_prev > 0) {
     sunrealtype grow = 1;  // eta_prev^(p+1)
     if (am.eta_prev != 1) {
@@ -597,6 +612,14 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
     }
     err = std::max(err, kEnvelope * am.err_prev * grow);
   }
+  return err;
+}
+
+// The controller's ratio from the error norm err of the last accepted step of hbase.
+sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
+  AdaptMem& am = *ce->adapt;
+  const sunrealtype k = am.order + 1;
+  err = Enveloped(am, err);
   if (err == 0) {
     // An estimate of exactly 0 (x'' = 0, a solution polynomial of degree below p + 1): no error
     // to aim at, so the step grows by the largest ratio, as CVODE's eta = etamax.
@@ -617,10 +640,45 @@ sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase)
   return ExactRatio(ce, err, hbase, v, had_prev);
 }
 
-}  // namespace
+// ControllerRatio's verdict and effects when the band keeps h (true); false leaves the record as
+// it was, for ControllerRatio to decide. Without calls, so that the step that keeps h runs
+// without saving registers for them.
+bool KeepsStep(AdaptMem& am, sunrealtype err) {
+  err = Enveloped(am, err);
+  if (err == 0) return false;
+  const sunrealtype le_approx = ApproxLog(std::max(err, 1e-10) / kTarget);
+  const sunrealtype lep_approx = am.err_prev > 0 ? am.lerr_prev_approx : le_approx;
+  if (!BandKeepsStep(am, le_approx, lep_approx, am.order + 1)) return false;
+  am.lerr_prev_approx = le_approx;
+  am.err_prev = err;
+  am.lerr_prev_exact = false;
+  return true;
+}
 
-sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
-                          sunrealtype limit_t, bool* capped) {
+// The step hbase * eta within hmax, the stable step, hmin and the stop time limit_t (from tfrom).
+__attribute__((always_inline)) inline sunrealtype BoundedStep(CEodeMemRec* ce, sunrealtype h,
+                                                              sunrealtype tfrom,
+                                                              sunrealtype limit_t, bool* capped) {
+  const AdaptMem& am = *ce->adapt;
+  if (am.hmax > 0) h = std::min(h, am.hmax);
+  const sunrealtype hs = AdaptStableStep(ce);
+  *capped = h > hs;
+  if (*capped) h = hs;
+  h = std::max(h, am.hmin);
+  // On the limit itself (a stop time just reached) the step stays the controller's: the next
+  // CEodeEvolve cuts it to its own stop time.
+  const sunrealtype rem = limit_t - tfrom;
+  if (rem > 0 && rem < 2 * h) {  // one test while the limit is far (h > 0)
+    // lands on the limit (a stretch of at most 1e-4), or two even steps instead of a sliver
+    h = rem <= h * (1 + 1e-4) ? rem : rem / 2;
+  }
+  return h;
+}
+
+// AdaptNextStep where the band's fast path does not keep h (or a schedule decides).
+__attribute__((noinline)) sunrealtype NextStepAnyRatio(CEodeMemRec* ce, sunrealtype err,
+                                                       sunrealtype hbase, sunrealtype tfrom,
+                                                       sunrealtype limit_t, bool* capped) {
   AdaptMem& am = *ce->adapt;
   // Without an estimate (the history is still too short) the step stays.
   sunrealtype eta = AdaptEstimated(am) ? ControllerRatio(ce, err, hbase) : 1;
@@ -635,22 +693,23 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
     eta = std::min(grow, std::max(kEtaMin, eta));
   }
   const sunrealtype hold = hbase;
-  sunrealtype h = hold * eta;
-  h = ScheduledStep(ce, h);
-  if (am.hmax > 0) h = std::min(h, am.hmax);
-  const sunrealtype hs = AdaptStableStep(ce);
-  *capped = h > hs;
-  if (*capped) h = hs;
-  h = std::max(h, am.hmin);
-  // On the limit itself (a stop time just reached) the step stays the controller's: the next
-  // CEodeEvolve cuts it to its own stop time.
-  const sunrealtype rem = limit_t - tfrom;
-  if (rem > 0 && rem < 2 * h) {  // one test while the limit is far (h > 0)
-    // lands on the limit (a stretch of at most 1e-4), or two even steps instead of a sliver
-    h = rem <= h * (1 + 1e-4) ? rem : rem / 2;
-  }
+  const sunrealtype h = BoundedStep(ce, ScheduledStep(ce, hold * eta), tfrom, limit_t, capped);
   am.eta_prev = h / hold;
   return h;
+}
+
+}  // namespace
+
+sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
+                          sunrealtype limit_t, bool* capped) {
+  AdaptMem& am = *ce->adapt;
+  // Most steps: the band keeps h (hbase * 1 is hbase), and no schedule replaces it.
+  if (AdaptEstimated(am) && am.schedule == nullptr && KeepsStep(am, err)) {
+    const sunrealtype h = BoundedStep(ce, hbase, tfrom, limit_t, capped);
+    am.eta_prev = h / hbase;
+    return h;
+  }
+  return NextStepAnyRatio(ce, err, hbase, tfrom, limit_t, capped);
 }
 
 void AdaptFree(CEodeMemRec* ce) {

@@ -100,7 +100,13 @@ struct AdaptMem {
   sunrealtype xkeep[4] = {};   // the same less the fast path's margin (BandKeepsStep)
   bool first = true;           // no step has passed an error test since the start
   bool capped_last = false;    // the stable step decided the last step
-  long int nst_refresh = 0;    // nst at the last estimate of the frequency behind the cap
+  // AdaptStableStep's value and the guard's inputs it came from (GuardStableStepInputsAre): the
+  // estimate changes only at the guard's checks, so most steps take the value without the call.
+  bool hs_kept = false;
+  sunrealtype hs_value = 0;
+  sunrealtype hs_omega = 0;
+  sunrealtype hs_limit = 0;
+  long int nst_refresh = 0;  // nst at the last estimate of the frequency behind the cap
   sunrealtype h_restart = 0;
   bool fail_restart = false;  // the start again comes after failed error tests
   // A step that keeps h takes no log (ceode_adapt.cpp, BandKeepsStep): whether lerr_prev is
@@ -198,7 +204,7 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
 // The step to retry with after a failed error test.
 sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
 // The largest step the guard's estimate admits (SUN_BIG_REAL: none known).
-sunrealtype AdaptStableStep(const CEodeMemRec* ce);
+sunrealtype AdaptStableStep(CEodeMemRec* ce);
 void AdaptFree(CEodeMemRec* ce);                         // its vectors (the problem's size changes)
 void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout);  // CEodeEvolve's tout
 // CEodeReset: the next start begins with the controller's next step (no effect before a step).
@@ -221,9 +227,9 @@ void RefreshTables(AdaptMem* am, int d);
 
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past
-// the stop time.
+// the stop time. *finite: whether the outputs written are finite (unset where none are written).
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
-                sunrealtype* tret, int itask);
+                sunrealtype* tret, int itask, bool* finite);
 
 }  // namespace ceode
 

@@ -4,6 +4,7 @@
 // and CEodeEvolve's returns by the dense output of the last accepted step.
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -483,6 +484,11 @@ int CheckGrowth(CEodeMemRec* ce, sunrealtype xl1, sunrealtype t, const char* fun
                       static_cast<double>(ce->xl1_start), ce->method_name.c_str());
 }
 
+// MoveTo out of line: a step that changes h (few) leaves the step's path short.
+__attribute__((noinline)) sunrealtype MoveToApart(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
+  return MoveTo(ce, am, h);
+}
+
 // The accepted node's next step (with constraints the planned one, and the plan of the step after
 // it) and the position at its end.
 int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype err,
@@ -510,26 +516,36 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
     am->spec_ready = false;
     return CheckGrowth(ce, am->spec_l1, t, func);
   }
-  return CheckGrowth(ce, MoveTo(ce, am, h), t, func);
+  return CheckGrowth(ce, MoveToApart(ce, am, h), t, func);
 }
 
-// One accepted step (with as many retries as the error test asks for), then the next step's
-// size and position.
-int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
-  const bool constrained = ce->step->solve_kind == SolveKind::kConstrained;
-  int flag = FirstStepWithinStableStep(ce, am, constrained);
-  int nef = 0;
-  sunrealtype err = 0;
-  sunrealtype t = 0;
-  while (flag == CE_SUCCESS) {
-    t = ce->h == tlimit - ce->tcur ? tlimit : ce->tcur + ce->h;  // lands on tstop exactly
-    flag = AttemptStep(ce, am, constrained, t, &err, func);
-    if (flag != CE_SUCCESS || err <= 1 || am->schedule != nullptr) break;  // NaN fails the test
+// The end of the step from tcur: tlimit itself where the step ends there (lands on tstop exactly).
+sunrealtype StepEnd(const CEodeMemRec* ce, sunrealtype tlimit) {
+  return ce->h == tlimit - ce->tcur ? tlimit : ce->tcur + ce->h;
+}
+
+// After a step to *t whose test failed (*err > 1, or NaN): retries until one passes (or a
+// schedule decides the step), the failures counted in *nef.
+__attribute__((noinline)) int RetryUntilAccepted(CEodeMemRec* ce, AdaptMem* am, bool constrained,
+                                                 sunrealtype tlimit, sunrealtype* t,
+                                                 sunrealtype* err, int* nef, const char* func) {
+  while (!(*err <= 1) && am->schedule == nullptr) {
     ++am->netf;
-    flag = RetryAfterFailure(ce, am, constrained, t, err, ++nef, func);
+    int flag = RetryAfterFailure(ce, am, constrained, *t, *err, ++*nef, func);
+    if (flag != CE_SUCCESS) return flag;
+    *t = StepEnd(ce, tlimit);
+    flag = AttemptStep(ce, am, constrained, *t, err, func);
+    if (flag != CE_SUCCESS) return flag;
   }
-  if (flag != CE_SUCCESS) return flag;
+  return CE_SUCCESS;
+}
+
+// The step to t that passed its test (after nef failures) becomes the node, then the next step's
+// size and position.
+int AcceptStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype err,
+               int nef, sunrealtype tlimit, const char* func) {
   CommitNode(ce, am, t, err);
+  int flag = CE_SUCCESS;
   if (am->tol_kind == 2) {
     flag = AdaptWeights(ce, ce->xcur, func);
   } else if (!(am->dmin_next > 0)) {
@@ -542,10 +558,67 @@ int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func)
   return CE_SUCCESS;
 }
 
-// The k-th derivative at tcur + s, s in [-hlast, 0]: the history at tcur and x at its left end.
-void Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+// One accepted step (with as many retries as the error test asks for), then the next step's
+// size and position.
+int OneStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
+  const bool constrained = ce->step->solve_kind == SolveKind::kConstrained;
+  int flag = FirstStepWithinStableStep(ce, am, constrained);
+  if (flag != CE_SUCCESS) return flag;
+  int nef = 0;
+  sunrealtype err = 0;
+  sunrealtype t = StepEnd(ce, tlimit);
+  flag = AttemptStep(ce, am, constrained, t, &err, func);
+  if (flag == CE_SUCCESS && !(err <= 1)) {  // NaN fails the test
+    flag = RetryUntilAccepted(ce, am, constrained, tlimit, &t, &err, &nef, func);
+  }
+  if (flag != CE_SUCCESS) return flag;
+  return AcceptStep(ce, am, constrained, t, err, nef, tlimit, func);
+}
+
+// OneStep out of line, for LeanUntil's rare steps.
+__attribute__((noinline)) int OneStepApart(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit,
+                                           const char* func) {
+  return OneStep(ce, am, tlimit, func);
+}
+
+// AcceptStep out of line, for LeanRetry.
+__attribute__((noinline)) int AcceptStepApart(CEodeMemRec* ce, AdaptMem* am, sunrealtype t,
+                                              sunrealtype err, int nef, sunrealtype tlimit,
+                                              const char* func) {
+  return AcceptStep(ce, am, false, t, err, nef, tlimit, func);
+}
+
+// The rest of a LeanStep whose test failed at t: OneStep's retries and acceptance.
+__attribute__((noinline)) int LeanRetry(CEodeMemRec* ce, AdaptMem* am, sunrealtype t,
+                                        sunrealtype err, sunrealtype tlimit, const char* func) {
+  int nef = 0;
+  const int flag = RetryUntilAccepted(ce, am, false, tlimit, &t, &err, &nef, func);
+  if (flag != CE_SUCCESS) return flag;
+  return AcceptStepApart(ce, am, t, err, nef, tlimit, func);
+}
+
+// OneStep where LeanCall holds for the call and the start is behind (not first): the same
+// operations without the tests that these decide.
+int LeanStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func) {
+  sunrealtype err = 0;
+  const sunrealtype t = StepEnd(ce, tlimit);
+  int flag = AttemptStep(ce, am, false, t, &err, func);
+  if (flag != CE_SUCCESS) return flag;
+  if (!(err <= 1)) return LeanRetry(ce, am, t, err, tlimit, func);  // NaN fails the test
+  CommitNode(ce, am, t, err);
+  if (!(am->dmin_next > 0)) flag = AdaptWeightsDefined(ce, am->dmin_next, func);
+  if (flag == CE_SUCCESS) flag = RefreshStableStep(ce, am, func);
+  if (flag == CE_SUCCESS) flag = NextStep(ce, am, false, t, err, 0, tlimit, func);
+  return flag;
+}
+
+// x and x' at tcur + s, s in [-hlast, 0] (the history at tcur and x at its left end), and whether
+// both are finite: at tcur the method's own values, copied and tested in one pass.
+bool Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
+  if (s == 0) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
   Interpolate(ce, s, 0, xout);
   Interpolate(ce, s, 1, vout);
+  return AllFinite(xout) && AllFinite(vout);
 }
 
 }  // namespace
@@ -580,34 +653,95 @@ int ApproachStopTime(CEodeMemRec* ce, AdaptMem* am, sunrealtype troundoff, sunre
   return CE_SUCCESS;
 }
 
-// Accepted steps until done() (a new start, where a step asks for one, is not a step).
+int TooMuchWork(CEodeMemRec* ce, long int nsteps, sunrealtype tout, const char* func) {
+  return ProcessError(ce, CE_TOO_MUCH_WORK, func,
+                      "%ld steps taken before reaching tout = %.17g (t = %.17g): raise the "
+                      "limit with CEodeSetMaxNumSteps or loosen the tolerances.",
+                      nsteps, static_cast<double>(tout), static_cast<double>(ce->tcur));
+}
+
+// A step's flag: a new start where the step asks for one (not a step), otherwise the step counted.
+int AfterStep(CEodeMemRec* ce, AdaptMem* am, int flag, long int* nsteps) {
+  if (flag == kStartAgain) return StartMethod(ce);
+  if (flag == CE_SUCCESS) {
+    am->start_fails = 0;
+    ++*nsteps;
+  }
+  return flag;
+}
+
+// Accepted steps until done().
 template <typename Done>
 int StepUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit, Done done,
               const char* func) {
   long int nsteps = 0;
   while (!done(nsteps)) {
-    if (nsteps >= ce->mxstep) {
-      return ProcessError(ce, CE_TOO_MUCH_WORK, func,
-                          "%ld steps taken before reaching tout = %.17g (t = %.17g): raise the "
-                          "limit with CEodeSetMaxNumSteps or loosen the tolerances.",
-                          nsteps, static_cast<double>(tout), static_cast<double>(ce->tcur));
-    }
-    int flag = OneStep(ce, am, tlimit, func);
-    if (flag == kStartAgain)
-      flag = StartMethod(ce);
-    else if (flag == CE_SUCCESS) {
-      am->start_fails = 0;
-      ++nsteps;
-    }
+    if (nsteps >= ce->mxstep) return TooMuchWork(ce, nsteps, tout, func);
+    const int flag = AfterStep(ce, am, OneStep(ce, am, tlimit, func), &nsteps);
     if (flag != CE_SUCCESS) return flag;
   }
   return CE_SUCCESS;
 }
 
+// Whether a call without roots can run LeanUntil: no constraints, weights from the tolerances, no
+// schedule and no periodic guard check, which stay for the call.
+bool LeanCall(const CEodeMemRec* ce, const AdaptMem* am) {
+  return ce->root == nullptr && ce->step->solve_kind != SolveKind::kConstrained &&
+         am->tol_kind != 2 && am->schedule == nullptr && ce->guard.every == 0;
+}
+
+// StepUntil for such a call, done when tcur reaches tend or after max_steps steps: most steps are
+// LeanStep's, the start's first steps OneStep's.
+__attribute__((noinline, flatten)) int LeanUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout,
+                                                 sunrealtype tend, sunrealtype tlimit,
+                                                 long int max_steps, const char* func) {
+  long int nsteps = 0;
+  while (nsteps < max_steps && !(ce->tcur >= tend)) {
+    if (nsteps >= ce->mxstep) return TooMuchWork(ce, nsteps, tout, func);
+    const int step =
+        am->first ? OneStepApart(ce, am, tlimit, func) : LeanStep(ce, am, tlimit, func);
+    const int flag = AfterStep(ce, am, step, &nsteps);
+    if (flag != CE_SUCCESS) return flag;
+  }
+  return CE_SUCCESS;
+}
+
+// Whether the call reached its stop time tlimit.
+bool AtLimit(const CEodeMemRec* ce, sunrealtype tlimit, sunrealtype troundoff) {
+  return ce->tstop_set && ce->tcur >= tlimit - troundoff;
+}
+
+// The steps of a CEodeEvolve call: until the last covers tout (CE_NORMAL) or one step
+// (CE_ONE_STEP), never past the stop time tlimit, and each accepted step (and what is left of the
+// last) checked for roots first, *root_flag their verdict.
+int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit,
+                sunrealtype troundoff, int itask, int* root_flag, const char* func) {
+  // Without roots a call ends on one time alone, tout's or the stop time's where that comes first
+  // (or after one step): one test a step.
+  const sunrealtype tend = tout - troundoff;
+  if (LeanCall(ce, am)) {
+    const sunrealtype tstop_end = ce->tstop_set ? tlimit - troundoff : SUN_BIG_REAL;
+    if (itask == CE_ONE_STEP) return LeanUntil(ce, am, tout, tstop_end, tlimit, 1, func);
+    return LeanUntil(ce, am, tout, std::min(tend, tstop_end), tlimit, LONG_MAX, func);
+  }
+  const bool tout_only = ce->root == nullptr && !ce->tstop_set && itask == CE_NORMAL;
+  const auto done = [&](long int nsteps) {
+    if (tout_only) return ce->tcur >= tend;
+    if (ce->root != nullptr) {
+      *root_flag = RootCheck(ce, itask == CE_NORMAL ? std::min(tout, ce->tcur) : ce->tcur, func);
+      if (*root_flag != CE_SUCCESS) return true;
+    }
+    if (AtLimit(ce, tlimit, troundoff)) return true;
+    return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tend;
+  };
+  return StepUntil(ce, am, tout, tlimit, done, func);
+}
+
 }  // namespace
 
-int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
-                sunrealtype* tret, int itask) {
+__attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                         N_Vector xout, N_Vector vout, sunrealtype* tret, int itask,
+                                         bool* finite) {
   AdaptMem* am = ce->adapt.get();
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   *tret = ce->tcur;
@@ -621,36 +755,25 @@ int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xo
   sunrealtype tlimit = SUN_BIG_REAL;
   int flag = ApproachStopTime(ce, am, troundoff, &tlimit, func);
   if (flag != CE_SUCCESS) return flag;
-  const auto at_limit = [&] { return ce->tstop_set && ce->tcur >= tlimit - troundoff; };
   int root_flag = CE_SUCCESS;  // each accepted step (and what is left of the last) checked first
-  flag = StepUntil(
-      ce, am, tout, tlimit,
-      [&](long int nsteps) {
-        if (ce->root != nullptr) {
-          root_flag = RootCheck(ce, itask == CE_NORMAL ? std::min(tout, ce->tcur) : ce->tcur, func);
-          if (root_flag != CE_SUCCESS) return true;
-        }
-        if (at_limit()) return true;
-        return itask == CE_ONE_STEP ? nsteps > 0 : ce->tcur >= tout - troundoff;
-      },
-      func);
+  flag = StepsOfCall(ce, am, tout, tlimit, troundoff, itask, &root_flag, func);
   if (flag == CE_SUCCESS) flag = root_flag;
   if (flag == CE_ROOT_RETURN) {
     const sunrealtype tr = RootTime(ce);
-    Output(ce, tr - ce->tcur, xout, vout);
+    *finite = Output(ce, tr - ce->tcur, xout, vout);
     *tret = ce->tretlast = tr;
     return flag;
   }
   if (flag != CE_SUCCESS) {
-    Output(ce, 0, xout, vout);
+    *finite = Output(ce, 0, xout, vout);
     *tret = ce->tretlast = ce->tcur;
     return flag;
   }
   // tout inside the last step, before the stop time, is returned as without a stop time.
   const bool tout_first = itask == CE_NORMAL && tout < tlimit - troundoff;
-  const bool at_stop = at_limit() && !tout_first;
+  const bool at_stop = AtLimit(ce, tlimit, troundoff) && !tout_first;
   const sunrealtype tr = itask == CE_ONE_STEP || at_stop ? ce->tcur : std::min(tout, ce->tcur);
-  Output(ce, tr - ce->tcur, xout, vout);
+  *finite = Output(ce, tr - ce->tcur, xout, vout);
   *tret = ce->tretlast = tr;
   if (!at_stop) return CE_SUCCESS;
   ce->tstop_set = false;

@@ -607,6 +607,11 @@ sunrealtype GuardStableStep(CEodeMemRec* ce, sunrealtype safety);
 // Whether the guard is on, so that GuardStableStep can know a step: callers on a step's path test
 // it before the call.
 inline bool GuardOn(const CEodeMemRec* ce) { return ce->guard.mode != CE_GUARD_OFF; }
+// The inputs GuardStableStep's value follows besides the safety: the estimate and the method's
+// limit (0 until it is first needed). A caller keeps the value while both stay.
+inline bool GuardStableStepInputsAre(const CEodeMemRec* ce, sunrealtype omega, sunrealtype limit) {
+  return ce->guard.omega_est == omega && ce->guard.omega_limit == limit;
+}
 
 // ceode_stability.cpp
 int MethodStabilityLimit(int degree, const sunrealtype* params, sunrealtype* Omega_max);
