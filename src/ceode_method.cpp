@@ -126,7 +126,11 @@ int NumMethodSets() { return static_cast<int>(sizeof(kMethodSets) / sizeof(kMeth
 const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 
 void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co, bool products) {
-  *co = StepCoeffs{};
+  // Another h of the same degree rewrites the same entries: the zeros stay (StepCoeffs::degree).
+  if (co->degree != d) {
+    *co = StepCoeffs{};
+    co->degree = d;
+  }
   co->h = h;
   sunrealtype* tw = co->tw;  // h^i / i!
   if (products) {
@@ -136,11 +140,12 @@ void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* c
   }
   // The predictor's weights, once per h: every step reads them (PredictAccel, SolvePC).
   std::copy(tw, tw + d - 2, co->pred);
-  // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
+  // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k (added to
+  // the entry's zero, so that a zero term keeps the sum's sign of zero).
   for (int k = 1; k <= d - 2; ++k) {
     for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = tw[i];
     const sunrealtype top = tw[d - 1 - k];
-    co->T[k][d - 1] += top * (1 - p[k]);
+    co->T[k][d - 1] = SUN_RCONST(0.0) + top * (1 - p[k]);
     co->c[k] = top * p[k];
   }
   if (d == 3) co->c[2] = 1;  // D_2 is the top derivative itself
