@@ -31,11 +31,15 @@ sunrealtype Falling(int i, int m) {
   return v;
 }
 
-// x^j by repeated multiplication from 1 (RemapWeights' powers).
-sunrealtype RepeatedPower(sunrealtype x, int j) {
+// x^j - y^j, the powers by repeated multiplication from 1 (RemapWeights' values).
+sunrealtype PowerDifference(sunrealtype x, sunrealtype y, int j) {
+  sunrealtype u = 1;
   sunrealtype v = 1;
-  for (int q = 0; q < j; ++q) v *= x;
-  return v;
+  for (int q = 0; q < j; ++q) {
+    u *= x;
+    v *= y;
+  }
+  return u - v;
 }
 
 // The row of D_k, k >= 3, at s = 0: gamma_kl h^l P^(m)(t_n), m = k + l - 2, reads m! times the
@@ -87,14 +91,16 @@ void RefreshWeightsOf(const AdaptMem& am, sunrealtype h, sunrealtype scale,
   for (int j = 1; j < P; ++j) rho[j] = Splat((am.tnode[j - 1] - am.tnode[0]) * hinv, tag);
   std::fill(c[0], c[0] + AdaptMem::kRefreshRows, SUN_RCONST(0.0));  // e_r >= 1: no row reaches it
   // Each group of rows on its own (the table of one group stays in registers): g[t] = L^t(u_j),
-  // t < P - j; term j's weights are L(u_j) = g[0] times the powers.
+  // t < P - j; term j's weights are L(u_j) = g[0] times the powers. Below the group's lowest
+  // power e = w L + 1 (t + j < e) the entries stay zero: each would be +0 - rho (+0) = +0.
+#pragma GCC unroll 8
   for (int w = 0; w < W; ++w) {
     Lanes g[P];
     for (int t = 0; t < P; ++t) g[t] = Load(am.refresh_k[t] + w * L, tag);
 #pragma GCC unroll 8
     for (int j = 1; j < P; ++j) {
 #pragma GCC unroll 8
-      for (int t = 0; t + j < P; ++t) g[t] = g[t + 1] - rho[j] * g[t];
+      for (int t = std::max(0, w * L + 1 - j); t + j < P; ++t) g[t] = g[t + 1] - rho[j] * g[t];
       Store(c[j] + w * L, g[0] * Load(pw + P - j + w * L, tag));
     }
   }
@@ -128,7 +134,7 @@ void MoveVelocity(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
   for (int i = 0; i < am->nremap && am->remap[i].k == 1; ++i) {
     const RemapTerm& r = am->remap[i];
-    const sunrealtype c = r.gamma * (RepeatedPower(h, r.j) - RepeatedPower(am->hmap, r.j));
+    const sunrealtype c = r.gamma * PowerDifference(h, am->hmap, r.j);
     am->kernels.Axpy(c, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
 }

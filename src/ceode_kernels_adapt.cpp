@@ -89,9 +89,10 @@ constexpr auto kLinManyFns = LinManyTable(std::make_index_sequence<kMaxDegree - 
 void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                            N_Vector* out) const {
   if (serial && m >= 3 && n <= kLinManyFew && nout >= 1 && nout <= kLinManyOut) {
-    // Lin's CombineSerial with the inputs' data looked up once
+    // Lin's CombineSerial with the inputs' data looked up once (serial: every vector is
+    // NVECTOR_SERIAL)
     const sunrealtype* x[kMaxDegree];
-    SerialDataOf(m, X, x);
+    for (int j = 0; j < m; ++j) x[j] = NV_DATA_S(X[j]);
     sunrealtype* o[kLinManyOut];
     for (int k = 0; k < nout; ++k) o[k] = NV_DATA_S(out[k]);
     kLinManyFns[m - 3][nout - 1](n, c, x, o);
