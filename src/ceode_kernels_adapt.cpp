@@ -46,11 +46,16 @@ using OutputLanes = Pair;
 using OutputLanes = sunrealtype;
 #endif
 template <int M, int NOUT>
-void LinManyEntries(sunindextype n, const sunrealtype (*c)[kMaxDegree], const sunrealtype* const* x,
-                    sunrealtype* const* out) {
+void LinManyEntries(sunindextype n, const sunrealtype (*c)[kMaxDegree], const N_Vector* X,
+                    const N_Vector* Out) {
   constexpr int L = sizeof(OutputLanes) / sizeof(sunrealtype);
   constexpr int W = NOUT / L;  // groups of L outputs, the rest one by one
   const OutputLanes tag{};
+  // The vectors' data looked up once (serial: every vector is NVECTOR_SERIAL)
+  const sunrealtype* x[M];
+  for (int j = 0; j < M; ++j) x[j] = NV_DATA_S(X[j]);
+  sunrealtype* out[NOUT];
+  for (int k = 0; k < NOUT; ++k) out[k] = NV_DATA_S(Out[k]);
   for (sunindextype i = 0; i < n; ++i) {
     OutputLanes s[W + 1];
     sunrealtype sums[NOUT];
@@ -68,8 +73,8 @@ void LinManyEntries(sunindextype n, const sunrealtype (*c)[kMaxDegree], const su
   }
 }
 
-using LinManyFn = void (*)(sunindextype, const sunrealtype (*)[kMaxDegree],
-                           const sunrealtype* const*, sunrealtype* const*);
+using LinManyFn = void (*)(sunindextype, const sunrealtype (*)[kMaxDegree], const N_Vector*,
+                           const N_Vector*);
 constexpr int kLinManyOut = kMaxDegree - 2;  // the refresh's rows at most
 
 template <int M, std::size_t... K>
@@ -89,13 +94,7 @@ constexpr auto kLinManyFns = LinManyTable(std::make_index_sequence<kMaxDegree - 
 void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                            N_Vector* out) const {
   if (serial && m >= 3 && n <= kLinManyFew && nout >= 1 && nout <= kLinManyOut) {
-    // Lin's CombineSerial with the inputs' data looked up once (serial: every vector is
-    // NVECTOR_SERIAL)
-    const sunrealtype* x[kMaxDegree];
-    for (int j = 0; j < m; ++j) x[j] = NV_DATA_S(X[j]);
-    sunrealtype* o[kLinManyOut];
-    for (int k = 0; k < nout; ++k) o[k] = NV_DATA_S(out[k]);
-    kLinManyFns[m - 3][nout - 1](n, c, x, o);
+    kLinManyFns[m - 3][nout - 1](n, c, X, out);  // Lin's CombineSerial, output by output
     return;
   }
   for (int k = 0; k < nout; ++k) {
