@@ -51,8 +51,8 @@ void PositionTerms(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hprev,
                    sunrealtype* c, int* m) {
   const int d = ce->degree;
   const sunrealtype* tw = ce->co.tw;
-  // The Taylor weights by whole (a constant-size copy: a few moves; those from d on, zero or
-  // the yd term below, are not read).
+  // The Taylor weights by whole, a constant-size copy (a few moves): of the entries from d on
+  // only entry d is read, as the yd term below.
   std::copy(tw, tw + kMaxDegree, c);
   c[0] = 1;
   // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap: zero (each term +0) when the

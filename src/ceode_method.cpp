@@ -177,6 +177,7 @@ constexpr auto kStepCoeffsFns =
 
 }  // namespace
 
+// d = kMinDegree .. kMaxDegree (validated where the degree enters: CEodeSetMethod, the analyses).
 void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co, bool products) {
   // Another h of the same degree rewrites the same entries: the zeros stay (StepCoeffs::degree).
   if (co->degree != d) {
