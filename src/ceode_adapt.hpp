@@ -62,10 +62,10 @@ struct AdaptMem {
   sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
   // The refresh's rows as polynomials in h (RefreshTables, with the coefficients): row r
   // (D_3 .. D_{d-1}, then yd) weighs the interpolant's power coefficient i by
-  // refresh_k[i][r] h^(i - refresh_e[r]); by coefficient, so that one pass serves all rows.
+  // refresh_k[i][r] h^(i - 1 - r) (zero for i <= r); by coefficient, so that one pass serves all
+  // rows.
   static constexpr int kRefreshRows = kMaxDegree - 2;
   int refresh_rows = 0;
-  int refresh_e[kRefreshRows] = {};
   sunrealtype refresh_k[kMaxDegree][kRefreshRows] = {};
 
   // The run

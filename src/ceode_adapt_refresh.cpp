@@ -3,14 +3,25 @@
 // accelerations as the consistent history of a fixed-step run with the new step, so that a
 // rough step sequence cannot pump the parasitic modes of the derivative relations.
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include "ceode_adapt.hpp"
+#include "ceode_lanes.hpp"
 #include "ceode_step.hpp"
 
 namespace ceode {
 
 namespace {
+
+// The refresh's rows side by side: pairs where SSE2 is, single values elsewhere (the same IEEE
+// operations per row either way, ceode_lanes.hpp).
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+using Lanes = Pair;
+#else
+using Lanes = sunrealtype;
+#endif
 
 // i! / (i - m)!, m <= i < kMaxDegree: the weights of the derivatives of s^i, products of
 // integers (exact).
@@ -18,6 +29,17 @@ sunrealtype Falling(int i, int m) {
   sunrealtype v = 1;
   for (int q = i - m + 1; q <= i; ++q) v *= q;
   return v;
+}
+
+// x^j - y^j, the powers by repeated multiplication from 1 (RemapWeights' values).
+sunrealtype PowerDifference(sunrealtype x, sunrealtype y, int j) {
+  sunrealtype u = 1;
+  sunrealtype v = 1;
+  for (int q = 0; q < j; ++q) {
+    u *= x;
+    v *= y;
+  }
+  return u - v;
 }
 
 // The row of D_k, k >= 3, at s = 0: gamma_kl h^l P^(m)(t_n), m = k + l - 2, reads m! times the
@@ -43,41 +65,58 @@ void RateRow(const AdaptMem& am, int d, sunrealtype* row) {
   }
 }
 
-// The weights of the refreshed history over the differences, c[r][j] (r < refresh_rows,
-// j < p). Row r weighs the interpolant's power coefficient i by k_ri h^(i - e_r); in
-// sigma = s / h the Newton basis is w_j = h^j prod_{i<j} (sigma - rho_i), rho_i = delta_i / h,
-// delta_i = t_{n-i} - t_n, so that c[r][j] = h^(j - e_r) L_r(u_j), u_j = prod_{i<j} (sigma -
-// rho_i), L_r the row's constant functional on the power coefficients. With L_r^t the functional
-// shifted by t, u_j = (sigma - rho_{j-1}) u_{j-1} gives L_r^t(u_j) = L_r^{t+1}(u_{j-1}) - rho_{j-1}
-// L_r^t(u_{j-1}): all rows at once, from the table without forming the basis.
-void RefreshWeights(const AdaptMem& am, sunrealtype h, sunrealtype scale,
-                    sunrealtype (*c)[kMaxDegree]) {
-  constexpr int R = AdaptMem::kRefreshRows;
-  const int p = am.order;
+// The weights of the refreshed history over the differences by term, c[j][r] (j < p, r <
+// refresh_rows: row r's weight of difference j). Row r weighs the interpolant's power coefficient
+// i by k_ri h^(i - e_r); in sigma = s / h the Newton basis is w_j = h^j prod_{i<j} (sigma - rho_i),
+// rho_i = delta_i / h, delta_i = t_{n-i} - t_n, so that c[j][r] = h^(j - e_r) L_r(u_j), u_j =
+// prod_{i<j} (sigma - rho_i), L_r the row's constant functional on the power coefficients. With
+// L_r^t the functional shifted by t, u_j = (sigma - rho_{j-1}) u_{j-1} gives L_r^t(u_j) =
+// L_r^{t+1}(u_{j-1}) - rho_{j-1} L_r^t(u_{j-1}): all rows at once, from the table without forming
+// the basis. The order P is a constant, so that the loops unroll and the rows run side by side.
+template <int P>
+void RefreshWeightsOf(const AdaptMem& am, sunrealtype h, sunrealtype scale,
+                      sunrealtype (*c)[kMaxDegree]) {
+  constexpr int L = sizeof(Lanes) / sizeof(sunrealtype);
+  constexpr int W = AdaptMem::kRefreshRows / L;  // the rows in groups of L
+  static_assert(W * L == AdaptMem::kRefreshRows, "the rows fill the groups");
+  const Lanes tag{};
   const sunrealtype hinv = 1 / h;
-  // g[t][r] = L_r^t(u_j), t < p - j; col[j][r] = L_r(u_j) (fixed sizes: copies without calls)
-  sunrealtype g[kMaxDegree][R];
-  for (int t = 0; t < kMaxDegree; ++t) std::copy(am.refresh_k[t], am.refresh_k[t] + R, g[t]);
-  sunrealtype col[kMaxDegree][R];
-  std::copy(g[0], g[0] + R, col[0]);
-  for (int j = 1; j < p; ++j) {
-    const sunrealtype rho = (am.tnode[j - 1] - am.tnode[0]) * hinv;
-    for (int t = 0; t + j < p; ++t) {
-      for (int r = 0; r < R; ++r) g[t][r] = g[t + 1][r] - rho * g[t][r];
+  // Row r's lowest power is e_r = r + 1 (RefreshTables): lane r of term j weighs by h^(j - 1 - r),
+  // at pw[P - j + r] with the powers in reverse (pw[P - 1 - k] = h^k), zero below h^0, where
+  // L_r(u_j) is zero too (no term of L_r reaches it).
+  sunrealtype pw[P + AdaptMem::kRefreshRows] = {};
+  pw[P - 1] = 1;
+  for (int k = 1; k < P; ++k) pw[P - 1 - k] = pw[P - k] * h;
+  Lanes rho[P];
+  for (int j = 1; j < P; ++j) rho[j] = Splat((am.tnode[j - 1] - am.tnode[0]) * hinv, tag);
+  std::fill(c[0], c[0] + AdaptMem::kRefreshRows, SUN_RCONST(0.0));  // e_r >= 1: no row reaches it
+  // Each group of rows on its own (the table of one group stays in registers): g[t] = L^t(u_j),
+  // t < P - j; term j's weights are L(u_j) = g[0] times the powers. Below the group's lowest
+  // power e = w L + 1 (t + j < e) the entries stay zero: each would be +0 - rho (+0) = +0.
+#pragma GCC unroll 8
+  for (int w = 0; w < W; ++w) {
+    Lanes g[P];
+    for (int t = 0; t < P; ++t) g[t] = Load(am.refresh_k[t] + w * L, tag);
+#pragma GCC unroll 8
+    for (int j = 1; j < P; ++j) {
+#pragma GCC unroll 8
+      for (int t = std::max(0, w * L + 1 - j); t + j < P; ++t) g[t] = g[t + 1] - rho[j] * g[t];
+      Store(c[j] + w * L, g[0] * Load(pw + P - j + w * L, tag));
     }
-    std::copy(g[0], g[0] + R, col[j]);
   }
-  // c[r][j] = h^(j - e) col[j][r], j >= e; below e col is zero (no term of L_r reaches it)
-  sunrealtype pw[kMaxDegree];
-  pw[0] = 1;
-  for (int k = 1; k < p; ++k) pw[k] = pw[k - 1] * h;
-  for (int r = 0; r < am.refresh_rows; ++r) {
-    const int e = am.refresh_e[r];
-    std::fill(c[r], c[r] + kMaxDegree, SUN_RCONST(0.0));
-    for (int j = e; j < p; ++j) c[r][j] = col[j][r] * pw[j - e];
-    c[r][p - 1] /= scale;
-  }
+  const Lanes s = Splat(scale, tag);
+  for (int w = 0; w < W; ++w) Store(c[P - 1] + w * L, Load(c[P - 1] + w * L, tag) / s);
 }
+
+using RefreshWeightsFn = void (*)(const AdaptMem&, sunrealtype, sunrealtype,
+                                  sunrealtype (*)[kMaxDegree]);
+template <std::size_t... I>
+constexpr std::array<RefreshWeightsFn, sizeof...(I)> RefreshWeightsTable(
+    std::index_sequence<I...> /*p*/) {
+  return {&RefreshWeightsOf<static_cast<int>(I) + 2>...};
+}
+// By the order p = 2 .. kMaxDegree.
+constexpr auto kRefreshWeightsFns = RefreshWeightsTable(std::make_index_sequence<kMaxDegree - 1>{});
 
 // The top difference's scale: the accepted estimate is ele = cerr hlast^(p+1) (p-1)! times it,
 // the estimate's own factor when it was formed for hlast.
@@ -89,14 +128,14 @@ sunrealtype TopScale(const AdaptMem& am) {
 }
 
 // D_1 keeps its value (the velocity is no parasitic component) and moves its h-dependent part
-// from hmap to h with the remap's own terms, from the history before it is rebuilt.
+// from hmap to h with the remap's own terms (RemapWeights' values), from the history before it
+// is rebuilt. The terms come by k (AdaptCoefficients): those of D_1 first.
 void MoveVelocity(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
-  sunrealtype rc[kMaxDegree * kMaxDegree];
-  RemapWeights(*am, d, h, rc);
-  for (int i = 0; i < am->nremap; ++i) {
+  for (int i = 0; i < am->nremap && am->remap[i].k == 1; ++i) {
     const RemapTerm& r = am->remap[i];
-    if (r.k == 1) am->kernels.Axpy(rc[i], 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
+    const sunrealtype c = r.gamma * PowerDifference(h, am->hmap, r.j);
+    am->kernels.Axpy(c, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
 }
 
@@ -109,7 +148,6 @@ void RefreshTables(AdaptMem* am, int d) {
   for (int k = 3; k <= d; ++k) {  // D_3 .. D_{d-1}, then yd
     const int r = am->refresh_rows++;
     sunrealtype row[kMaxDegree] = {};
-    am->refresh_e[r] = k < d ? k - 2 : d - 2;
     if (k < d) {
       ConsistentRow(*am, k, row);
     } else {
@@ -124,16 +162,17 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   if (!am->refresh || am->ndata < p || p < 2) return false;  // the table is not full yet
   const sunrealtype scale = TopScale(*am);
   if (scale == 0 || !std::isfinite(scale)) return false;
-  N_Vector X[kMaxDegree + 1];
-  X[0] = ce->D[2];  // a(t_n), the table's first entry
-  for (int j = 1; j < p - 1; ++j) X[j] = am->dd[am->cur][j];
+  // The arrays of pointers by whole (constant-size copies: a few moves, no library call).
+  N_Vector X[kMaxDegree];
+  std::copy(am->dd[am->cur], am->dd[am->cur] + kMaxDegree, X);
+  X[0] = ce->D[2];  // a(t_n), the table's first entry, then the differences
   X[p - 1] = am->ele;
   MoveVelocity(ce, am, h);
   // D_3 .. D_{d-1}, then yd, in one call.
-  sunrealtype c[AdaptMem::kRefreshRows][kMaxDegree];
-  RefreshWeights(*am, h, scale, c);
+  sunrealtype c[kMaxDegree][kMaxDegree];
+  kRefreshWeightsFns[p - 2](*am, h, scale, c);
   N_Vector out[AdaptMem::kRefreshRows];
-  for (int r = 0; r + 1 < am->refresh_rows; ++r) out[r] = ce->D[3 + r];
+  std::copy(ce->D + 3, ce->D + 3 + AdaptMem::kRefreshRows - 1, out);
   out[am->refresh_rows - 1] = am->yd;
   am->kernels.LinMany(am->refresh_rows, p, c, X, out);
   am->hmap = am->hprev = h;

@@ -52,11 +52,17 @@ void PositionTerms(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hprev,
                    sunrealtype* c, int* m) {
   const int d = ce->degree;
   const sunrealtype* tw = ce->co.tw;
+  // The Taylor weights by whole, a constant-size copy (a few moves): of the entries from d on
+  // only entry d is read, as the yd term below.
+  std::copy(tw, tw + kMaxDegree, c);
   c[0] = 1;
-  for (int i = 1; i < d; ++i) c[i] = tw[i];
-  sunrealtype top_shift = 0;  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap
-  for (int i = 0; i < am.nremap; ++i) {
-    if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (hmap - hprev);
+  // D_{d-1} = z_n + gamma (hmap - hprev) yd after the remap: zero (each term +0) when the
+  // history is remapped for the node's own step, as a refreshed one is.
+  sunrealtype top_shift = 0;
+  if (hmap != hprev) {
+    for (int i = 0; i < am.nremap; ++i) {
+      if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (hmap - hprev);
+    }
   }
   const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * ce->h);
   *m = d;
@@ -86,8 +92,8 @@ sunrealtype MoveTo(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   RemapTerms(ce, am, h, &w);
   SetStep(ce, h);
   PositionWeights(ce, am);
+  std::copy(ce->D, ce->D + kMaxDegree, w.X);  // by whole, as PositionTerms' weights
   w.X[0] = ce->xcur;
-  for (int i = 1; i < ce->degree; ++i) w.X[i] = ce->D[i];
   if (w.m > ce->degree) w.X[ce->degree] = am->yd;
   w.out = ce->xnext;
   // The weights of the new position come with it, unless the constrained solve moves it.
@@ -139,32 +145,50 @@ sunrealtype* const (*HistoryData(CEodeMemRec* ce, AdaptMem* am))[kMaxDegree] {
   return am->hist_data[c];
 }
 
+// The derivatives' weights of the serial pass for degree D (a constant, so that the loops
+// unroll): BuildUpdatePlan's values in its order into cw; whether none is zero. The smallest
+// magnitude tells, without a branch per weight (a NaN is no zero, as for c != 0: min keeps the
+// other operand).
+template <int D>
+bool DerivativeWeightsOf(const StepCoeffs& co, sunrealtype (*cw)[kMaxDegree]) {
+  sunrealtype smallest = 1;
+  int s = 0;
+  const auto put = [&](int j, sunrealtype c) {
+    cw[s][j] = c;
+    smallest = std::min(smallest, std::fabs(c));
+  };
+  if (D > 3) {
+    put(0, 1 / co.c[2]);
+    for (int j = 2; j < D; ++j) put(j - 1, -co.T[2][j] / co.c[2]);
+    ++s;
+  }
+#pragma GCC unroll 8
+  for (int k = 1; k <= D - 2; ++k) {
+    if (k == 2) continue;
+#pragma GCC unroll 8
+    for (int j = k + 1; j < D; ++j) put(j - k - 1, co.T[k][j]);
+    put(D - k - 1, co.c[k]);
+    ++s;
+  }
+  return smallest > 0;
+}
+
+using DerivativeWeightsFn = bool (*)(const StepCoeffs&, sunrealtype (*)[kMaxDegree]);
+template <std::size_t... I>
+constexpr std::array<DerivativeWeightsFn, sizeof...(I)> DerivativeWeightsTable(
+    std::index_sequence<I...> /*d*/) {
+  return {&DerivativeWeightsOf<static_cast<int>(I) + kMinDegree>...};
+}
+// By the degree d = kMinDegree .. kMaxDegree.
+constexpr auto kDerivativeWeightsFns =
+    DerivativeWeightsTable(std::make_index_sequence<kMaxDegree - kMinDegree + 1>{});
+
 // The derivatives' weights of the serial pass (AdaptAfterF::cw) for the step's h, once per h:
 // BuildUpdatePlan's values in its order, and whether none is zero (full).
 void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
   if (am->cw_h == ce->co.h) return;
   am->cw_h = ce->co.h;
-  const int d = ce->degree;
-  const StepCoeffs& co = ce->co;
-  AdaptAfterF& w = am->after;
-  bool full = true;
-  int s = 0;
-  const auto put = [&](int j, sunrealtype c) {
-    w.cw[s][j] = c;
-    full = full && c != 0;
-  };
-  if (d > 3) {
-    put(0, 1 / co.c[2]);
-    for (int j = 2; j < d; ++j) put(j - 1, -co.T[2][j] / co.c[2]);
-    ++s;
-  }
-  for (int k = 1; k <= d - 2; ++k) {
-    if (k == 2) continue;
-    for (int j = k + 1; j < d; ++j) put(j - k - 1, co.T[k][j]);
-    put(d - k - 1, co.c[k]);
-    ++s;
-  }
-  w.full = full;
+  am->after.full = kDerivativeWeightsFns[ce->degree - kMinDegree](ce->co, am->after.cw);
 }
 
 // The estimate's shape for the step ce->h (kept while h and the number of differences stay,

@@ -52,6 +52,9 @@ const MethodSet& MethodSetAt(int index);
 //   v(a)   = sum_j V0[j] H_j + kappa a              (velocity as a function of a)
 //   x(t+h) = X0 + mu (a - B_2)                      (used by the constraint solve)
 struct StepCoeffs {
+  // The degree the entries belong to: ComputeStepCoeffs writes every entry the formulas below
+  // give, the others stay zero while the degree stays (0: none set).
+  int degree = 0;
   sunrealtype h = 0;
   sunrealtype T[kMaxDegree][kMaxDegree] = {};
   sunrealtype c[kMaxDegree] = {};

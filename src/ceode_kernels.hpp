@@ -257,7 +257,8 @@ struct AdaptKernels {
   sunindextype n = 0;
   // out = sum_j c[j] X[j] (Combine's values; out is not an input).
   void Lin(int m, const sunrealtype* c, N_Vector* X, N_Vector out) const;
-  // out[k] = sum_j c[k][j] X[j], k < nout (Lin's values; no out among the X), m <= kMaxDegree.
+  // out[k] = sum_j c[j][k] X[j], k < nout (Lin's values; no out among the X), m <= kMaxDegree:
+  // the weights by term, row j those of X[j].
   void LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                N_Vector* out) const;
   // x += c y (N_VLinearSum(1, x, c, y, x)).

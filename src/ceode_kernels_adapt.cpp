@@ -37,51 +37,71 @@ namespace {
 
 // LinMany on few entries: each entry's inputs are read once for all outputs, the sums in
 // CombineEntriesOf's order (the same values); there the calls per output are most of the cost.
+// With the counts constants the outputs' sums run side by side, L at a time (pairs where SSE2 is,
+// ceode_lanes.hpp: the same operations per output), from the rows of c by term.
 constexpr sunindextype kLinManyFew = 64;
-template <int M>
-void LinManyEntries(sunindextype n, int nout, const sunrealtype (*c)[kMaxDegree],
-                    const sunrealtype* const* x, sunrealtype* const* out) {
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+using OutputLanes = Pair;
+#else
+using OutputLanes = sunrealtype;
+#endif
+template <int M, int NOUT>
+void LinManyEntries(sunindextype n, const sunrealtype (*c)[kMaxDegree], const N_Vector* X,
+                    const N_Vector* Out) {
+  constexpr int L = sizeof(OutputLanes) / sizeof(sunrealtype);
+  constexpr int W = NOUT / L;  // groups of L outputs, the rest one by one
+  const OutputLanes tag{};
+  // The vectors' data looked up once (serial: every vector is NVECTOR_SERIAL)
+  const sunrealtype* x[M];
+  for (int j = 0; j < M; ++j) x[j] = NV_DATA_S(X[j]);
+  sunrealtype* out[NOUT];
+  for (int k = 0; k < NOUT; ++k) out[k] = NV_DATA_S(Out[k]);
   for (sunindextype i = 0; i < n; ++i) {
-    sunrealtype xi[M];
-    for (int j = 0; j < M; ++j) xi[j] = x[j][i];
-    for (int k = 0; k < nout; ++k) {
-      sunrealtype s = c[k][0] * xi[0];
-      for (int j = 1; j < M; ++j) s += c[k][j] * xi[j];
-      out[k][i] = s;
+    OutputLanes s[W + 1];
+    sunrealtype sums[NOUT];
+    const OutputLanes x0 = Splat(x[0][i], tag);
+    for (int w = 0; w < W; ++w) s[w] = Load(c[0] + w * L, tag) * x0;
+    for (int k = W * L; k < NOUT; ++k) sums[k] = c[0][k] * x[0][i];
+    for (int j = 1; j < M; ++j) {
+      const sunrealtype xj = x[j][i];
+      const OutputLanes xs = Splat(xj, tag);
+      for (int w = 0; w < W; ++w) s[w] += Load(c[j] + w * L, tag) * xs;
+      for (int k = W * L; k < NOUT; ++k) sums[k] += c[j][k] * xj;
     }
+    for (int w = 0; w < W; ++w) Store(sums + w * L, s[w]);
+    for (int k = 0; k < NOUT; ++k) out[k][i] = sums[k];
   }
 }
 
-// LinManyEntries for 3 <= m <= kMaxDegree terms; false for other m.
-bool LinManyFew(sunindextype n, int nout, int m, const sunrealtype (*c)[kMaxDegree],
-                const sunrealtype* const* x, sunrealtype* const* out) {
-  static_assert(kMaxDegree == 8, "LinManyFew lists every term count");
-  using Fn = void (*)(sunindextype, int, const sunrealtype(*)[kMaxDegree],
-                      const sunrealtype* const*, sunrealtype* const*);
-  static constexpr Fn kFns[] = {LinManyEntries<3>, LinManyEntries<4>, LinManyEntries<5>,
-                                LinManyEntries<6>, LinManyEntries<7>, LinManyEntries<8>};
-  if (m < 3 || m > kMaxDegree) return false;
-  kFns[m - 3](n, nout, c, x, out);
-  return true;
+using LinManyFn = void (*)(sunindextype, const sunrealtype (*)[kMaxDegree], const N_Vector*,
+                           const N_Vector*);
+constexpr int kLinManyOut = kMaxDegree - 2;  // the refresh's rows at most
+
+template <int M, std::size_t... K>
+constexpr std::array<LinManyFn, sizeof...(K)> LinManyRow(std::index_sequence<K...> /*nout*/) {
+  return {&LinManyEntries<M, static_cast<int>(K) + 1>...};
 }
+template <std::size_t... I>
+constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyTable(
+    std::index_sequence<I...> /*m*/) {
+  return {LinManyRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
+}
+// By the term count m = 3 .. kMaxDegree and the output count nout = 1 .. kLinManyOut.
+constexpr auto kLinManyFns = LinManyTable(std::make_index_sequence<kMaxDegree - 2>{});
 
 }  // namespace
 
 void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                            N_Vector* out) const {
-  if (!serial || m < 3) {  // Lin's special case of two terms
-    for (int k = 0; k < nout; ++k) Lin(m, c[k], X, out[k]);
+  if (serial && m >= 3 && n <= kLinManyFew && nout >= 1 && nout <= kLinManyOut) {
+    kLinManyFns[m - 3][nout - 1](n, c, X, out);  // Lin's CombineSerial, output by output
     return;
   }
-  // Lin's CombineSerial with the inputs' data looked up once
-  const sunrealtype* x[kMaxDegree];
-  SerialDataOf(m, X, x);
-  if (n <= kLinManyFew) {
-    sunrealtype* o[kMaxDegree];
-    for (int k = 0; k < nout; ++k) o[k] = NV_DATA_S(out[k]);
-    if (LinManyFew(n, nout, m, c, x, o)) return;
+  for (int k = 0; k < nout; ++k) {
+    sunrealtype row[kMaxDegree];  // output k's weights by term (Lin's special case of two terms)
+    for (int j = 0; j < m; ++j) row[j] = c[j][k];
+    Lin(m, row, X, out[k]);
   }
-  for (int k = 0; k < nout; ++k) CombineSerial(n, m, c[k], x, NV_DATA_S(out[k]));
 }
 
 void AdaptKernels::Axpy(sunrealtype c, N_Vector y, N_Vector x) const {

@@ -3,8 +3,10 @@
 // difference weights every other part of the library builds on. Pure arithmetic and N_Vector
 // combinations on the history; no state of a run is kept here.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "ceode_kernels.hpp"
 
@@ -125,36 +127,65 @@ int NumMethodSets() { return static_cast<int>(sizeof(kMethodSets) / sizeof(kMeth
 
 const MethodSet& MethodSetAt(int index) { return kMethodSets[index]; }
 
-void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co, bool products) {
-  *co = StepCoeffs{};
-  co->h = h;
+namespace {
+
+// The step's coefficients from its Taylor weights co->tw, for degree D (a constant, so that the
+// loops unroll: the adaptive step forms them at every change of h).
+template <int D>
+void StepCoeffsOf(const sunrealtype* p, sunrealtype h, bool products, StepCoeffs* co) {
   sunrealtype* tw = co->tw;  // h^i / i!
   if (products) {
-    TaylorWeightsByProducts(h, d, tw);
+    tw[0] = 1;  // TaylorWeightsByProducts' values
+    for (int i = 1; i < D; ++i) tw[i] = tw[i - 1] * h / i;
   } else {
-    TaylorWeights(h, d, tw);
+    TaylorWeights(h, D, tw);
   }
   // The predictor's weights, once per h: every step reads them (PredictAccel, SolvePC).
-  std::copy(tw, tw + d - 2, co->pred);
-  // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k.
-  for (int k = 1; k <= d - 2; ++k) {
-    for (int i = 0; i <= d - 2 - k; ++i) co->T[k][k + i] = tw[i];
-    const sunrealtype top = tw[d - 1 - k];
-    co->T[k][d - 1] += top * (1 - p[k]);
+  std::copy(tw, tw + D - 2, co->pred);
+  // Lower derivatives k = 1..d-2: Taylor from t-h with the top term blended by p_k (added to
+  // the entry's zero, so that a zero term keeps the sum's sign of zero).
+#pragma GCC unroll 8
+  for (int k = 1; k <= D - 2; ++k) {
+#pragma GCC unroll 8
+    for (int i = 0; i <= D - 2 - k; ++i) co->T[k][k + i] = tw[i];
+    const sunrealtype top = tw[D - 1 - k];
+    co->T[k][D - 1] = SUN_RCONST(0.0) + top * (1 - p[k]);
     co->c[k] = top * p[k];
   }
-  if (d == 3) co->c[2] = 1;  // D_2 is the top derivative itself
-  co->c[d - 1] = 1;
+  if (D == 3) co->c[2] = 1;  // D_2 is the top derivative itself
+  co->c[D - 1] = 1;
   co->kappa = co->c[1] / co->c[2];
-  for (int j = 1; j < d; ++j) co->V0[j] = co->T[1][j] - co->kappa * co->T[2][j];
+  for (int j = 1; j < D; ++j) co->V0[j] = co->T[1][j] - co->kappa * co->T[2][j];
   // Position: Taylor from t with the top term blended by p_0.
-  for (int i = 1; i <= d - 2; ++i) co->w[i] = tw[i];
-  const sunrealtype top = tw[d - 1];
+  for (int i = 1; i <= D - 2; ++i) co->w[i] = tw[i];
+  const sunrealtype top = tw[D - 1];
   co->wz_old = top * (1 - p[0]);
   co->wz_new = top * p[0];
   sunrealtype cx = co->wz_new;
-  for (int i = 1; i <= d - 2; ++i) cx += co->w[i] * co->c[i];
+  for (int i = 1; i <= D - 2; ++i) cx += co->w[i] * co->c[i];
   co->mu = cx / co->c[2];
+}
+
+using StepCoeffsFn = void (*)(const sunrealtype*, sunrealtype, bool, StepCoeffs*);
+template <std::size_t... I>
+constexpr std::array<StepCoeffsFn, sizeof...(I)> StepCoeffsTable(std::index_sequence<I...> /*d*/) {
+  return {&StepCoeffsOf<static_cast<int>(I) + kMinDegree>...};
+}
+// By the degree d = kMinDegree .. kMaxDegree.
+constexpr auto kStepCoeffsFns =
+    StepCoeffsTable(std::make_index_sequence<kMaxDegree - kMinDegree + 1>{});
+
+}  // namespace
+
+// d = kMinDegree .. kMaxDegree (validated where the degree enters: CEodeSetMethod, the analyses).
+void ComputeStepCoeffs(int d, const sunrealtype* p, sunrealtype h, StepCoeffs* co, bool products) {
+  // Another h of the same degree rewrites the same entries: the zeros stay (StepCoeffs::degree).
+  if (co->degree != d) {
+    *co = StepCoeffs{};
+    co->degree = d;
+  }
+  co->h = h;
+  kStepCoeffsFns[d - kMinDegree](p, h, products, co);
 }
 
 // Every Taylor polynomial of the library (step coefficients, predictors, starts, dense output)

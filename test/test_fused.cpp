@@ -771,3 +771,45 @@ INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
                          });
 
 }  // namespace kernel
+
+namespace {
+
+// Whether two coefficient tables hold the same bits in every entry (the fields one by one: the
+// padding after the degree is not compared).
+bool SameTable(const ceode::StepCoeffs& a, const ceode::StepCoeffs& b) {
+  constexpr size_t kD = ceode::kMaxDegree;
+  const auto same = [](const sunrealtype* x, const sunrealtype* y, size_t n) {
+    return std::memcmp(x, y, n * sizeof(sunrealtype)) == 0;
+  };
+  return a.degree == b.degree && same(&a.h, &b.h, 1) && same(&a.T[0][0], &b.T[0][0], kD * kD) &&
+         same(a.c, b.c, kD) && same(a.w, b.w, kD) && same(&a.wz_old, &b.wz_old, 1) &&
+         same(&a.wz_new, &b.wz_new, 1) && same(a.V0, b.V0, kD) && same(&a.kappa, &b.kappa, 1) &&
+         same(&a.mu, &b.mu, 1) && same(a.pred, b.pred, kD) && same(a.tw, b.tw, kD + 1);
+}
+
+}  // namespace
+
+// ComputeStepCoeffs keeps a table's zeros while the degree stays and writes every other entry
+// (the adaptive step's change of h): a table reused after every set, another h and the other form
+// of the Taylor weights holds the bits of a fresh one.
+TEST(StepCoefficients, AReusedTableHoldsTheBitsOfAFreshOne) {
+  const int nsets = ceode::NumMethodSets();
+  ceode::StepCoeffs reused;
+  int same = 0;
+  for (int a = 0; a < nsets; ++a) {
+    for (int b = 0; b < nsets; ++b) {
+      for (bool products : {false, true}) {
+        const ceode::MethodSet& first = ceode::MethodSetAt(a);
+        const ceode::MethodSet& next = ceode::MethodSetAt(b);
+        ceode::ComputeStepCoeffs(first.degree, first.params.data(), 0.03, &reused, !products);
+        ceode::ComputeStepCoeffs(next.degree, next.params.data(), 0.007, &reused, products);
+        ceode::StepCoeffs fresh;
+        ceode::ComputeStepCoeffs(next.degree, next.params.data(), 0.007, &fresh, products);
+        const bool equal = SameTable(reused, fresh);
+        EXPECT_TRUE(equal) << first.name << " then " << next.name << ", products " << products;
+        same += equal ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(same, 2 * nsets * nsets);
+}
