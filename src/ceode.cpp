@@ -340,7 +340,6 @@ int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, s
                       SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout) &&
                       (itask == CE_NORMAL || itask == CE_ONE_STEP);
   if (!direct) return Evolve(ce, func, tout, xout, vout, tret, itask);
-  AdaptSetTarget(ce, tout);
   bool finite = true;
   const int flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask, &finite);
   return CheckReturned(ce, func, finite, xout, flag);
