@@ -773,9 +773,12 @@ int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tli
 }
 }  // namespace
 
-__attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                         N_Vector xout, N_Vector vout, sunrealtype* tret, int itask,
-                                         bool* finite) {
+namespace {
+
+// AdaptEvolve before its check of the outputs; *finite: whether the outputs written are finite
+// (unset where none are written).
+inline int StepsAndOutputs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                           N_Vector vout, sunrealtype* tret, int itask, bool* finite) {
   AdaptMem* am = ce->adapt.get();
   am->tout_hint = tout;  // as AdaptSetTarget, which Evolve calls before the start
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
@@ -813,6 +816,16 @@ __attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunr
   if (!at_stop) return CE_SUCCESS;
   ce->tstop_set = false;
   return CE_TSTOP_RETURN;
+}
+
+}  // namespace
+
+__attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                         N_Vector xout, N_Vector vout, sunrealtype* tret,
+                                         int itask) {
+  bool finite = true;
+  const int flag = StepsAndOutputs(ce, func, tout, xout, vout, tret, itask, &finite);
+  return CheckReturned(ce, func, finite, xout, flag);
 }
 
 }  // namespace ceode
