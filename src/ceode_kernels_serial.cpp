@@ -1144,61 +1144,11 @@ bool CopyFinite(N_Vector from, N_Vector to) {
   return IsFinite(to);
 }
 
-namespace {
-
-// CopyPairFinite at N unknowns, unrolled: the values loaded before any store (the outputs may
-// share memory with nothing here, but the compiler cannot know), and the test one sum of a - a,
-// which is 0 for finite a and NaN otherwise.
-template <int N>
-inline bool CopyPairFiniteOf(const sunrealtype* xs, const sunrealtype* vs, sunrealtype* xo,
-                             sunrealtype* vo) {
-  sunrealtype a[N];
-  sunrealtype b[N];
-  sunrealtype zero = 0;
-  for (int i = 0; i < N; ++i) {
-    a[i] = xs[i];
-    b[i] = vs[i];
-    zero += (a[i] - a[i]) + (b[i] - b[i]);
-  }
-  for (int i = 0; i < N; ++i) {
-    xo[i] = a[i];
-    vo[i] = b[i];
-  }
-  return zero == 0;
-}
-
-__attribute__((noinline)) bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout,
-                                                 N_Vector vout, bool serial) {
+bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout, bool serial) {
   if (!serial) return CopyFinite(x, xout) & CopyFinite(v, vout);
   const sunindextype n = NV_LENGTH_S(x);
   return CopyFiniteData(NV_DATA_S(x), NV_DATA_S(xout), n) &
          CopyFiniteData(NV_DATA_S(v), NV_DATA_S(vout), n);
-}
-
-}  // namespace
-
-bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout) {
-  const auto get = N_VGetArrayPointer_Serial;
-  const bool serial = x->ops->nvgetarraypointer == get && v->ops->nvgetarraypointer == get &&
-                      xout->ops->nvgetarraypointer == get && vout->ops->nvgetarraypointer == get;
-  const sunindextype n = serial ? NV_LENGTH_S(x) : 0;
-  // A few unknowns (a call of CE_ONE_STEP on a small problem): no loop set-up.
-  const sunrealtype* xs = serial ? NV_DATA_S(x) : nullptr;
-  const sunrealtype* vs = serial ? NV_DATA_S(v) : nullptr;
-  sunrealtype* xo = serial ? NV_DATA_S(xout) : nullptr;
-  sunrealtype* vo = serial ? NV_DATA_S(vout) : nullptr;
-  switch (n) {
-    case 1:
-      return CopyPairFiniteOf<1>(xs, vs, xo, vo);
-    case 2:
-      return CopyPairFiniteOf<2>(xs, vs, xo, vo);
-    case 3:
-      return CopyPairFiniteOf<3>(xs, vs, xo, vo);
-    case 4:
-      return CopyPairFiniteOf<4>(xs, vs, xo, vo);
-    default:
-      return CopyPairFiniteAny(x, v, xout, vout, serial);
-  }
 }
 
 bool AllFinite(N_Vector v) {
