@@ -76,6 +76,15 @@ bool IsFinite(N_Vector v) {
   return !std::isnan(l1) && std::isfinite(N_VMaxNorm(v));
 }
 
+int ReportNotFinite(CEodeMemRec* ce, const char* func, N_Vector xout) {
+  return ProcessError(ce, CE_UNSTABLE, func,
+                      "The %s at t = %.17g is not finite although every step passed its growth "
+                      "check: h = %g is beyond what %s can represent (its velocity weights "
+                      "overflow); reduce h or choose another set, then call CEodeReInit.",
+                      IsFinite(xout) ? "velocity" : "position", static_cast<double>(ce->tcur),
+                      static_cast<double>(ce->h), ce->method_name.c_str());
+}
+
 namespace {
 
 // Every object whose size is the problem's: the modules' workspaces and the vectors.
@@ -152,20 +161,6 @@ int CheckEvolveArgs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vecto
     return ProcessError(ce, CE_ILL_INPUT, func, "itask = %d: use CE_NORMAL or CE_ONE_STEP.", itask);
   }
   return std::isfinite(tout) ? CE_SUCCESS : ValidateTime(ce, func, "tout", tout);
-}
-
-// The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
-// cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
-// extreme for this h) is caught here, once per call, and never returned with success. finite:
-// whether xout and vout are finite, as the output (OutputState) found while writing them.
-int CheckReturned(CEodeMemRec* ce, const char* func, bool finite, N_Vector xout, int flag) {
-  if (flag < 0 || finite) return flag;
-  return ProcessError(ce, CE_UNSTABLE, func,
-                      "The %s at t = %.17g is not finite although every step passed its growth "
-                      "check: h = %g is beyond what %s can represent (its velocity weights "
-                      "overflow); reduce h or choose another set, then call CEodeReInit.",
-                      IsFinite(xout) ? "velocity" : "position", static_cast<double>(ce->tcur),
-                      static_cast<double>(ce->h), ce->method_name.c_str());
 }
 
 void ReturnCurrentState(const CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
@@ -277,11 +272,7 @@ __attribute__((noinline)) int Evolve(CEodeMemRec* ce, const char* func, sunrealt
     *tret = ce->tcur;
     return flag;
   }
-  if (AdaptOn(ce)) {
-    bool finite = true;
-    flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask, &finite);
-    return CheckReturned(ce, func, finite, xout, flag);
-  }
+  if (AdaptOn(ce)) return AdaptEvolve(ce, func, tout, xout, vout, tret, itask);
   sunrealtype target = 0;
   bool hit_tstop = false;
   flag = EvolveTarget(ce, func, tout, itask, &target, &hit_tstop);
@@ -340,10 +331,7 @@ int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, s
                       SerialOfLength(vout, ce->n) && tret != nullptr && std::isfinite(tout) &&
                       (itask == CE_NORMAL || itask == CE_ONE_STEP);
   if (!direct) return Evolve(ce, func, tout, xout, vout, tret, itask);
-  AdaptSetTarget(ce, tout);
-  bool finite = true;
-  const int flag = AdaptEvolve(ce, func, tout, xout, vout, tret, itask, &finite);
-  return CheckReturned(ce, func, finite, xout, flag);
+  return AdaptEvolve(ce, func, tout, xout, vout, tret, itask);
 }
 
 }  // namespace
@@ -494,7 +482,7 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (ceode::AdaptOn(ce)) return ceode::AdaptCall(ce, tout, xout, vout, tret, itask);
+  if (ceode::AdaptOnInline(ce)) return ceode::AdaptCall(ce, tout, xout, vout, tret, itask);
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
   return ceode::NormalEvolve(ce, tout, xout, vout, tret, itask);
 }

@@ -225,11 +225,15 @@ bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h);
 // The refresh's rows from gamma and the order, once per method (none when the refresh is off).
 void RefreshTables(AdaptMem* am, int d);
 
+// AdaptOn where the record's type is known, without the call: CEodeEvolve's entry then needs no
+// frame of its own.
+inline bool AdaptOnInline(const CEodeMemRec* ce) { return ce->adapt != nullptr && ce->adapt->on; }
+
 // ceode_adapt_step.cpp: CEodeEvolve with error control: steps until the last accepted one
 // covers tout (CE_NORMAL; the output by its dense output) or one step (CE_ONE_STEP), never past
-// the stop time. *finite: whether the outputs written are finite (unset where none are written).
+// the stop time; a success with outputs that are not finite is reported (CheckReturned).
 int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout, N_Vector vout,
-                sunrealtype* tret, int itask, bool* finite);
+                sunrealtype* tret, int itask);
 
 }  // namespace ceode
 

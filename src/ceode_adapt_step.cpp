@@ -735,19 +735,14 @@ bool AtLimit(const CEodeMemRec* ce, sunrealtype tlimit, sunrealtype troundoff) {
   return ce->tstop_set && ce->tcur >= tlimit - troundoff;
 }
 
-// The steps of a CEodeEvolve call: until the last covers tout (CE_NORMAL) or one step
-// (CE_ONE_STEP), never past the stop time tlimit, and each accepted step (and what is left of the
-// last) checked for roots first, *root_flag their verdict.
-int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit,
-                sunrealtype troundoff, int itask, int* root_flag, const char* func) {
-  // Without roots a call ends on one time alone, tout's or the stop time's where that comes first
-  // (or after one step): one test a step.
+// StepsOfCall's steps with their tests (roots, constraints, user weights, a schedule or a periodic
+// guard check), out of line: AdaptEvolve, which a call without them runs through, keeps a small
+// frame.
+__attribute__((noinline, flatten)) int StepsWithTests(CEodeMemRec* ce, AdaptMem* am,
+                                                      sunrealtype tout, sunrealtype tlimit,
+                                                      sunrealtype troundoff, int itask,
+                                                      int* root_flag, const char* func) {
   const sunrealtype tend = tout - troundoff;
-  if (LeanCall(ce, am)) {
-    const sunrealtype tstop_end = ce->tstop_set ? tlimit - troundoff : SUN_BIG_REAL;
-    if (itask == CE_ONE_STEP) return LeanUntil(ce, am, tout, tstop_end, tlimit, 1, func);
-    return LeanUntil(ce, am, tout, std::min(tend, tstop_end), tlimit, LONG_MAX, func);
-  }
   const bool tout_only = ce->root == nullptr && !ce->tstop_set && itask == CE_NORMAL;
   const auto done = [&](long int nsteps) {
     if (tout_only) return ce->tcur >= tend;
@@ -761,12 +756,31 @@ int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tli
   return StepUntil(ce, am, tout, tlimit, done, func);
 }
 
+// The steps of a CEodeEvolve call: until the last covers tout (CE_NORMAL) or one step
+// (CE_ONE_STEP), never past the stop time tlimit, and each accepted step (and what is left of the
+// last) checked for roots first, *root_flag their verdict.
+int StepsOfCall(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout, sunrealtype tlimit,
+                sunrealtype troundoff, int itask, int* root_flag, const char* func) {
+  // Without roots a call ends on one time alone, tout's or the stop time's where that comes first
+  // (or after one step): one test a step.
+  const sunrealtype tend = tout - troundoff;
+  if (LeanCall(ce, am)) {
+    const sunrealtype tstop_end = ce->tstop_set ? tlimit - troundoff : SUN_BIG_REAL;
+    if (itask == CE_ONE_STEP) return LeanUntil(ce, am, tout, tstop_end, tlimit, 1, func);
+    return LeanUntil(ce, am, tout, std::min(tend, tstop_end), tlimit, LONG_MAX, func);
+  }
+  return StepsWithTests(ce, am, tout, tlimit, troundoff, itask, root_flag, func);
+}
 }  // namespace
 
-__attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
-                                         N_Vector xout, N_Vector vout, sunrealtype* tret, int itask,
-                                         bool* finite) {
+namespace {
+
+// AdaptEvolve before its check of the outputs; *finite: whether the outputs written are finite
+// (unset where none are written).
+inline int StepsAndOutputs(CEodeMemRec* ce, const char* func, sunrealtype tout, N_Vector xout,
+                           N_Vector vout, sunrealtype* tret, int itask, bool* finite) {
   AdaptMem* am = ce->adapt.get();
+  am->tout_hint = tout;  // as AdaptSetTarget, which Evolve calls before the start
   const sunrealtype troundoff = 100 * SUN_UNIT_ROUNDOFF * (std::fabs(ce->tcur) + ce->h);
   *tret = ce->tcur;
   if (itask == CE_NORMAL && tout < ce->tcur - am->hlast - troundoff) {
@@ -802,6 +816,16 @@ __attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunr
   if (!at_stop) return CE_SUCCESS;
   ce->tstop_set = false;
   return CE_TSTOP_RETURN;
+}
+
+}  // namespace
+
+__attribute__((flatten)) int AdaptEvolve(CEodeMemRec* ce, const char* func, sunrealtype tout,
+                                         N_Vector xout, N_Vector vout, sunrealtype* tret,
+                                         int itask) {
+  bool finite = true;
+  const int flag = StepsAndOutputs(ce, func, tout, xout, vout, tret, itask, &finite);
+  return CheckReturned(ce, func, finite, xout, flag);
 }
 
 }  // namespace ceode

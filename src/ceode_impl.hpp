@@ -371,6 +371,16 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 void Restart(CEodeMemRec* ce);
 // The access guard every exported function starts with.
 int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
+// The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
+// cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
+// extreme for this h) is caught here, once per call, and never returned with success. finite:
+// whether xout and vout are finite, as the output (OutputState) found while writing them.
+// ReportNotFinite: its report, out of line.
+int ReportNotFinite(CEodeMemRec* ce, const char* func, N_Vector xout);
+inline int CheckReturned(CEodeMemRec* ce, const char* func, bool finite, N_Vector xout, int flag) {
+  if (flag < 0 || finite) return flag;
+  return ReportNotFinite(ce, func, xout);
+}
 
 // ceode_adapt.cpp: whether the run chooses its steps from tolerances (error control). Inline on
 // the record's pointer: a run that never set tolerances pays one test per call.

@@ -150,9 +150,46 @@ void CopyVector(N_Vector from, N_Vector to);
 // CopyVector that also tells whether every value copied is finite: on serial vectors the test
 // rides on the copy (one pass, no call per vector); on others N_VScale, then IsFinite.
 bool CopyFinite(N_Vector from, N_Vector to);
+// CopyPairFinite's general form, out of line: CopyFinite on both (serial: whether all four are).
+bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout, bool serial);
+// CopyPairFinite at N unknowns, unrolled: the values loaded before any store (the outputs share
+// memory with neither input, but the compiler cannot know), and the test one sum of a - a, which
+// is 0 for finite a and NaN otherwise.
+template <int N>
+inline bool CopyPairFiniteOf(const sunrealtype* xs, const sunrealtype* vs, sunrealtype* xo,
+                             sunrealtype* vo) {
+  sunrealtype a[N];
+  sunrealtype b[N];
+  sunrealtype zero = 0;
+  for (int i = 0; i < N; ++i) {
+    a[i] = xs[i];
+    b[i] = vs[i];
+    zero += (a[i] - a[i]) + (b[i] - b[i]);
+  }
+  for (int i = 0; i < N; ++i) {
+    xo[i] = a[i];
+    vo[i] = b[i];
+  }
+  return zero == 0;
+}
 // xout = x and vout = v (CopyFinite on both, in one call), all four of one length: whether the
-// values copied are finite.
-bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout);
+// values copied are finite. Inline for serial vectors of 1 to 4 unknowns (a call of CE_ONE_STEP
+// on a small problem): no call and no loop set-up.
+inline bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout) {
+  const auto get = N_VGetArrayPointer_Serial;
+  const bool serial = x->ops->nvgetarraypointer == get && v->ops->nvgetarraypointer == get &&
+                      xout->ops->nvgetarraypointer == get && vout->ops->nvgetarraypointer == get;
+  const sunindextype n = serial ? NV_LENGTH_S(x) : 0;
+  if (n < 1 || n > 4) return CopyPairFiniteAny(x, v, xout, vout, serial);
+  const sunrealtype* xs = NV_DATA_S(x);
+  const sunrealtype* vs = NV_DATA_S(v);
+  sunrealtype* xo = NV_DATA_S(xout);
+  sunrealtype* vo = NV_DATA_S(vout);
+  if (n == 1) return CopyPairFiniteOf<1>(xs, vs, xo, vo);
+  if (n == 2) return CopyPairFiniteOf<2>(xs, vs, xo, vo);
+  if (n == 3) return CopyPairFiniteOf<3>(xs, vs, xo, vo);
+  return CopyPairFiniteOf<4>(xs, vs, xo, vo);
+}
 // Whether every entry is finite, on the data of a serial vector (or any exposing it) without a
 // call per vector; IsFinite (two norms) on the others.
 bool AllFinite(N_Vector v);

@@ -1144,29 +1144,11 @@ bool CopyFinite(N_Vector from, N_Vector to) {
   return IsFinite(to);
 }
 
-namespace {
-
-__attribute__((noinline)) bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout,
-                                                 N_Vector vout, bool serial) {
+bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout, bool serial) {
   if (!serial) return CopyFinite(x, xout) & CopyFinite(v, vout);
   const sunindextype n = NV_LENGTH_S(x);
   return CopyFiniteData(NV_DATA_S(x), NV_DATA_S(xout), n) &
          CopyFiniteData(NV_DATA_S(v), NV_DATA_S(vout), n);
-}
-
-}  // namespace
-
-bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout) {
-  const auto get = N_VGetArrayPointer_Serial;
-  const bool serial = x->ops->nvgetarraypointer == get && v->ops->nvgetarraypointer == get &&
-                      xout->ops->nvgetarraypointer == get && vout->ops->nvgetarraypointer == get;
-  if (!serial || NV_LENGTH_S(x) != 1) return CopyPairFiniteAny(x, v, xout, vout, serial);
-  // One unknown (a call of CE_ONE_STEP on a small problem): no loop set-up.
-  const sunrealtype a = NV_DATA_S(x)[0];
-  const sunrealtype b = NV_DATA_S(v)[0];
-  NV_DATA_S(xout)[0] = a;
-  NV_DATA_S(vout)[0] = b;
-  return std::isfinite(a) && std::isfinite(b);
 }
 
 bool AllFinite(N_Vector v) {
