@@ -319,11 +319,6 @@ int EvolveNormalGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vect
   return Evolve(ce, func, tout, xout, vout, tret, itask);
 }
 
-namespace {
-
-// CEodeEvolve with error control: straight to its steps where Evolve would only check the
-// arguments (serial outputs of the problem's length, tret, a finite tout, a known itask) and find
-// the run started with no guard check pending; Evolve otherwise, which reports what it refuses.
 int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
               int itask) {
   static const char* func = "CEodeEvolve";
@@ -333,8 +328,6 @@ int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, s
   if (!direct) return Evolve(ce, func, tout, xout, vout, tret, itask);
   return AdaptEvolve(ce, func, tout, xout, vout, tret, itask);
 }
-
-}  // namespace
 
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                          sunrealtype* tret) {
@@ -482,8 +475,10 @@ int CEodeEvolve(void* mem, sunrealtype tout, N_Vector xout, N_Vector vout, sunre
   CEodeMemRec* ce = nullptr;
   const int flag = ceode::Access(mem, __func__, &ce, true);
   if (flag != CE_SUCCESS) return flag;
-  if (ceode::AdaptOnInline(ce)) return ceode::AdaptCall(ce, tout, xout, vout, tret, itask);
+  // With error control a one-step call reaches AdaptCall from OneStepEvolve's checked path, so
+  // that the fixed step's fast path tests nothing more.
   if (itask == CE_ONE_STEP) return ceode::OneStepEvolve(ce, tout, xout, vout, tret);
+  if (ceode::AdaptOnInline(ce)) return ceode::AdaptCall(ce, tout, xout, vout, tret, itask);
   return ceode::NormalEvolve(ce, tout, xout, vout, tret, itask);
 }
 

@@ -715,6 +715,12 @@ struct ResetOptions {
 int Reset(CEodeMemRec* ce, const char* func, sunrealtype t0, N_Vector x0, N_Vector v0,
           const ResetOptions& opt);
 
+// CEodeEvolve with error control: straight to its steps where the general path would only check
+// the arguments (serial outputs of the problem's length, tret, a finite tout, a known itask) and
+// find the run started with no guard check pending; the general path otherwise, which reports what
+// it refuses.
+int AdaptCall(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout, sunrealtype* tret,
+              int itask);
 // CEodeEvolve's CE_ONE_STEP call on the general path (the checks, the start, the step through
 // TakeSteps or TakeDirectStep, the outputs): where OneStepEvolve has no direct form.
 int EvolveOneStepGeneral(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,

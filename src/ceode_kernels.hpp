@@ -190,6 +190,9 @@ inline bool CopyPairFinite(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout)
   if (n == 3) return CopyPairFiniteOf<3>(xs, vs, xo, vo);
   return CopyPairFiniteOf<4>(xs, vs, xo, vo);
 }
+// CopyPairFinite out of line: the fixed step's one-step path keeps its frame small at one unknown,
+// where it copies without it.
+bool CopyPairFiniteApart(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout);
 // Whether every entry is finite, on the data of a serial vector (or any exposing it) without a
 // call per vector; IsFinite (two norms) on the others.
 bool AllFinite(N_Vector v);

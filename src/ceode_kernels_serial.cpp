@@ -1151,6 +1151,10 @@ bool CopyPairFiniteAny(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout, boo
          CopyFiniteData(NV_DATA_S(v), NV_DATA_S(vout), n);
 }
 
+bool CopyPairFiniteApart(N_Vector x, N_Vector v, N_Vector xout, N_Vector vout) {
+  return CopyPairFinite(x, v, xout, vout);
+}
+
 bool AllFinite(N_Vector v) {
   const sunrealtype* data = SerialOnly(v);
   return data != nullptr ? FiniteData(data, NV_LENGTH_S(v)) : IsFinite(v);

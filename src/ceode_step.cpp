@@ -519,7 +519,7 @@ __attribute__((always_inline)) inline bool CopyPairFiniteSerial(const CEodeMemRe
                                                                 N_Vector xout, N_Vector vout) {
   const sunrealtype* x = NV_DATA_S(ce->xcur);
   const sunrealtype* v = NV_DATA_S(ce->D[1]);
-  if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  if (ce->n != 1) return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
   const sunrealtype a = x[0];
   const sunrealtype b = v[0];
   NV_DATA_S(xout)[0] = a;
@@ -562,6 +562,8 @@ long int FastSpanEnd(const CEodeMemRec* ce, const StepMem& sm) {
 // allows it from here on (FastSpanEnd).
 __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
                                              N_Vector vout, sunrealtype* tret) {
+  // Error control has no fast span (FastSpanEnd): its calls come here, and go on to its own path.
+  if (AdaptOn(ce)) return AdaptCall(ce, tout, xout, vout, tret, CE_ONE_STEP);
   ce->step->fast_until = FastSpanEnd(ce, *ce->step);
   const sunrealtype target = ce->tcur + ce->h;
   const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
@@ -627,7 +629,7 @@ __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* 
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
-  if (ce->n != 1) return CopyPairFinite(ce->xcur, ce->D[1], xout, vout);
+  if (ce->n != 1) return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
   const sunrealtype v = ph.v[0];
   NV_DATA_S(xout)[0] = ph.x[0];
   NV_DATA_S(vout)[0] = v;
