@@ -440,6 +440,19 @@ __attribute__((always_inline)) inline sunindextype NormFours(const K& k, suninde
   return i;
 }
 
+// The pass's |x| over all n entries: NormFours' four partial sums, the entries it leaves one by one
+// (one(i) steps entry i and returns its new position) into the first, then the sums in a fixed
+// order. Stream: the streamed stores are made visible after the vector part, before f reads
+// x(t + h).
+template <typename V, bool Stream = false, typename K, typename One>
+__attribute__((always_inline)) inline sunrealtype NormPass(const K& k, sunindextype n, One one) {
+  sunrealtype s[4];
+  sunindextype i = NormFours<V>(k, n, s);
+  if constexpr (Stream) StreamFence();
+  for (; i < n; ++i) s[0] += std::fabs(one(i));
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
 // The entries of one vector of type V from i of a sum of M terms: the same multiplications and
 // additions in the same order as SumBlock.
 template <int M, typename V>
@@ -511,14 +524,11 @@ inline void ShapedEntry(const FusedPlan& fp, sunindextype i, std::index_sequence
 template <int D, unsigned Ones, bool Stream, typename V = Pair>
 __attribute__((always_inline)) inline sunrealtype PairsPass(const FusedPlan& fp, sunindextype n) {
   const PairPlan<D, Ones, Stream, V> pp(fp);
-  sunrealtype s[4];
-  sunindextype i = NormFours<V>(pp, n, s);
-  if constexpr (Stream) StreamFence();  // visible before f reads x(t + h)
-  for (; i < n; ++i) {
-    ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
-    s[0] += std::fabs(pp.out[StepSums(D) - 1][i]);
-  }
-  return (s[0] + s[1]) + (s[2] + s[3]);
+  return NormPass<V, Stream>(
+      pp, n, [&](sunindextype i) __attribute__((always_inline)) {
+        ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
+        return pp.out[StepSums(D) - 1][i];
+      });
 }
 template <int D, unsigned Ones, bool Stream>
 sunrealtype UpdatePairs(const FusedPlan& fp, sunindextype n) {
@@ -709,13 +719,11 @@ __attribute__((always_inline)) inline V RolePair(const RolePlan<D, Ones, V>& rp,
 template <int D, unsigned Ones, typename V = Pair>
 __attribute__((always_inline)) inline sunrealtype RolesPass(const FusedPlan& fp, sunindextype n) {
   const RolePlan<D, Ones, V> rp(fp);
-  sunrealtype s[4];
-  sunindextype i = NormFours<V>(rp, n, s);
-  for (; i < n; ++i) {
-    ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
-    s[0] += std::fabs(rp.out[StepSums(D) - 1][i]);
-  }
-  return (s[0] + s[1]) + (s[2] + s[3]);
+  return NormPass<V>(
+      rp, n, [&](sunindextype i) __attribute__((always_inline)) {
+        ShapedEntry<D, Ones>(fp, i, std::make_index_sequence<StepSums(D)>{});
+        return rp.out[StepSums(D) - 1][i];
+      });
 }
 template <int D, unsigned Ones>
 sunrealtype UpdateRoles(const FusedPlan& fp, sunindextype n) {
@@ -809,11 +817,8 @@ struct LeapStep {
 template <bool kFromV, bool kToU, bool kStream, typename V = Pair>
 __attribute__((always_inline)) inline sunrealtype LeapPass(const FusedPlan& fp, sunindextype n) {
   const LeapStep<kFromV, kToU, kStream, V> st(fp);
-  sunrealtype s[4];
-  sunindextype i = NormFours<V>(st, n, s);
-  if constexpr (kStream) StreamFence();  // visible before f reads x(t + h)
-  for (; i < n; ++i) s[0] += std::fabs(st.One(i));
-  return (s[0] + s[1]) + (s[2] + s[3]);
+  return NormPass<V, kStream>(
+      st, n, [&](sunindextype i) __attribute__((always_inline)) { return st.One(i); });
 }
 template <bool kFromV, bool kToU, bool kStream>
 sunrealtype UpdateLeap(const FusedPlan& fp, sunindextype n) {

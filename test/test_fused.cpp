@@ -660,6 +660,12 @@ class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
   static int NewSlot(int d, int k, bool in_place) {
     return in_place && ceode::InPlaceLevel(d, k) ? k : ceode::kMaxDegree + k;
   }
+  // The set's step coefficients at h = 0.01.
+  static ceode::StepCoeffs Coeffs(const ceode::MethodSet& set) {
+    ceode::StepCoeffs co;
+    ceode::ComputeStepCoeffs(set.degree, set.params.data(), 0.01, &co);
+    return co;
+  }
   // over: the position too is written over its last value (pool_[0]), as the lean loop does.
   ceode::UpdatePlan Plan(int d, const ceode::StepCoeffs& co, bool in_place, bool over = false) {
     N_Vector D[ceode::kMaxDegree] = {};
@@ -686,8 +692,7 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNam
   for (int s = 0; s < ceode::NumMethodSets(); ++s) {
     const ceode::MethodSet& set = ceode::MethodSetAt(s);
     const int d = set.degree;
-    ceode::StepCoeffs co;
-    ceode::ComputeStepCoeffs(d, set.params.data(), 0.01, &co);
+    const ceode::StepCoeffs co = Coeffs(set);
     Fill();
     ceode::UpdateReference(Plan(d, co, false), {});
     std::vector<std::vector<sunrealtype>> ref;  // the outputs: x(t + h), then level 1 .. d - 1
@@ -740,8 +745,7 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceWhenTheRole
   for (int s = 0; s < ceode::NumMethodSets(); ++s) {
     const ceode::MethodSet& set = ceode::MethodSetAt(s);
     const int d = set.degree;
-    ceode::StepCoeffs co;
-    ceode::ComputeStepCoeffs(d, set.params.data(), 0.01, &co);
+    const ceode::StepCoeffs co = Coeffs(set);
     ceode::UpdatePlan plan = Plan(d, co, false);
     if (!MoveSharedRead(&plan, d, pool_, pool_[kSpare])) continue;  // each read by one sum
     ++moved;
