@@ -558,6 +558,51 @@ TEST_P(Backends, SerialLoopsGiveTheReferencesBits) {
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, Backends, ::testing::ValuesIn(kSets));
 
+// A root function that never changes sign: a call then steps through the path with tests.
+int InertRoot(sunrealtype, N_Vector x, N_Vector, sunrealtype* g, void*) {
+  g[0] = NV_Ith_S(x, 0) + 10;
+  return 0;
+}
+
+// Every return of a Kepler run with a stop time: CE_ONE_STEP calls (one_step) or CE_NORMAL calls
+// to 40 output times, with the inert root function (roots) or without.
+struct CallsRun {
+  std::vector<double> out;  // t, x, v of every return
+  long nst = 0;
+};
+CallsRun RunCalls(const char* set, bool one_step, bool roots) {
+  KeplerMem k(set, 1e-9);
+  const double tend = 4 * M_PI;
+  EXPECT_EQ(CEodeSetStopTime(k.mem.get(), tend), CE_SUCCESS);
+  if (roots) EXPECT_EQ(CEodeRootInit(k.mem.get(), 1, InertRoot), CE_SUCCESS);
+  CallsRun r;
+  sunrealtype t = 0;
+  int flag = CE_SUCCESS;
+  for (int i = 1; flag == CE_SUCCESS && t < tend; ++i) {
+    const double tout = one_step ? tend : tend * i / 40;
+    flag = CEodeEvolve(k.mem.get(), tout, k.x.get(), k.v.get(), &t,
+                       one_step ? CE_ONE_STEP : CE_NORMAL);
+    r.out.insert(r.out.end(), {t, NV_Ith_S(k.x.get(), 0), NV_Ith_S(k.x.get(), 1),
+                               NV_Ith_S(k.v.get(), 0), NV_Ith_S(k.v.get(), 1)});
+  }
+  EXPECT_EQ(flag, CE_TSTOP_RETURN);
+  CEodeGetNumSteps(k.mem.get(), &r.nst);
+  return r;
+}
+
+// A call without roots, constraints, user weights or a schedule runs its steps in the loop that
+// leaves out their tests; with a stop time, in one-step mode and to output times it gives every
+// return bit for bit as the loop with the tests (an inert root function selects it).
+TEST_P(Backends, TheLoopWithoutTestsGivesTheBitsOfTheLoopWithThem) {
+  for (bool one_step : {true, false}) {
+    const CallsRun lean = RunCalls(GetParam(), one_step, false);
+    const CallsRun tested = RunCalls(GetParam(), one_step, true);
+    EXPECT_GT(lean.nst, 100) << one_step;
+    EXPECT_EQ(lean.nst, tested.nst) << one_step;
+    EXPECT_EQ(lean.out, tested.out) << one_step;  // every return, bit for bit
+  }
+}
+
 // A unit spring whose acceleration jumps by 1e8 after *jump_at (user data).
 int SpringWithJump(sunrealtype t, N_Vector x, N_Vector, N_Vector f, void* data) {
   NV_Ith_S(f, 0) = -NV_Ith_S(x, 0) + (t > *static_cast<sunrealtype*>(data) ? 1e8 : 0);
