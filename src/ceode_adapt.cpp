@@ -293,7 +293,7 @@ bool CloneOnce(N_Vector* v, N_Vector tmpl) {
 
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
-  const bool ahead = ce->n <= kNextPositionMaxN;  // the next position in the pass after f
+  const bool ahead = am.kernels.serial;  // the next position in the serial pass after f
   bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
             (!ahead || (CloneOnce(&am.ewt_spec, ce->xcur) && CloneOnce(&am.xspec, ce->xcur))) &&
             CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
@@ -418,10 +418,10 @@ int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
   if (am.tol_kind == 0 && tol == 0) tol = am.atol;
   if (am.tol_kind == 1 && tol == 0) tol = N_VMaxNorm(am.atol_vec);
   am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.order);
-  flag = AllocAdaptVectors(ce, func);
   const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL &&
                       (am.tol_kind != 1 || N_VGetVectorID(am.atol_vec) == SUNDIALS_NVEC_SERIAL);
   am.kernels = {serial, ce->n};
+  flag = AllocAdaptVectors(ce, func);
   if (flag == CE_SUCCESS) flag = AdaptWeights(ce, ce->xcur, func);
   if (flag != CE_SUCCESS) return flag;
   ClearRun(ce);

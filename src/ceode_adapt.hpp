@@ -22,12 +22,6 @@ struct RemapTerm {
 // Terms of the consistent history's series D_k = sum_l gamma_kl h^l y^(k+l) that the refresh uses.
 constexpr int kGammaTerms = kMaxDegree + 1;
 
-// Up to this many unknowns the pass after f also forms the position of a next step of the same
-// h (AdaptAfterF 7.). There the second pass's set-up and calls are most of its cost; per entry
-// the longer pass costs slightly more than the second pass it saves (the wider loop runs out of
-// registers), and the two cross near 250 unknowns (bench_step's springs, G3_CD and G8_O8).
-constexpr sunindextype kNextPositionMaxN = 256;
-
 struct AdaptMem {
   // Options
   bool on = false;   // tolerances given and no fixed step set after them
@@ -73,7 +67,7 @@ struct AdaptMem {
   N_Vector ewt = nullptr;       // the node's weights: the test of the step from it
   N_Vector ewt_next = nullptr;  // those of the step's end, formed with its estimate
   N_Vector ewt_spec = nullptr;  // those of the next position formed with the estimate (spec_*)
-  N_Vector xspec = nullptr;     // that position (only on few unknowns, as ewt_spec)
+  N_Vector xspec = nullptr;     // that position (serial passes only, as ewt_spec)
   N_Vector ele = nullptr;       // the last accepted step's local error estimate
   N_Vector est = nullptr;       // the estimate of the step under test
   N_Vector yd = nullptr;        // (z_n - z_{n-1}) / h_{n-1}: the top derivative's rate at the node

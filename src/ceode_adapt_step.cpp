@@ -252,10 +252,11 @@ void DifferenceVectors(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   }
 }
 
-// Most steps keep h (the controller's band): on few unknowns (kNextPositionMaxN) the serial pass
-// forms the position of a next step of the same h with the new history, as MoveTo would after the
-// step is accepted, into xspec and its weights into ewt_spec (AdaptAfterF 7.); NextStep takes
-// them when h stays. A failed test leaves the node's vectors and the last step's left end.
+// Most steps keep h (the controller's band): the serial pass forms the position of a next step of
+// the same h with the new history, as MoveTo would after the step is accepted, into xspec and its
+// weights into ewt_spec (AdaptAfterF 7.); NextStep takes them when h stays. On every n this costs
+// fewer instructions than the second pass it saves (AVX's three-operand encoding keeps the longer
+// pass in registers). A failed test leaves the node's vectors and the last step's left end.
 void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
   w->spec_m = 0;
   const bool weights_from_tolerances = am->wkind != AdaptAfterF::kWeightsNone && w->positive;

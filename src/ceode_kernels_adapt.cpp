@@ -578,8 +578,8 @@ struct PositionArrays {
 // weights after it (WK, as AfterFEntry's): x(t_n)'s weight c[0] is 1, so its term is the value
 // itself (1 x exactly). Returns |x(t_n + h)|.
 template <int M, bool R, int WK, typename V>
-inline V PositionEntry(const PositionArrays& p, const V* c, const V* rc, V rtol, V atol,
-                       sunindextype i) {
+__attribute__((always_inline)) inline V PositionEntry(const PositionArrays& p, const V* c,
+                                                      const V* rc, V rtol, V atol, sunindextype i) {
   const V tag{};
   if constexpr (R) {
     for (int r = 0; r < p.nr; ++r) {
@@ -597,24 +597,40 @@ inline V PositionEntry(const PositionArrays& p, const V* c, const V* rc, V rtol,
   return ax;
 }
 
+// Entries i, i + 1, ... of the position in vectors of type V while whole ones fit in n, their
+// magnitudes summed into the pair loop's lanes; returns the first entry left.
+template <int M, bool R, int WK, typename V>
+__attribute__((always_inline)) inline sunindextype PositionVectors(const AdaptPosition& w,
+                                                                   const PositionArrays& p,
+                                                                   sunindextype i, sunindextype n,
+                                                                   Pair* l1p) {
+  constexpr sunindextype kWidth = sizeof(V) / sizeof(sunrealtype);
+  V c[M];
+  V rc[kMaxDegree * kMaxDegree];
+  for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], V{});
+  for (int r = 0; r < p.nr; ++r) rc[r] = Splat(w.rc[r], V{});
+  const V rtol = Splat(w.rtol, V{});
+  const V atol = Splat(w.atol, V{});
+#pragma GCC unroll 2
+  for (; i + kWidth <= n; i += kWidth)
+    AddLanes(l1p, PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i));
+  return i;
+}
+
 // The L1 norm only feeds the growth check: pairs are summed in two lanes (its rounding, not
-// N_VL1Norm's order, does not reach the state).
-template <int M, bool R, int WK>
-sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunindextype n) {
+// N_VL1Norm's order, does not reach the state). W: the widest vector, Pair or (in the AVX entry)
+// Quad, whose loop the pair loop follows.
+template <int M, bool R, int WK, typename W>
+__attribute__((always_inline)) inline sunrealtype PositionLoop(const AdaptPosition& w,
+                                                               const PositionArrays& p,
+                                                               sunindextype n) {
   sunrealtype l1 = 0;
   sunindextype i = 0;
   if constexpr (kPairs) {
     if (n >= kPairsFrom) {
-      constexpr int kR = kMaxDegree * kMaxDegree;
-      Pair c[M];
-      Pair rc[kR];
-      for (int j = 0; j < M; ++j) c[j] = Splat(w.c[j], Pair{});
-      for (int r = 0; r < p.nr; ++r) rc[r] = Splat(w.rc[r], Pair{});
-      const Pair rtol = Splat(w.rtol, Pair{});
-      const Pair atol = Splat(w.atol, Pair{});
       Pair l1p = Splat(0, Pair{});
-#pragma GCC unroll 2
-      for (; i + 2 <= n; i += 2) l1p += PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i);
+      if constexpr (sizeof(W) > sizeof(Pair)) i = PositionVectors<M, R, WK, W>(w, p, i, n, &l1p);
+      i = PositionVectors<M, R, WK, Pair>(w, p, i, n, &l1p);
       l1 = LaneSum(l1p);
     }
   }
@@ -622,8 +638,9 @@ sunrealtype PositionLoop(const AdaptPosition& w, const PositionArrays& p, sunind
   return l1;
 }
 
-template <int M, int WK>
-sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
+template <int M, int WK, typename W>
+__attribute__((always_inline)) inline sunrealtype PositionPass(const AdaptPosition& w,
+                                                               sunindextype n) {
   PositionArrays p;
   p.nr = w.nremap;
   for (int r = 0; r < p.nr; ++r) {
@@ -634,8 +651,23 @@ sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
   p.out = NV_DATA_S(w.out);
   p.atolv = WK == AdaptAfterF::kWeightsVector ? NV_DATA_S(w.atolv) : nullptr;
   p.ewt = WK != AdaptAfterF::kWeightsNone ? NV_DATA_S(w.ewt) : nullptr;
-  return p.nr > 0 ? PositionLoop<M, true, WK>(w, p, n) : PositionLoop<M, false, WK>(w, p, n);
+  return p.nr > 0 ? PositionLoop<M, true, WK, W>(w, p, n) : PositionLoop<M, false, WK, W>(w, p, n);
 }
+
+template <int M, int WK>
+sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
+  return PositionPass<M, WK, Pair>(w, n);
+}
+
+#if defined(CEODE_AVX)
+// Four entries at a time in AVX's three-operand encoding, then pairs and single entries as the
+// pair loop takes them: the same values, the L1 norm in the pair loop's lanes.
+template <int M, int WK>
+__attribute__((target("avx"))) sunrealtype PositionFusedAvx(const AdaptPosition& w,
+                                                            sunindextype n) {
+  return PositionPass<M, WK, Quad>(w, n);
+}
+#endif
 
 using PositionFn = sunrealtype (*)(const AdaptPosition&, sunindextype);
 
@@ -649,6 +681,26 @@ constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
     PositionTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
     PositionTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
 
+#if defined(CEODE_AVX)
+template <int WK, std::size_t... I>
+constexpr std::array<PositionFn, sizeof...(I)> PositionAvxTable(std::index_sequence<I...> /*m*/) {
+  return {&PositionFusedAvx<static_cast<int>(I) + 3, WK>...};
+}
+constexpr std::array<PositionFn, kMaxDegree> kPositionAvxFns[3] = {
+    PositionAvxTable<AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
+    PositionAvxTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
+    PositionAvxTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
+#endif
+
+// The pass for the weights' kind and m terms in the best encoding the processor runs; below the
+// pair loop's size the AVX entry would only add its set-up.
+PositionFn PositionPassFor(int weights, int m, sunindextype n) {
+#if defined(CEODE_AVX)
+  if (n >= kPairsFrom && __builtin_cpu_supports("avx")) return kPositionAvxFns[weights][m - 3];
+#endif
+  return kPositionFns[weights][m - 3];
+}
+
 }  // namespace
 
 sunrealtype AdaptKernels::Position(AdaptPosition* pw, sunrealtype* dmin) const {
@@ -659,7 +711,7 @@ sunrealtype AdaptKernels::Position(AdaptPosition* pw, sunrealtype* dmin) const {
   if (key != w.fused_key) {
     pw->fused_key = key;
     const bool fusable = serial && w.m >= 3 && w.m < kMaxDegree + 3 && (!weights || w.positive);
-    pw->fused = fusable ? reinterpret_cast<void*>(kPositionFns[w.weights][w.m - 3]) : nullptr;
+    pw->fused = fusable ? reinterpret_cast<void*>(PositionPassFor(w.weights, w.m, n)) : nullptr;
   }
   // x(t_n)'s weight is 1 (AdaptPosition)
   if (w.fused != nullptr && w.c[0] == 1) return reinterpret_cast<PositionFn>(w.fused)(w, n);
