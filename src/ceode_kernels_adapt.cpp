@@ -89,12 +89,15 @@ constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyTa
 // By the term count m = 3 .. kMaxDegree and the output count nout = 1 .. kLinManyOut.
 constexpr auto kLinManyFns = LinManyTable(std::make_index_sequence<kMaxDegree - 2>{});
 
+// LinMany's pass for m terms and nout outputs on n entries (below: it needs the pair loops).
+LinManyFn LinManyFor(int m, int nout, sunindextype n);
+
 }  // namespace
 
 void AdaptKernels::LinMany(int nout, int m, const sunrealtype (*c)[kMaxDegree], N_Vector* X,
                            N_Vector* out) const {
-  if (serial && m >= 3 && n <= kLinManyFew && nout >= 1 && nout <= kLinManyOut) {
-    kLinManyFns[m - 3][nout - 1](n, c, X, out);  // Lin's CombineSerial, output by output
+  if (serial && m >= 3 && nout >= 1 && nout <= kLinManyOut) {
+    LinManyFor(m, nout, n)(n, c, X, out);  // Lin's CombineSerial, output by output
     return;
   }
   for (int k = 0; k < nout; ++k) {
@@ -212,6 +215,100 @@ __attribute__((always_inline)) inline void AddLanes(Pair* s, const Quad& v) {
 // The pair loops start at this many entries: below it splatting their coefficients costs more
 // than it saves (the L1 sums of n < 4 entries are the same either way).
 constexpr sunindextype kPairsFrom = 4;
+
+// LinMany on more entries: V's entries at a time (four in the AVX entry, then pairs), every
+// output's sum in a register of its own and each input read once for all outputs; per entry and
+// output the sums of CombineEntriesOf in its order (the same values).
+template <int M, int NOUT, typename V>
+__attribute__((always_inline)) inline sunindextype LinManyVectors(
+    sunindextype i, sunindextype n, const sunrealtype (*c)[kMaxDegree], const sunrealtype* const* x,
+    sunrealtype* const* out) {
+  constexpr sunindextype kWidth = sizeof(V) / sizeof(sunrealtype);
+  const V tag{};
+  V cw[M][NOUT];
+  for (int j = 0; j < M; ++j) {
+    for (int k = 0; k < NOUT; ++k) cw[j][k] = Splat(c[j][k], tag);
+  }
+  for (; i + kWidth <= n; i += kWidth) {
+    V s[NOUT];
+    const V x0 = Load(x[0] + i, tag);
+    for (int k = 0; k < NOUT; ++k) s[k] = cw[0][k] * x0;
+    for (int j = 1; j < M; ++j) {
+      const V xj = Load(x[j] + i, tag);
+      for (int k = 0; k < NOUT; ++k) s[k] += cw[j][k] * xj;
+    }
+    for (int k = 0; k < NOUT; ++k) Store(out[k] + i, s[k]);
+  }
+  return i;
+}
+
+template <int M, int NOUT, typename W>
+__attribute__((always_inline)) inline void LinManyPass(sunindextype n,
+                                                       const sunrealtype (*c)[kMaxDegree],
+                                                       const N_Vector* X, const N_Vector* Out) {
+  const sunrealtype* x[M];
+  for (int j = 0; j < M; ++j) x[j] = NV_DATA_S(X[j]);
+  sunrealtype* out[NOUT];
+  for (int k = 0; k < NOUT; ++k) out[k] = NV_DATA_S(Out[k]);
+  sunindextype i = 0;
+  if constexpr (kPairs) {
+    if constexpr (sizeof(W) > sizeof(Pair)) i = LinManyVectors<M, NOUT, W>(i, n, c, x, out);
+    i = LinManyVectors<M, NOUT, Pair>(i, n, c, x, out);
+  }
+  for (; i < n; ++i) {
+    for (int k = 0; k < NOUT; ++k) {
+      sunrealtype s = c[0][k] * x[0][i];
+      for (int j = 1; j < M; ++j) s += c[j][k] * x[j][i];
+      out[k][i] = s;
+    }
+  }
+}
+
+template <int M, int NOUT>
+void LinManyWide(sunindextype n, const sunrealtype (*c)[kMaxDegree], const N_Vector* X,
+                 const N_Vector* Out) {
+  LinManyPass<M, NOUT, Pair>(n, c, X, Out);
+}
+#if defined(CEODE_AVX)
+template <int M, int NOUT>
+__attribute__((target("avx"))) void LinManyWideAvx(sunindextype n,
+                                                   const sunrealtype (*c)[kMaxDegree],
+                                                   const N_Vector* X, const N_Vector* Out) {
+  LinManyPass<M, NOUT, Quad>(n, c, X, Out);
+}
+#endif
+
+template <int M, std::size_t... K>
+constexpr std::array<LinManyFn, sizeof...(K)> LinManyWideRow(std::index_sequence<K...> /*nout*/) {
+  return {&LinManyWide<M, static_cast<int>(K) + 1>...};
+}
+template <std::size_t... I>
+constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyWideTable(
+    std::index_sequence<I...> /*m*/) {
+  return {LinManyWideRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
+}
+constexpr auto kLinManyWideFns = LinManyWideTable(std::make_index_sequence<kMaxDegree - 2>{});
+#if defined(CEODE_AVX)
+template <int M, std::size_t... K>
+constexpr std::array<LinManyFn, sizeof...(K)> LinManyAvxRow(std::index_sequence<K...> /*nout*/) {
+  return {&LinManyWideAvx<M, static_cast<int>(K) + 1>...};
+}
+template <std::size_t... I>
+constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyAvxTable(
+    std::index_sequence<I...> /*m*/) {
+  return {LinManyAvxRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
+}
+constexpr auto kLinManyAvxFns = LinManyAvxTable(std::make_index_sequence<kMaxDegree - 2>{});
+#endif
+
+// In the best encoding the processor runs.
+LinManyFn LinManyFor(int m, int nout, sunindextype n) {
+  if (n <= kLinManyFew) return kLinManyFns[m - 3][nout - 1];
+#if defined(CEODE_AVX)
+  if (__builtin_cpu_supports("avx")) return kLinManyAvxFns[m - 3][nout - 1];
+#endif
+  return kLinManyWideFns[m - 3][nout - 1];
+}
 
 // The slots of the histories and the differences in AfterFArrays: copied into the object
 // (Small false: the entry loop keeps them in registers or on the stack; read through the tables,
