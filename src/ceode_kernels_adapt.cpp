@@ -185,7 +185,7 @@ namespace {
 // s += each entry of v in the order of the entries (the reference's sums are sequential).
 inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
 
-// The L1 norm's lanes: a pair's two, one entry's one.
+// The L1 norm's lanes: a vector's (folded into a pair's two after its loop), one entry's one.
 inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
 [[maybe_unused]] inline sunrealtype LaneSum(sunrealtype v) { return v; }
 
@@ -196,6 +196,7 @@ inline void AddInOrder(sunrealtype* s, Pair v) {
   *s += _mm_cvtsd_f64(_mm_unpackhi_pd(v, v));
 }
 inline void AddLanes(Pair* s, Pair v) { *s += v; }
+inline void FoldLanes(Pair* s, Pair v) { *s += v; }
 inline sunrealtype LaneSum(Pair v) { return v[0] + v[1]; }
 #else
 constexpr bool kPairs = false;
@@ -206,10 +207,10 @@ using Pair = sunrealtype;  // the pair loops are discarded (kPairs), their types
 __attribute__((always_inline)) inline void AddInOrder(sunrealtype* s, const Quad& v) {
   for (int l = 0; l < 4; ++l) *s += v[l];
 }
-// Into the pair loop's two lanes, entries 0 and 2 into the first: the pairs' order of additions.
-__attribute__((always_inline)) inline void AddLanes(Pair* s, const Quad& v) {
-  *s += Pair{v[0], v[1]};
-  *s += Pair{v[2], v[3]};
+__attribute__((always_inline)) inline void AddLanes(Quad* s, const Quad& v) { *s += v; }
+// A loop's four lanes into the pair loop's two, once after the loop.
+__attribute__((always_inline)) inline void FoldLanes(Pair* s, const Quad& v) {
+  *s += Pair{v[0], v[1]} + Pair{v[2], v[3]};
 }
 #endif
 // The pair loops start at this many entries: below it splatting their coefficients costs more
@@ -507,9 +508,11 @@ __attribute__((always_inline)) inline sunindextype AfterFVectors(
   constexpr sunindextype kWidth = sizeof(V) / sizeof(sunrealtype);
   const AfterFCoeffs<D, ND, V> k(w, V{});
   const SplatCo<D, ND, V> co{k};
+  V l1 = Splat(0, V{});
 #pragma GCC unroll 2
   for (; i + kWidth <= n; i += kWidth)
-    AfterFEntry<D, ND, false, WK, SM, SWK, V>(p, co, i, ssq, l1p);
+    AfterFEntry<D, ND, false, WK, SM, SWK, V>(p, co, i, ssq, &l1);
+  FoldLanes(l1p, l1);
   return i;
 }
 
@@ -708,13 +711,14 @@ __attribute__((always_inline)) inline sunindextype PositionVectors(const AdaptPo
   for (int r = 0; r < p.nr; ++r) rc[r] = Splat(w.rc[r], V{});
   const V rtol = Splat(w.rtol, V{});
   const V atol = Splat(w.atol, V{});
+  V l1 = Splat(0, V{});
 #pragma GCC unroll 2
-  for (; i + kWidth <= n; i += kWidth)
-    AddLanes(l1p, PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i));
+  for (; i + kWidth <= n; i += kWidth) l1 += PositionEntry<M, R, WK>(p, c, rc, rtol, atol, i);
+  FoldLanes(l1p, l1);
   return i;
 }
 
-// The L1 norm only feeds the growth check: pairs are summed in two lanes (its rounding, not
+// The L1 norm only feeds the growth check: each loop sums in its vector's lanes (its rounding, not
 // N_VL1Norm's order, does not reach the state). W: the widest vector, Pair or (in the AVX entry)
 // Quad, whose loop the pair loop follows.
 template <int M, bool R, int WK, typename W>
@@ -758,7 +762,7 @@ sunrealtype PositionFused(const AdaptPosition& w, sunindextype n) {
 
 #if defined(CEODE_AVX)
 // Four entries at a time in AVX's three-operand encoding, then pairs and single entries as the
-// pair loop takes them: the same values, the L1 norm in the pair loop's lanes.
+// pair loop takes them: the same values, the L1 norm in their lanes.
 template <int M, int WK>
 __attribute__((target("avx"))) sunrealtype PositionFusedAvx(const AdaptPosition& w,
                                                             sunindextype n) {
