@@ -14,7 +14,9 @@
 //    CEodeEvolve in CE_NORMAL to the stop time t_f, the rest at CEODE's defaults. f evaluations
 //    are counted in f itself (the start's and the stability guard's included). A run that
 //    returns a failure flag is a failure row with the flag's name, not a point of the curve,
-//    and not a failure of the scene: it is one of the results.
+//    and not a failure of the scene: it is one of the results. G8_O8 also with the narrow band
+//    CEodeSetFixedStepBounds(0.99, 1.01) (G8_O8_adaptive_band0.99-1.01: h changes on most
+//    steps, fewer f at equal error over ten orbits, more instructions a step, theory.md 12.3).
 //  * CEODE fixed step (wp::CeodeRun, guard off, one CE_NORMAL call to t_f: Problem::end_only):
 //    G5_O4, G6_O5, G7_O7, G8_O8 (--quick: G6_O5, G8_O8), for adaptive against fixed at equal f.
 //    ARKODE's default table and CVODE Adams run in their normal mode to t_f as well.
@@ -85,9 +87,15 @@ struct AdaptStats {
   long netf = 0, ncapped = 0, guard_fe = 0, solver_fe = 0;
 };
 
+// The band of step ratios that keep h (CEodeSetFixedStepBounds); lb = 0: CEODE's default.
+struct Band {
+  double lb = 0, ub = 0;
+};
+constexpr Band kNarrowBand{0.99, 1.01};
+
 // One run at rtol = atol = tol: create, set up, CEodeEvolve(CE_NORMAL) to the stop time t_f,
 // free. rhs_evals is the count of f itself. Returns 0 on success; st->flag is the flag.
-int CeodeAdaptiveRun(SUNContext ctx, const wp::Problem& p, const char* set, double tol,
+int CeodeAdaptiveRun(SUNContext ctx, const wp::Problem& p, const char* set, double tol, Band band,
                      wp::Outcome* out, AdaptStats* st) {
   const long f0 = Evals(p);
   wp::CeodeObjects o;
@@ -99,7 +107,9 @@ int CeodeAdaptiveRun(SUNContext ctx, const wp::Problem& p, const char* set, doub
              wp::Failed(CEodeSetMethodByName(mem, set), "CEodeSetMethodByName") ||
              wp::Failed(CEodeSStolerances(mem, tol, tol), "CEodeSStolerances") ||
              wp::Failed(CEodeSetMaxNumSteps(mem, 100000000L), "CEodeSetMaxNumSteps") ||
-             wp::Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime");
+             wp::Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") ||
+             (band.lb > 0 && wp::Failed(CEodeSetFixedStepBounds(mem, band.lb, band.ub),
+                                        "CEodeSetFixedStepBounds"));
   double t = p.t0;
   if (!bad) {
     st->flag = CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_NORMAL);
@@ -120,11 +130,13 @@ int CeodeAdaptiveRun(SUNContext ctx, const wp::Problem& p, const char* set, doub
 // The numbers run, then the timed runs (wp::TimeMedian); a failed numbers run is a failure row
 // named by its flag. Returns true when the row was added.
 bool MeasureCeodeAdaptive(wp::Table* table, SUNContext ctx, const wp::Problem& p, const char* set,
-                          double tol, int* failures) {
-  const std::string config = std::string(set) + "_adaptive";
+                          double tol, int* failures, Band band = {}) {
+  char suffix[48] = "";
+  if (band.lb > 0) std::snprintf(suffix, sizeof suffix, "_band%g-%g", band.lb, band.ub);
+  const std::string config = std::string(set) + "_adaptive" + suffix;
   wp::Outcome o;
   AdaptStats st;
-  if (CeodeAdaptiveRun(ctx, p, set, tol, &o, &st) != 0) {
+  if (CeodeAdaptiveRun(ctx, p, set, tol, band, &o, &st) != 0) {
     const std::string why =
         st.flag < 0 ? std::string("failed: ") + CEodeGetReturnFlagName(st.flag) : "failed";
     table->Fail("CEODE", config, tol, why.c_str());
@@ -133,8 +145,8 @@ bool MeasureCeodeAdaptive(wp::Table* table, SUNContext ctx, const wp::Problem& p
   }
   wp::Outcome scratch;
   AdaptStats scratch_st;
-  const double secs =
-      wp::TimeMedian([&]() { return CeodeAdaptiveRun(ctx, p, set, tol, &scratch, &scratch_st); });
+  const double secs = wp::TimeMedian(
+      [&]() { return CeodeAdaptiveRun(ctx, p, set, tol, band, &scratch, &scratch_st); });
   if (secs < 0) {
     table->Fail("CEODE", config, tol, "failed while timing");
     ++*failures;
@@ -144,7 +156,7 @@ bool MeasureCeodeAdaptive(wp::Table* table, SUNContext ctx, const wp::Problem& p
   std::printf(
       "    %s tol %.0e: %ld failed error tests, %ld steps capped by the stable step, "
       "f: %ld by the step, %ld by the guard, %ld in all\n",
-      set, tol, st.netf, st.ncapped, st.solver_fe, st.guard_fe, o.rhs_evals);
+      config.c_str(), tol, st.netf, st.ncapped, st.solver_fe, st.guard_fe, o.rhs_evals);
   return true;
 }
 
@@ -169,9 +181,9 @@ void PrintCeodeRunOverhead(SUNContext ctx, const wp::Problem& p,
   for (const char* set : sets) {
     wp::Outcome o;
     AdaptStats st;
-    if (CeodeAdaptiveRun(ctx, shortp, set, 1e-10, &o, &st) != 0) continue;
+    if (CeodeAdaptiveRun(ctx, shortp, set, 1e-10, {}, &o, &st) != 0) continue;
     const double secs =
-        wp::TimeMedian([&]() { return CeodeAdaptiveRun(ctx, shortp, set, 1e-10, &o, &st); });
+        wp::TimeMedian([&]() { return CeodeAdaptiveRun(ctx, shortp, set, 1e-10, {}, &o, &st); });
     std::printf("  %-7s %9.1f us, %ld steps, %ld f\n", set, 1e6 * secs, o.steps, o.rhs_evals);
   }
 }
@@ -495,6 +507,9 @@ int main(int argc, char** argv) {
 
   for (const char* set : sets) {
     for (double tol : tols) MeasureCeodeAdaptive(&table, ctx, p, set, tol, &ceode_failures);
+  }
+  for (double tol : tols) {
+    MeasureCeodeAdaptive(&table, ctx, p, "G8_O8", tol, &ceode_failures, kNarrowBand);
   }
   for (const char* set : fixed_sets) {
     for (long n : fixed_n) {
