@@ -77,18 +77,6 @@ using LinManyFn = void (*)(sunindextype, const sunrealtype (*)[kMaxDegree], cons
                            const N_Vector*);
 constexpr int kLinManyOut = kMaxDegree - 2;  // the refresh's rows at most
 
-template <int M, std::size_t... K>
-constexpr std::array<LinManyFn, sizeof...(K)> LinManyRow(std::index_sequence<K...> /*nout*/) {
-  return {&LinManyEntries<M, static_cast<int>(K) + 1>...};
-}
-template <std::size_t... I>
-constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyTable(
-    std::index_sequence<I...> /*m*/) {
-  return {LinManyRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
-}
-// By the term count m = 3 .. kMaxDegree and the output count nout = 1 .. kLinManyOut.
-constexpr auto kLinManyFns = LinManyTable(std::make_index_sequence<kMaxDegree - 2>{});
-
 // LinMany's pass for m terms and nout outputs on n entries (below: it needs the pair loops).
 LinManyFn LinManyFor(int m, int nout, sunindextype n);
 
@@ -279,36 +267,36 @@ __attribute__((target("avx"))) void LinManyWideAvx(sunindextype n,
 }
 #endif
 
-template <int M, std::size_t... K>
-constexpr std::array<LinManyFn, sizeof...(K)> LinManyWideRow(std::index_sequence<K...> /*nout*/) {
-  return {&LinManyWide<M, static_cast<int>(K) + 1>...};
-}
-template <std::size_t... I>
-constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyWideTable(
-    std::index_sequence<I...> /*m*/) {
-  return {LinManyWideRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
-}
-constexpr auto kLinManyWideFns = LinManyWideTable(std::make_index_sequence<kMaxDegree - 2>{});
+// LinMany's passes: on few entries (kFew), on more (kWide) and their AVX entry (kAvx).
+enum class LinKind { kFew, kWide, kAvx };
+template <LinKind K, int M, int NOUT>
+constexpr LinManyFn LinManyOf() {
 #if defined(CEODE_AVX)
-template <int M, std::size_t... K>
-constexpr std::array<LinManyFn, sizeof...(K)> LinManyAvxRow(std::index_sequence<K...> /*nout*/) {
-  return {&LinManyWideAvx<M, static_cast<int>(K) + 1>...};
-}
-template <std::size_t... I>
-constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyAvxTable(
-    std::index_sequence<I...> /*m*/) {
-  return {LinManyAvxRow<static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
-}
-constexpr auto kLinManyAvxFns = LinManyAvxTable(std::make_index_sequence<kMaxDegree - 2>{});
+  if constexpr (K == LinKind::kAvx) return &LinManyWideAvx<M, NOUT>;
 #endif
+  if constexpr (K == LinKind::kWide) return &LinManyWide<M, NOUT>;
+  return &LinManyEntries<M, NOUT>;
+}
+template <LinKind K, int M, std::size_t... N>
+constexpr std::array<LinManyFn, sizeof...(N)> LinManyRow(std::index_sequence<N...> /*nout*/) {
+  return {LinManyOf<K, M, static_cast<int>(N) + 1>()...};
+}
+template <LinKind K, std::size_t... I>
+constexpr std::array<std::array<LinManyFn, kLinManyOut>, sizeof...(I)> LinManyTable(
+    std::index_sequence<I...> /*m*/) {
+  return {LinManyRow<K, static_cast<int>(I) + 3>(std::make_index_sequence<kLinManyOut>{})...};
+}
+// By the term count m = 3 .. kMaxDegree and the output count nout = 1 .. kLinManyOut.
+template <LinKind K>
+constexpr auto kLinManyFns = LinManyTable<K>(std::make_index_sequence<kMaxDegree - 2>{});
 
 // In the best encoding the processor runs.
 LinManyFn LinManyFor(int m, int nout, sunindextype n) {
-  if (n <= kLinManyFew) return kLinManyFns[m - 3][nout - 1];
+  if (n <= kLinManyFew) return kLinManyFns<LinKind::kFew>[m - 3][nout - 1];
 #if defined(CEODE_AVX)
-  if (__builtin_cpu_supports("avx")) return kLinManyAvxFns[m - 3][nout - 1];
+  if (__builtin_cpu_supports("avx")) return kLinManyFns<LinKind::kAvx>[m - 3][nout - 1];
 #endif
-  return kLinManyWideFns[m - 3][nout - 1];
+  return kLinManyFns<LinKind::kWide>[m - 3][nout - 1];
 }
 
 // The slots of the histories and the differences in AfterFArrays: copied into the object
@@ -772,34 +760,31 @@ __attribute__((target("avx"))) sunrealtype PositionFusedAvx(const AdaptPosition&
 
 using PositionFn = sunrealtype (*)(const AdaptPosition&, sunindextype);
 
-template <int WK, std::size_t... I>
-constexpr std::array<PositionFn, sizeof...(I)> PositionTable(std::index_sequence<I...> /*m*/) {
-  return {&PositionFused<static_cast<int>(I) + 3, WK>...};
-}
-// By the weights' kind and the term count m = 3 .. kMaxDegree + 2.
-constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
-    PositionTable<AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
-    PositionTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
-    PositionTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
-
+template <bool Avx, int WK, int M>
+constexpr PositionFn PositionOf() {
 #if defined(CEODE_AVX)
-template <int WK, std::size_t... I>
-constexpr std::array<PositionFn, sizeof...(I)> PositionAvxTable(std::index_sequence<I...> /*m*/) {
-  return {&PositionFusedAvx<static_cast<int>(I) + 3, WK>...};
-}
-constexpr std::array<PositionFn, kMaxDegree> kPositionAvxFns[3] = {
-    PositionAvxTable<AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
-    PositionAvxTable<AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
-    PositionAvxTable<AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
+  if constexpr (Avx) return &PositionFusedAvx<M, WK>;
 #endif
+  return &PositionFused<M, WK>;
+}
+template <bool Avx, int WK, std::size_t... I>
+constexpr std::array<PositionFn, sizeof...(I)> PositionRow(std::index_sequence<I...> /*m*/) {
+  return {PositionOf<Avx, WK, static_cast<int>(I) + 3>()...};
+}
+// By the weights' kind and the term count m = 3 .. kMaxDegree + 2; Avx: the AVX entries.
+template <bool Avx>
+constexpr std::array<PositionFn, kMaxDegree> kPositionFns[3] = {
+    PositionRow<Avx, AdaptAfterF::kWeightsScalar>(std::make_index_sequence<kMaxDegree>{}),
+    PositionRow<Avx, AdaptAfterF::kWeightsVector>(std::make_index_sequence<kMaxDegree>{}),
+    PositionRow<Avx, AdaptAfterF::kWeightsNone>(std::make_index_sequence<kMaxDegree>{})};
 
 // The pass for the weights' kind and m terms in the best encoding the processor runs; below the
 // pair loop's size the AVX entry would only add its set-up.
 PositionFn PositionPassFor(int weights, int m, sunindextype n) {
 #if defined(CEODE_AVX)
-  if (n >= kPairsFrom && __builtin_cpu_supports("avx")) return kPositionAvxFns[weights][m - 3];
+  if (n >= kPairsFrom && __builtin_cpu_supports("avx")) return kPositionFns<true>[weights][m - 3];
 #endif
-  return kPositionFns[weights][m - 3];
+  return kPositionFns<false>[weights][m - 3];
 }
 
 }  // namespace
