@@ -175,6 +175,7 @@ inline void AddInOrder(sunrealtype* s, sunrealtype v) { *s += v; }
 
 // The L1 norm's lanes: a vector's (folded into a pair's two after its loop), one entry's one.
 inline void AddLanes(sunrealtype* s, sunrealtype v) { *s += v; }
+[[maybe_unused]] inline void FoldLanes(sunrealtype* s, sunrealtype v) { *s += v; }
 [[maybe_unused]] inline sunrealtype LaneSum(sunrealtype v) { return v; }
 
 #if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
@@ -686,7 +687,7 @@ __attribute__((always_inline)) inline V PositionEntry(const PositionArrays& p, c
 }
 
 // Entries i, i + 1, ... of the position in vectors of type V while whole ones fit in n, their
-// magnitudes summed into the pair loop's lanes; returns the first entry left.
+// magnitudes summed in V's lanes and folded into the pair loop's; returns the first entry left.
 template <int M, bool R, int WK, typename V>
 __attribute__((always_inline)) inline sunindextype PositionVectors(const AdaptPosition& w,
                                                                    const PositionArrays& p,
