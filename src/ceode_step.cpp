@@ -520,11 +520,7 @@ __attribute__((always_inline)) inline bool CopyPairFiniteSerial(const CEodeMemRe
   const sunrealtype* x = NV_DATA_S(ce->xcur);
   const sunrealtype* v = NV_DATA_S(ce->D[1]);
   if (ce->n != 1) return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
-  const sunrealtype a = x[0];
-  const sunrealtype b = v[0];
-  NV_DATA_S(xout)[0] = a;
-  NV_DATA_S(vout)[0] = b;
-  return std::isfinite(a) && std::isfinite(b);
+  return CopyPairFiniteOf<1>(x, v, NV_DATA_S(xout), NV_DATA_S(vout));
 }
 
 }  // namespace
