@@ -11,7 +11,9 @@
 //    SPGMR or KLU solver), IdaRun (residual form), each in one of three modes: one step at a time
 //    with the error measured after every step, or (Problem::nout > 0) to nout output instants in
 //    the normal mode, or (Problem::end_only) to the end time in one normal-mode call. Every solver
-//    of a scene is driven, observed and timed the same way in the same process.
+//    of a scene is driven, observed and timed the same way in the same process. HandG8Run is
+//    the same method's floor: G8_O8 at fixed steps written out by hand (hand_step.h), started by
+//    CEODE, in the one-step and end modes.
 //  * Timing: every configuration is run back to back until one repetition has lasted >= 50 ms,
 //    and the per-run time is the median of 5 repetitions (3 for runs of >= 0.5 s; a run of
 //    >= 2 s is its own measurement), either configuration by configuration (Measure) or in
@@ -56,6 +58,7 @@
 #include <vector>
 
 #include "ceode_sundials_compat.h"  // SUN_COMM_NULL on SUNDIALS 6.4
+#include "hand_step.h"              // the hand loop of G8_O8
 
 namespace wp {
 
@@ -1189,6 +1192,93 @@ inline bool MeasureCeode(Table* table, SUNContext ctx, const Problem& p, const c
   CeodeOpts c(method);
   c.zero_start = zero_start;
   return MeasureCeode(table, ctx, p, c, h, config, got);
+}
+
+// ------------------------------------------------------------------ the hand loop
+// G8_O8 at the fixed step h written out by hand (hand_step.h) on the problem's own a(x): the
+// floor of the method's cost, beside CEODE's fixed-step curve of the same set. CEODE takes the
+// first step (its start included, in the time too); the history at t1 = t0 + h and x(t1 + h)
+// come from its interpolant there (CEodeGetDky, k = 0 .. 8, p(h) summed as the dense output
+// does), every later step by hand. One-step mode observes every step, end mode tend alone (as
+// CeodeRun); for problems whose a does not depend on v or t (Problem::separable) and without
+// outputs, constraints or a mass matrix.
+inline int HandG8Run(SUNContext ctx, const Problem& p, double h, Outcome* out) {
+  constexpr int d = 8;
+  int degree = 0;
+  double prm[hand::kMaxD] = {};
+  if (!p.separable || p.nout > 0 || p.nc > 0 || p.mass != nullptr ||
+      Failed(CEodeGetMethodParams("G8_O8", &degree, prm, hand::kMaxD), "CEodeGetMethodParams") ||
+      degree != d) {
+    return 1;
+  }
+  CeodeObjects o;
+  if (!o.Create(ctx, p)) return 1;
+  void* mem = o.mem;
+  double t = p.t0;
+  long nfe = 0;
+  bool bad = Failed(CEodeInit(mem, p.f2, p.t0, o.x, o.v), "CEodeInit") ||
+             Failed(CEodeSetUserData(mem, p.user), "CEodeSetUserData") ||
+             Failed(CEodeSetMethodByName(mem, "G8_O8"), "CEodeSetMethodByName") ||
+             Failed(CEodeSetFixedStep(mem, h), "CEodeSetFixedStep") ||
+             Failed(CEodeSetStabilityGuard(mem, CE_GUARD_OFF, 0), "CEodeSetStabilityGuard") ||
+             Failed(CEodeSetStopTime(mem, p.tend), "CEodeSetStopTime") ||
+             Failed(CEodeEvolve(mem, p.tend, o.x, o.v, &t, CE_ONE_STEP), "CEodeEvolve") ||
+             Failed(CEodeGetNumRhsEvals(mem, &nfe), "CEodeGetNumRhsEvals");
+  const long n = p.n;
+  // D[0] = x(t1), D[1 .. 7] the history, D[8] the interpolant's top derivative.
+  std::vector<Vec> D(d + 1, Vec(n));
+  for (int k = 0; k <= d && !bad; ++k) {
+    bad = Failed(CEodeGetDky(mem, t, k, o.x), "CEodeGetDky");
+    const double* xd = N_VGetArrayPointer(o.x);
+    std::copy(xd, xd + n, D[k].begin());
+  }
+  if (bad) return 1;
+  Track tr(p);
+  if (!p.end_only) tr.Step(t, D[0].data(), D[1].data());
+  Vec x(n, 0.0), xprev(n), an(n);
+  for (long i = 0; i < n; ++i) {  // x(t1 + h) = p(h)
+    double s = 0, w = 1;
+    for (int k = 1; k <= d; ++k) {
+      w *= h / k;
+      s += w * D[k][i];
+    }
+    x[i] = D[0][i] + s;
+  }
+  const hand::D8Weights w = hand::MakeD8Weights(hand::MakeCoeffs(d, prm, h));
+  const long nsteps = std::lround((p.tend - p.t0) / h);
+  for (long j = 2; j <= nsteps; ++j) {
+    t = p.t0 + static_cast<double>(j) * h;
+    xprev = x;
+    if (p.acc(t, x.data(), D[1].data(), an.data(), p.user) != 0) return 1;
+    hand::D8Update(w, an.data(), D[1].data(), D[2].data(), D[3].data(), D[4].data(), D[5].data(),
+                   D[6].data(), D[7].data(), x.data(), n);
+    D[2].swap(an);
+    if (!p.end_only) tr.Step(t, xprev.data(), D[1].data());
+  }
+  if (p.end_only) tr.Step(t, xprev.data(), D[1].data());
+  out->steps = nsteps;
+  out->rhs_evals = nfe + nsteps - 1;
+  return tr.Finish(false, out);
+}
+
+// The hand loop's row at step h (solver "CEODE-hand", config G8_O8), checked against CEODE's
+// fixed step of the same set: the errors agree to 1 %, or to the scene's round-off floor (the
+// two sum in other orders), else a failure.
+inline bool MeasureHandG8(Table* table, SUNContext ctx, const Problem& p, double h, double floor,
+                          Outcome* got = nullptr) {
+  Outcome hand_o, ceode_o;
+  if (HandG8Run(ctx, p, h, &hand_o) != 0 || CeodeRun(ctx, p, "G8_O8", h, &ceode_o) != 0) {
+    table->Fail("CEODE-hand", "G8_O8", h, "failed or unstable");
+    return false;
+  }
+  if (!(std::fabs(hand_o.error - ceode_o.error) <= std::max(1e-2 * ceode_o.error, floor))) {
+    std::printf("  hand loop G8_O8 h=%g: error %.6e vs CEODE %.6e -- MISMATCH\n", h, hand_o.error,
+                ceode_o.error);
+    table->Fail("CEODE-hand", "G8_O8", h, "differs from CEODE");
+    return false;
+  }
+  return Measure(
+      table, "CEODE-hand", "G8_O8", h, [&](Outcome* o) { return HandG8Run(ctx, p, h, o); }, got);
 }
 
 // ------------------------------------------------------------ CEODE adaptive

@@ -35,6 +35,14 @@ def hand(r):
     return f"{float(r['ceode_seconds']) / float(r['hand_loop_seconds']):.3g}"
 
 
+def hand_over_peer(r):
+    """The hand-written loop's time over the best peer's (scenes that have both): above 1, the
+    method itself loses to that peer, whatever the library's overhead."""
+    if not (r["hand_loop_seconds"] and r["peer_seconds"]):
+        return "–"
+    return f"{float(r['hand_loop_seconds']) / float(r['peer_seconds']):.3g}"
+
+
 def strip(name):
     return name[len("CEODE "):] if name.startswith("CEODE ") else name
 

@@ -20,6 +20,8 @@
 //  * CEODE fixed step (wp::CeodeRun, guard off, one CE_NORMAL call to t_f: Problem::end_only):
 //    G5_O4, G6_O5, G7_O7, G8_O8 (--quick: G6_O5, G8_O8), for adaptive against fixed at equal f.
 //    ARKODE's default table and CVODE Adams run in their normal mode to t_f as well.
+//  * The same G8_O8 steps written out by hand (wp::HandG8Run, solver CEODE-hand): the method's
+//    floor, with the errors of CEODE's fixed-step curve (checked).
 //  * ARKODE ERKStep adaptive with the default table (order 4) and CVODE Adams (fixed-point
 //    iteration) through wp::SundialsRun; ERKStep with Verner 8-5-6 (order 6) and Fehlberg 13-7-8
 //    (order 8; SUNDIALS 6.4 has no Verner 16-8-9) through ErkTableRun, the same one-step loop
@@ -516,6 +518,12 @@ int main(int argc, char** argv) {
       wp::MeasureCeode(&table, ctx, p, set, kTend / static_cast<double>(n), false,
                        std::string(set) + "_fixed");
     }
+  }
+  // The same G8_O8 steps by hand: the method's floor (wp::MeasureHandG8 checks its errors, to
+  // 1e-11 where ten orbits' round-off leaves the fixed steps' errors, 5e-13 .. 4e-12; a failure
+  // row counts as a problem).
+  for (long n : fixed_n) {
+    wp::MeasureHandG8(&table, ctx, p, kTend / static_cast<double>(n), 1e-11);
   }
 
   bad += CheckErkTable(ctx, p, ARKODE_VERNER_8_5_6, "ARKODE_VERNER_8_5_6");

@@ -13,8 +13,9 @@
 //    picks for a smooth problem, G5_O4, G6_O5, G7_O7, G8_O8, at h = 1e-1 ... 1e-3 (a curve stops
 //    below an error of 1e-13), one step at a time as the error needs (explicit path: f does not
 //    depend on theta');
-//  * the same G5 and G3_CD steps as a hand-written loop on raw doubles: the
-//    floor for per-step overhead (its errors must equal CEODE's);
+//  * the same G5 and G3_CD steps as a hand-written loop on raw doubles, and G8_O8's on the
+//    smooth sets' steps (wp::HandG8Run): the floor for per-step overhead (its errors must equal
+//    CEODE's);
 //  * CEODE error control (CEodeSStolerances, rtol = atol = 1e-4 ... 1e-14, config
 //    "<set> adaptive", h_or_tol the tolerance) with G5_O4, G6_O5, G7_O7, G8_O8, the stability
 //    guard at its defaults; its f evaluations are counted with the run's;
@@ -193,6 +194,12 @@ int main(int argc, char** argv) {
       wp::Outcome o;
       if (wp::MeasureCeode(&table, ctx, p, m, h, false, m, &o) && o.error < 1e-13) break;
     }
+  }
+  // G8_O8's steps by hand on the same grid: the method's floor (wp::MeasureHandG8 checks its
+  // errors against CEODE's; a failure row counts as a problem).
+  for (double h : smooth_steps) {
+    wp::Outcome o;
+    if (!wp::MeasureHandG8(&table, ctx, p, h, 1e-13, &o) || o.error < 1e-13) break;
   }
 
   // Error control with the sets a user picks for a smooth problem.
