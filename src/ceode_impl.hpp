@@ -133,6 +133,8 @@ struct Adapters {
 
 }  // namespace ceode
 
+struct CEodeMemRec;
+
 namespace ceode {
 
 // Each record below belongs to one module and is written only by that module's file, as
@@ -196,6 +198,10 @@ struct NlsMem {
   long int nsteps = 0;  // steps solved by the nonlinear solver
 };
 
+// CorrectPC's serial form for the run's degree (ceode_pc.cpp, chosen at each start).
+using PcPlannedFn = int (*)(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k,
+                            const char* func);
+
 // Prediction-correction, CE_IMPLICIT_AUTO and velocity-dependence detection (ceode_pc.cpp).
 struct PcMem {
   int mode = CE_IMPLICIT_AUTO;         // the library chooses (docs/theory.md section 4.3)
@@ -215,6 +221,21 @@ struct PcMem {
   long int nsteps = 0;                 // steps solved by prediction-correction
   long int ncorr = 0;                  // its evaluation-corrections (one f each)
   long int nfe = 0;                    // f evaluations of the detection and the checks
+  // The serial combinations of a step's corrections for one configuration of the buffers at one
+  // h: the predicted velocity's weights cp over D_1 .. D_{d-1}, the corrected one's cc over them
+  // and a, their data in x (D_1 .. D_{d-1}, a) and vtmp's in out. The buffers trade places every
+  // step, so two are kept, each keyed by its vectors (PcPlanFor); a start clears them.
+  struct Plan {
+    sunrealtype h = 0;
+    N_Vector key[4] = {};  // D_1, D_2, D_{d-1} and a
+    sunrealtype cp[kMaxDegree] = {};
+    sunrealtype cc[kMaxDegree] = {};
+    const sunrealtype* x[kMaxDegree] = {};
+    sunrealtype* out = nullptr;
+  };
+  Plan plans[2];
+  int plan_last = 1;              // the slot the last step used
+  PcPlannedFn planned = nullptr;  // the serial form, nullptr on other backends
 };
 
 // The runtime stability guard (ceode_guard.cpp).
@@ -453,8 +474,8 @@ void StepRestart(CEodeMemRec* ce);
 void StepOptionsChanged(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
-int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
-            const char* func);  // f(t, x, v), counted, failures reported
+// f's failure (its return value rv at t) reported as CE_RHSFUNC_FAIL.
+int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func);
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func);  // a = M^{-1} f(t, x, v)
 // The explicit solve: a = M^{-1} f(t, x, D_1(t - h)).
@@ -679,6 +700,14 @@ __attribute__((always_inline)) inline int CallRhs(CEodeMemRec* ce, sunrealtype t
                                                   N_Vector v, N_Vector f) {
   return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
                                      : ce->adapters.rhs(t, x, v, f, ce);
+}
+// f(t, x, v), counted, failures reported (inline: the implicit steps call it once or twice a
+// step, at n of a few as costly as the step's arithmetic).
+inline int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f,
+                   const char* func) {
+  const int rv = CallRhs(ce, t, x, v, f);
+  ++ce->nfe;
+  return rv == 0 ? CE_SUCCESS : RhsFailed(ce, rv, t, func);
 }
 // The same without the forcing: the user's f, or F of the first-order form.
 int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f);

@@ -3,7 +3,9 @@
 // (CE_IMPLICIT_AUTO), and the start's check that f depends on x' at all.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include "ceode_impl.hpp"
 #include "ceode_kernels.hpp"
@@ -250,11 +252,100 @@ int ImplicitMode(const CEodeMemRec* ce) {
   return ce->pc.mode;
 }
 
+// Whether plan p is the one of the step's configuration at the step's h.
+__attribute__((always_inline)) inline bool PlanKeyed(const PcMem::Plan& p, const CEodeMemRec* ce,
+                                                     N_Vector a) {
+  return p.key[1] == ce->D[2] && p.key[3] == a && p.h == ce->co.h && p.key[0] == ce->D[1] &&
+         p.key[2] == ce->D[ce->degree - 1];
+}
+
+// A new plan, in the slot the other configuration did not use last: the weights as CorrectPC and
+// CorrectedVelocity form them, the vectors' data as VelocityCombination reads it.
+__attribute__((noinline)) const PcMem::Plan& NewPcPlan(CEodeMemRec* ce, N_Vector a) {
+  PcMem& pc = ce->pc;
+  const int d = ce->degree;
+  pc.plan_last = 1 - pc.plan_last;
+  PcMem::Plan& p = pc.plans[pc.plan_last];
+  const StepCoeffs& co = ce->co;
+  for (int j = 1; j < d; ++j) {
+    p.cp[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * co.pred[j - 2] : 0);
+    p.cc[j - 1] = co.V0[j];
+    p.x[j - 1] = NV_DATA_S(ce->D[j]);
+  }
+  p.cc[d - 1] = co.kappa;
+  p.x[d - 1] = NV_DATA_S(a);
+  p.out = NV_DATA_S(ce->vtmp);
+  p.h = co.h;
+  p.key[0] = ce->D[1];
+  p.key[1] = ce->D[2];
+  p.key[2] = ce->D[d - 1];
+  p.key[3] = a;
+  return p;
+}
+
+// The plan of the step's configuration at the step's h (PcMem::Plan), made when the
+// configuration first comes at this h.
+__attribute__((always_inline)) inline const PcMem::Plan& PcPlanFor(CEodeMemRec* ce, N_Vector a) {
+  PcMem& pc = ce->pc;
+  const int other = 1 - pc.plan_last;  // the configurations alternate
+  if (PlanKeyed(pc.plans[other], ce, a)) {
+    pc.plan_last = other;
+    return pc.plans[other];
+  }
+  if (PlanKeyed(pc.plans[pc.plan_last], ce, a)) return pc.plans[pc.plan_last];
+  return NewPcPlan(ce, a);
+}
+
+// out = sum_j c_j x_j over M terms, as VelocityCombination forms it on the serial backend.
+template <int M>
+inline void PlannedCombination(sunindextype n, const sunrealtype* c, const sunrealtype* const* x,
+                               sunrealtype* out) {
+  if constexpr (M >= 3) {
+    CombineEntriesOf<M>(n, c, x, out);
+  } else {
+    CombineSerial(n, M, c, x, out);
+  }
+}
+
+// CorrectPC without the contraction's measurement on the serial backend, for degree D: the same
+// combinations from the plan (one lookup a step instead of gathering weights and data for each)
+// and, without a mass matrix, f alone.
+template <int D>
+int CorrectPlannedOf(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k,
+                     const char* func) {
+  const PcMem::Plan& p = PcPlanFor(ce, a);
+  const bool mass = ce->ls.mfn != nullptr || ce->ls.M != nullptr;
+  PlannedCombination<D - 1>(ce->n, p.cp, p.x, p.out);
+  ++ce->pc.ncorr;
+  // M(x, t) of the step, once
+  int flag = mass ? EvalAccel(ce, t, x, ce->vtmp, a, func) : EvalRhs(ce, t, x, ce->vtmp, a, func);
+  for (int i = 2; i <= k && flag == CE_SUCCESS; ++i) {
+    PlannedCombination<D>(ce->n, p.cc, p.x, p.out);
+    if (mass) {
+      flag = CorrectionAccel(ce, t, x, ce->vtmp, a, func);
+    } else {
+      ++ce->pc.ncorr;
+      flag = EvalRhs(ce, t, x, ce->vtmp, a, func);
+    }
+  }
+  return flag;
+}
+
+template <std::size_t... I>
+constexpr std::array<PcPlannedFn, sizeof...(I)> PlannedTable(std::index_sequence<I...> /*d*/) {
+  return {&CorrectPlannedOf<static_cast<int>(I) + kMinDegree>...};
+}
+// By the degree d = kMinDegree .. kMaxDegree.
+constexpr auto kPlannedFns = PlannedTable(std::make_index_sequence<kMaxDegree - kMinDegree + 1>{});
+
 }  // namespace
 
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
-  // The velocity combinations' backend, once per start (the step module's rule).
+  // The velocity combinations' backend, once per start (the step module's rule); the plans of
+  // the last run go (its vectors may be gone).
   ce->pc.serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
+  for (PcMem::Plan& p : ce->pc.plans) p = PcMem::Plan{};
+  ce->pc.planned = ce->pc.serial ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
   if (HasConstraints(ce) || !ce->vel_dependent) return CE_SUCCESS;
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
@@ -352,6 +443,7 @@ int CorrectPC(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k, sun
 int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
             const char* func) {
   ++ce->pc.nsteps;
+  if (ce->pc.planned != nullptr) return ce->pc.planned(ce, t, x, a, PCCorrections(ce), func);
   return CorrectPC(ce, t, x, a, PCCorrections(ce), nullptr, func);
 }
 

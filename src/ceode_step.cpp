@@ -15,21 +15,11 @@
 
 namespace ceode {
 
-namespace {
-
 int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func) {
   return ProcessError(ce, CE_RHSFUNC_FAIL, func,
                       "The right-hand side function failed (returned %d) at t = %.17g. A fixed "
                       "step cannot retry with a smaller h: fix f or reduce h.",
                       rv, static_cast<double>(t));
-}
-
-}  // namespace
-
-int EvalRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f, const char* func) {
-  const int rv = CallRhs(ce, t, x, v, f);
-  ++ce->nfe;
-  return rv == 0 ? CE_SUCCESS : RhsFailed(ce, rv, t, func);
 }
 
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
@@ -458,10 +448,17 @@ inline bool StopBeyond(const CEodeMemRec* ce, sunrealtype t) {
   return !ce->tstop_set || ce->tstop - t > ce->h;
 }
 
-// StepMem::steps without the lean loop: one TakeStep.
-int OneStep(CEodeMemRec* ce, sunrealtype /*target*/, long int /*max_steps*/, long int* taken) {
-  const int flag = TakeStep(ce);
-  *taken = flag == CE_SUCCESS ? 1 : 0;
+// StepMem::steps without the lean loop: TakeStep as many times in a row as LeanStepCount admits,
+// so that a run of implicit steps does not go back to StepTo after each; one step where only a
+// few remain (CE_ONE_STEP calls decide on the distance alone, as LeanOrOneStep's).
+int ManySteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken) {
+  const bool run = target - ce->tcur > kLeanMinSteps * ce->h && max_steps >= kLeanMinSteps;
+  const long int count = run ? std::max(1L, LeanStepCount(ce, target, max_steps)) : 1;
+  const sunrealtype h = ce->h;  // a step that changes h (a guard check) ends the run
+  long int k = 0;
+  int flag = CE_SUCCESS;
+  while (k < count && ce->h == h && (flag = TakeStep(ce)) == CE_SUCCESS) ++k;
+  *taken = k;
   return flag;
 }
 
@@ -742,7 +739,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   // G3_CD's carried half-step velocity (StepMem::leap) is a variant of the loop, chosen here.
   constexpr StepsFn kLean[2][2] = {{LeanOrOneStep<false, false>, LeanOrOneStep<false, true>},
                                    {LeanOrOneStep<true, false>, LeanOrOneStep<true, true>}};
-  sm->steps = !lean ? OneStep : kLean[mpi ? 1 : 0][sm->leap ? 1 : 0];
+  sm->steps = !lean ? ManySteps : kLean[mpi ? 1 : 0][sm->leap ? 1 : 0];
   sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
   sm->one_call = lean && serial;
   sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_testing.h"  // CEodeSetFusedKernel
 #include "test_util.hpp"
 
 namespace {
@@ -250,6 +251,88 @@ INSTANTIATE_TEST_SUITE_P(EveryNamedSet, DefaultCorrections,
                          ::testing::Range(0, CEodeGetNumMethods()),
                          [](const ::testing::TestParamInfo<int>& p) {
                            return std::string(CEodeGetMethodName(p.param));
+                         });
+
+// ---------------------------------------------------------------------------
+// The serial backend's corrections (kept weights and data per configuration of the buffers, the
+// steps of a call back to back) against the N_Vector operations (CEodeSetFusedKernel off).
+
+struct BackendCase {
+  const char* method;
+  int mode;       // CE_IMPLICIT_PC or CE_IMPLICIT_AUTO
+  bool adaptive;  // tolerances: h changes, and every new h makes the plans again
+};
+
+void PrintTo(const BackendCase& c, std::ostream* os) {
+  *os << c.method << (c.mode == CE_IMPLICIT_PC ? " PC" : " AUTO")
+      << (c.adaptive ? ", tolerances" : ", fixed step");
+}
+
+// x and x' of three damped forced oscillators at ten output times (CE_NORMAL), then of one step
+// more (CE_ONE_STEP), concatenated.
+std::vector<double> BackendRun(const BackendCase& c, bool fused) {
+  Context ctx;
+  DampedForced prob;
+  Vector x = SerialVector(3, ctx, prob.x0);
+  Vector v = SerialVector(3, ctx, prob.v0);
+  NV_Ith_S(x.get(), 1) = SUN_RCONST(-0.4);
+  NV_Ith_S(v.get(), 2) = SUN_RCONST(1.3);
+  Mem mem(CEodeCreate(ctx));
+  EXPECT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetMethodByName(mem.get(), c.method), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetFusedKernel(mem.get(), fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetImplicitMode(mem.get(), c.mode), CE_SUCCESS);
+  if (c.adaptive) {
+    EXPECT_EQ(CEodeSStolerances(mem.get(), SUN_RCONST(1e-7), SUN_RCONST(1e-7)), CE_SUCCESS);
+  } else {
+    EXPECT_EQ(CEodeSetFixedStep(mem.get(), SUN_RCONST(0.01)), CE_SUCCESS);
+  }
+  std::vector<double> out;
+  sunrealtype t = 0;
+  for (int k = 1; k <= 11; ++k) {
+    const int itask = k <= 10 ? CE_NORMAL : CE_ONE_STEP;
+    EXPECT_EQ(CEodeEvolve(mem.get(), SUN_RCONST(0.3) * k, x.get(), v.get(), &t, itask), CE_SUCCESS);
+    for (int i = 0; i < 3; ++i) {
+      out.push_back(NV_Ith_S(x.get(), i));
+      out.push_back(NV_Ith_S(v.get(), i));
+    }
+  }
+  long int npc = 0, nnls = 0, nfc = 0;
+  sunrealtype coupling = 0;
+  EXPECT_EQ(CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfc, &coupling), CE_SUCCESS);
+  EXPECT_GT(npc, 40);  // the steps are prediction-correction's (46 or more)
+  EXPECT_EQ(nnls, 0);
+  return out;
+}
+
+class SerialCorrections : public ::testing::TestWithParam<BackendCase> {};
+
+TEST_P(SerialCorrections, GiveBitwiseTheNumbersOfTheNVectorOperations) {
+  const std::vector<double> serial = BackendRun(GetParam(), true);
+  const std::vector<double> generic = BackendRun(GetParam(), false);
+  ASSERT_EQ(serial.size(), generic.size());
+  for (size_t i = 0; i < serial.size(); ++i) {
+    EXPECT_EQ(serial[i], generic[i]) << "value " << i;  // bit for bit, not to round-off
+  }
+}
+
+const BackendCase kBackendCases[] = {
+    {"G3_CD", CE_IMPLICIT_PC, false},  {"G4_A34", CE_IMPLICIT_AUTO, false},
+    {"G5_O4", CE_IMPLICIT_PC, false},  {"G6_O5", CE_IMPLICIT_AUTO, false},
+    {"G7_O7", CE_IMPLICIT_PC, false},  {"G8_O8", CE_IMPLICIT_AUTO, false},
+    {"G4_A34", CE_IMPLICIT_PC, true},  {"G6_O5", CE_IMPLICIT_PC, true},
+    {"G8_O8", CE_IMPLICIT_AUTO, true},
+};
+
+INSTANTIATE_TEST_SUITE_P(NamedSets, SerialCorrections, ::testing::ValuesIn(kBackendCases),
+                         [](const ::testing::TestParamInfo<BackendCase>& info) {
+                           std::string name = info.param.method;
+                           name += info.param.mode == CE_IMPLICIT_PC ? "Pc" : "Auto";
+                           name += info.param.adaptive ? "WithTolerances" : "AtAFixedStep";
+                           name.erase(std::remove(name.begin(), name.end(), '_'), name.end());
+                           return name;
                          });
 
 // M x'' = 3 f(t, x, x') with M = 3: the same motion, with the mass solve inside every correction.
