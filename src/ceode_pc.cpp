@@ -453,15 +453,17 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
 // Prediction-correction measures its own contraction on that step; when the contraction is
 // lost, the step is solved again by the nonlinear solver, which then stays until the coupling
 // estimate (one power step per check) falls below kPcReturnLimit.
-int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
-              const char* func) {
-  const long int every = std::max(ce->ls.msbj, kDefaultJacEvalFrequency);
-  const bool check = ce->nst - ce->pc.nst_check >= every || ce->pc.nst_check < 0;
+namespace {
+
+// SolveAuto on a step that checks its choice, or solved by the nonlinear solver (few steps):
+// apart, so that a step of prediction-correction keeps a small frame.
+__attribute__((noinline)) int SolveAutoChecked(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext,
+                                               N_Vector x, N_Vector a, bool check,
+                                               const char* func) {
   if (!ce->pc.active) {
     const int flag = SolveImplicit(ce, t, tnext, x, a, func);
     return flag != CE_SUCCESS || !check ? flag : RefreshCoupling(ce, t, x, func);
   }
-  if (!check) return SolvePC(ce, t, tnext, x, a, func);
   sunrealtype theta = 0;
   const int flag = CorrectPC(ce, t, x, a, PCCorrections(ce), &theta, func);
   ce->pc.theta = Bounded(theta);
@@ -473,6 +475,16 @@ int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_V
   }
   ce->pc.active = false;  // an f failure at a diverging velocity, too
   return SolveImplicit(ce, t, tnext, x, a, func);
+}
+
+}  // namespace
+
+int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+              const char* func) {
+  const long int every = std::max(ce->ls.msbj, kDefaultJacEvalFrequency);
+  const bool check = ce->nst - ce->pc.nst_check >= every || ce->pc.nst_check < 0;
+  if (ce->pc.active && !check) return SolvePC(ce, t, tnext, x, a, func);
+  return SolveAutoChecked(ce, t, tnext, x, a, check, func);
 }
 
 void PcReset(CEodeMemRec* ce, bool counters) {
