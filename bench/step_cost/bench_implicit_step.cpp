@@ -16,9 +16,11 @@
 // ratio to the explicit step. Checked (exit 1 on failure, never on a timing): every
 // run succeeds and the PC and AUTO answers agree with Newton's to 1e-5 after 1 s.
 //
-// Usage: bench_implicit_step [--quick] [--only NAME --steps N]
+// Usage: bench_implicit_step [--quick] [--only NAME --steps N [--set SET] [--normal]]
 //   --only runs one configuration (e.g. "top/pc k=2") for N steps without timing:
-//   for callgrind, per-step instructions = difference of two step counts.
+//   for callgrind, per-step instructions = difference of two step counts (each block of 1000
+//   steps starts again, in both); --set replaces the problem's set, --normal takes each block's
+//   steps in one CE_NORMAL call instead of CE_ONE_STEP calls.
 // -----------------------------------------------------------------------------
 #include <ceode/ceode.h>
 #include <nvector/nvector_serial.h>
@@ -69,9 +71,10 @@ const Config kConfigs[] = {
     {"newton", SUNTRUE, CE_IMPLICIT_NEWTON, 0},
 };
 
-// Runs `steps` steps after the start; returns seconds per step (< 0: failure) and x at the end.
+// Runs `steps` steps after the start, one CE_ONE_STEP call each (normal: a block's in one
+// CE_NORMAL call); returns seconds per step (< 0: failure) and x at the end.
 double RunSteps(const Problem& p, const Config& c, long steps, std::vector<double>* xend,
-                double h = kStep, long block = kBlock) {
+                double h = kStep, long block = kBlock, bool normal = false) {
   SUNContext ctx = nullptr;
   if (SUNContext_Create(SUN_COMM_NULL, &ctx) != 0) return -1;
   top::Top top;
@@ -104,7 +107,12 @@ double RunSteps(const Problem& p, const Config& c, long steps, std::vector<doubl
          CEodeEvolve(mem, 1e9, x, v, &t, CE_ONE_STEP) == CE_SUCCESS;
     const long n = std::min(block, steps - done);
     const double t0 = wp::Now();
-    for (long i = 0; ok && i < n; ++i) ok = CEodeEvolve(mem, 1e9, x, v, &t, CE_ONE_STEP) == 0;
+    if (normal) {
+      ok = CEodeEvolve(mem, h * static_cast<double>(n + 1), x, v, &t, CE_NORMAL) == 0;
+    }
+    for (long i = 0; ok && !normal && i < n; ++i) {
+      ok = CEodeEvolve(mem, 1e9, x, v, &t, CE_ONE_STEP) == 0;
+    }
     clock += wp::Now() - t0;
   }
   const double per_step = clock / static_cast<double>(std::max(steps, 1L));
@@ -158,7 +166,8 @@ int CheckAgreement(const Problem& p) {
 
 int main(int argc, char** argv) {
   bool quick = false;
-  std::string only;
+  std::string only, set;
+  bool normal = false;
   long steps = 200000;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
@@ -167,17 +176,24 @@ int main(int argc, char** argv) {
       only = argv[++i];
     } else if (std::strcmp(argv[i], "--steps") == 0 && i + 1 < argc) {
       steps = std::atol(argv[++i]);
+    } else if (std::strcmp(argv[i], "--set") == 0 && i + 1 < argc) {
+      set = argv[++i];
+    } else if (std::strcmp(argv[i], "--normal") == 0) {
+      normal = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--only PROBLEM/CONFIG --steps N]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--quick] [--only PROBLEM/CONFIG --steps N [--set SET] [--normal]]\n",
+                   argv[0]);
       return 2;
     }
   }
   if (quick) steps = 20000;
   int bad = 0;
-  for (const Problem& p : Problems()) {
+  for (Problem p : Problems()) {
+    if (!set.empty()) p.method = set.c_str();
     for (const Config& c : kConfigs) {
       if (!only.empty() && only != std::string(p.name) + "/" + c.name) continue;
-      if (!only.empty()) return RunSteps(p, c, steps, nullptr) < 0 ? 1 : 0;
+      if (!only.empty()) return RunSteps(p, c, steps, nullptr, kStep, kBlock, normal) < 0 ? 1 : 0;
     }
   }
   if (!only.empty()) {
