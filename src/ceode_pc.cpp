@@ -447,12 +447,6 @@ int SolvePC(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N
   return CorrectPC(ce, t, x, a, PCCorrections(ce), nullptr, func);
 }
 
-// CE_IMPLICIT_AUTO's step: the solve in use, and every msbj steps (at least
-// kDefaultJacEvalFrequency apart: a user's msbj = 1, a fresh Newton matrix every step, would
-// otherwise add an f to every step) the check whether it is still the right one (section 4.3).
-// Prediction-correction measures its own contraction on that step; when the contraction is
-// lost, the step is solved again by the nonlinear solver, which then stays until the coupling
-// estimate (one power step per check) falls below kPcReturnLimit.
 namespace {
 
 // SolveAuto on a step that checks its choice, or solved by the nonlinear solver (few steps):
@@ -479,6 +473,12 @@ __attribute__((noinline)) int SolveAutoChecked(CEodeMemRec* ce, sunrealtype t, s
 
 }  // namespace
 
+// CE_IMPLICIT_AUTO's step: the solve in use, and every msbj steps (at least
+// kDefaultJacEvalFrequency apart: a user's msbj = 1, a fresh Newton matrix every step, would
+// otherwise add an f to every step) the check whether it is still the right one (section 4.3).
+// Prediction-correction measures its own contraction on that step; when the contraction is
+// lost, the step is solved again by the nonlinear solver, which then stays until the coupling
+// estimate (one power step per check) falls below kPcReturnLimit.
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func) {
   const long int every = std::max(ce->ls.msbj, kDefaultJacEvalFrequency);
