@@ -198,7 +198,8 @@ struct NlsMem {
   long int nsteps = 0;  // steps solved by the nonlinear solver
 };
 
-// CorrectPC's serial form for the run's degree (ceode_pc.cpp, chosen at each start).
+// CorrectPC's serial form without a mass matrix for the run's degree (ceode_pc.cpp, chosen at each
+// start).
 using PcPlannedFn = int (*)(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k,
                             const char* func);
 
@@ -235,7 +236,7 @@ struct PcMem {
   };
   Plan plans[2];
   int plan_last = 1;              // the slot the last step used
-  PcPlannedFn planned = nullptr;  // the serial form, nullptr on other backends
+  PcPlannedFn planned = nullptr;  // nullptr on other backends or with a mass matrix
 };
 
 // The runtime stability guard (ceode_guard.cpp).

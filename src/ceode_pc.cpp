@@ -252,6 +252,18 @@ int ImplicitMode(const CEodeMemRec* ce) {
   return ce->pc.mode;
 }
 
+// The predicted velocity's d - 1 weights over D_1 .. D_{d-1}: V0 + kappa times the predictor's
+// Taylor polynomial of the acceleration.
+void PredictedVelocityWeights(const StepCoeffs& co, int d, sunrealtype* c) {
+  for (int j = 1; j < d; ++j) c[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * co.pred[j - 2] : 0);
+}
+
+// The corrected velocity's d weights over D_1 .. D_{d-1} and a: V0 + kappa a.
+void CorrectedVelocityWeights(const StepCoeffs& co, int d, sunrealtype* c) {
+  for (int j = 1; j < d; ++j) c[j - 1] = co.V0[j];
+  c[d - 1] = co.kappa;
+}
+
 // Whether plan p is the one of the step's configuration at the step's h.
 __attribute__((always_inline)) inline bool PlanKeyed(const PcMem::Plan& p, const CEodeMemRec* ce,
                                                      N_Vector a) {
@@ -260,22 +272,18 @@ __attribute__((always_inline)) inline bool PlanKeyed(const PcMem::Plan& p, const
 }
 
 // A new plan, in the slot the other configuration did not use last: the weights as CorrectPC and
-// CorrectedVelocity form them, the vectors' data as VelocityCombination reads it.
+// CorrectedVelocity take them, the vectors' data as VelocityCombination reads it.
 __attribute__((noinline)) const PcMem::Plan& NewPcPlan(CEodeMemRec* ce, N_Vector a) {
   PcMem& pc = ce->pc;
   const int d = ce->degree;
   pc.plan_last = 1 - pc.plan_last;
   PcMem::Plan& p = pc.plans[pc.plan_last];
-  const StepCoeffs& co = ce->co;
-  for (int j = 1; j < d; ++j) {
-    p.cp[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * co.pred[j - 2] : 0);
-    p.cc[j - 1] = co.V0[j];
-    p.x[j - 1] = NV_DATA_S(ce->D[j]);
-  }
-  p.cc[d - 1] = co.kappa;
+  PredictedVelocityWeights(ce->co, d, p.cp);
+  CorrectedVelocityWeights(ce->co, d, p.cc);
+  for (int j = 1; j < d; ++j) p.x[j - 1] = NV_DATA_S(ce->D[j]);
   p.x[d - 1] = NV_DATA_S(a);
   p.out = NV_DATA_S(ce->vtmp);
-  p.h = co.h;
+  p.h = ce->co.h;
   p.key[0] = ce->D[1];
   p.key[1] = ce->D[2];
   p.key[2] = ce->D[d - 1];
@@ -307,26 +315,19 @@ inline void PlannedCombination(sunindextype n, const sunrealtype* c, const sunre
   }
 }
 
-// CorrectPC without the contraction's measurement on the serial backend, for degree D: the same
-// combinations from the plan (one lookup a step instead of gathering weights and data for each)
-// and, without a mass matrix, f alone.
+// CorrectPC without the contraction's measurement on the serial backend without a mass matrix,
+// for degree D: the same combinations from the plan (one lookup a step instead of gathering
+// weights and data for each), each followed by f alone (M = I: no mass solve).
 template <int D>
 int CorrectPlannedOf(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k,
                      const char* func) {
   const PcMem::Plan& p = PcPlanFor(ce, a);
-  const bool mass = ce->ls.mfn != nullptr || ce->ls.M != nullptr;
   PlannedCombination<D - 1>(ce->n, p.cp, p.x, p.out);
-  ++ce->pc.ncorr;
-  // M(x, t) of the step, once
-  int flag = mass ? EvalAccel(ce, t, x, ce->vtmp, a, func) : EvalRhs(ce, t, x, ce->vtmp, a, func);
-  for (int i = 2; i <= k && flag == CE_SUCCESS; ++i) {
-    PlannedCombination<D>(ce->n, p.cc, p.x, p.out);
-    if (mass) {
-      flag = CorrectionAccel(ce, t, x, ce->vtmp, a, func);
-    } else {
-      ++ce->pc.ncorr;
-      flag = EvalRhs(ce, t, x, ce->vtmp, a, func);
-    }
+  int flag = CE_SUCCESS;
+  for (int i = 1; i <= k && flag == CE_SUCCESS; ++i) {
+    if (i > 1) PlannedCombination<D>(ce->n, p.cc, p.x, p.out);
+    ++ce->pc.ncorr;
+    flag = EvalRhs(ce, t, x, ce->vtmp, a, func);
   }
   return flag;
 }
@@ -345,7 +346,8 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   // the last run go (its vectors may be gone).
   ce->pc.serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
   for (PcMem::Plan& p : ce->pc.plans) p = PcMem::Plan{};
-  ce->pc.planned = ce->pc.serial ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
+  const bool mass = ce->ls.mfn != nullptr || ce->ls.M != nullptr;  // set before a start only
+  ce->pc.planned = ce->pc.serial && !mass ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
   if (HasConstraints(ce) || !ce->vel_dependent) return CE_SUCCESS;
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
@@ -367,11 +369,8 @@ __attribute__((always_inline)) inline void CorrectedVelocity(CEodeMemRec* ce, N_
   const int d = ce->degree;
   sunrealtype c[kMaxDegree] = {};
   N_Vector X[kMaxDegree] = {};
-  for (int j = 1; j < d; ++j) {
-    c[j - 1] = co.V0[j];
-    X[j - 1] = ce->D[j];
-  }
-  c[d - 1] = co.kappa;
+  CorrectedVelocityWeights(co, d, c);
+  std::copy(ce->D + 1, ce->D + d, X);
   X[d - 1] = a;
   VelocityCombination(ce, d, c, X, ce->vtmp);
 }
@@ -406,11 +405,8 @@ int CorrectPC(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, int k, sun
   const int d = ce->degree;
   sunrealtype c[kMaxDegree] = {};
   N_Vector X[kMaxDegree] = {};
-  const sunrealtype* tw = co.pred;  // the predictor's weights of D_2 .. D_{d-1}
-  for (int j = 1; j < d; ++j) {
-    c[j - 1] = co.V0[j] + (j >= 2 ? co.kappa * tw[j - 2] : 0);
-    X[j - 1] = ce->D[j];
-  }
+  PredictedVelocityWeights(co, d, c);
+  std::copy(ce->D + 1, ce->D + d, X);
   VelocityCombination(ce, d - 1, c, X, ce->vtmp);
   ++ce->pc.ncorr;
   int flag = EvalAccel(ce, t, x, ce->vtmp, a, func);  // M(x, t) of the step, once
