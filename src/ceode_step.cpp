@@ -549,6 +549,19 @@ long int FastSpanEnd(const CEodeMemRec* ce, const StepMem& sm) {
   return k + 1;
 }
 
+// One step of the configuration (StepMem::one; LeanOneStep not inlined here: OneStepEvolve's
+// alone) towards target = tcur + h, then the outputs, on a direct path's call (OneStepChecked's,
+// and the fast path's where the configuration is not the lean one).
+__attribute__((noinline)) int DirectOneStep(CEodeMemRec* ce, sunrealtype target, N_Vector xout,
+                                            N_Vector vout, sunrealtype* tret) {
+  const int flag = ce->step->one(ce);
+  if (flag != CE_SUCCESS || !OnGrid(ce, target) || !CopyPairFiniteSerial(ce, xout, vout)) {
+    return OneStepRest(ce, flag, target, xout, vout, tret);
+  }
+  *tret = ce->tretlast = ce->tcur;
+  return CE_SUCCESS;
+}
+
 // OneStepEvolve outside its fast path: the same path with its tests of the configuration and
 // of the grid (a step must remain before tcur + h and end on it to round-off), taken where h is
 // near the round-off of t or the run has no direct path. Opens the fast path where the run
@@ -563,12 +576,7 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
                       tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
                       DirectConfiguration(ce) && StepsRemain(ce, target);
   if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
-  const int flag = ce->step->one(ce);  // LeanOneStep, not inlined here: OneStepEvolve's alone
-  if (flag != CE_SUCCESS || !OnGrid(ce, target) || !CopyPairFiniteSerial(ce, xout, vout)) {
-    return OneStepRest(ce, flag, target, xout, vout, tret);
-  }
-  *tret = ce->tretlast = ce->tcur;
-  return CE_SUCCESS;
+  return DirectOneStep(ce, target, xout, vout, tret);
 }
 
 }  // namespace
@@ -642,6 +650,9 @@ int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vou
   const bool fast = ce->nsteps_h < ce->step->fast_until && SerialOfLength(xout, ce->n) &&
                     SerialOfLength(vout, ce->n) && tret != nullptr && !std::isnan(tout - tout);
   if (!fast) return OneStepChecked(ce, tout, xout, vout, tret);
+  // The implicit, constrained and mass-matrix steps: TakeStep, whose guard test the span keeps
+  // from firing.
+  if (!ce->step->lean_one) return DirectOneStep(ce, ce->tcur + ce->h, xout, vout, tret);
   // LeanOneStep without its guard test (the span ends before a step with a check).
   const sunrealtype t = StepTime(ce, 1);
   const bool own_f = __builtin_expect(ce->adapters.rhs == nullptr, 1);
@@ -681,7 +692,7 @@ int NormalEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout
                       SerialOfLength(vout, ce->n) && tret != nullptr;
   if (!direct) return EvolveNormalGeneral(ce, tout, xout, vout, tret, itask);
   while (tout - ce->tcur > sm->grid_remain) {  // StepsRemain
-    const int flag = LeanOneStep<false>(ce);
+    const int flag = sm->lean_one ? LeanOneStep<false>(ce) : sm->one(ce);
     if (flag != CE_SUCCESS) return OneStepRest(ce, flag, tout, xout, vout, tret);
   }
   const sunrealtype s = std::fabs(tout - ce->tcur) <= sm->grid_tol ? 0 : tout - ce->tcur;
@@ -740,8 +751,9 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   constexpr StepsFn kLean[2][2] = {{LeanOrOneStep<false, false>, LeanOrOneStep<false, true>},
                                    {LeanOrOneStep<true, false>, LeanOrOneStep<true, true>}};
   sm->steps = !lean ? ManySteps : kLean[mpi ? 1 : 0][sm->leap ? 1 : 0];
-  sm->one = !lean ? nullptr : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
-  sm->one_call = lean && serial;
+  sm->one = !lean ? TakeStep : (mpi ? LeanOneStep<true> : LeanOneStep<false>);
+  sm->one_call = serial;
+  sm->lean_one = lean && serial;
   sm->growth_limit = std::min(GrowthBound(ce), kAbsoluteLimit);  // xl1_start is the start's
   sm->grid_tol = SUN_RCONST(1e-8) * ce->h;                       // GridTolerance's second term
   sm->grid_remain = ce->h - sm->grid_tol;

@@ -31,11 +31,13 @@ struct StepMem {
   // The step, chosen once (ChooseStep)
   SolveKind implicit = SolveKind::kNewton;  // ceode_pc.cpp's choice for a velocity dependence
   SolveKind solve_kind = SolveKind::kExplicit;
-  SolveFn solve = nullptr;                // the acceleration at t (TakeStep)
-  UpdateFn update = nullptr;              // the derivatives and x(t + h) after the solve (TakeStep)
-  StepsFn steps = nullptr;                // TakeSteps: the lean loop or one TakeStep
-  int (*one)(CEodeMemRec* ce) = nullptr;  // TakeDirectStep: TakeStep of the lean configuration
-  bool one_call = false;                  // OneStepCall: the lean configuration on serial vectors
+  SolveFn solve = nullptr;    // the acceleration at t (TakeStep)
+  UpdateFn update = nullptr;  // the derivatives and x(t + h) after the solve (TakeStep)
+  StepsFn steps = nullptr;    // TakeSteps: the lean loop or one TakeStep
+  // TakeDirectStep: one step of the configuration (LeanOneStep on the lean one, else TakeStep)
+  int (*one)(CEodeMemRec* ce) = nullptr;
+  bool one_call = false;  // serial vectors: OneStepEvolve's and NormalEvolve's direct paths
+  bool lean_one = false;  // one_call on the lean configuration: the direct paths inline its step
   // OneStepEvolve's direct path: while |tcur| stays at or below it, the grid's times are exact to
   // far inside GridTolerance (one step always remains before tcur + h and ends on it); negative
   // where the run has no direct path (not one_call).

@@ -335,6 +335,95 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, SerialCorrections, ::testing::ValuesIn(kBack
                            return name;
                          });
 
+// The states at steps 6, 12, ..., 300 of h = 0.01 on the damped forced oscillator, taken by
+// calls of kind: one CE_ONE_STEP call per step, a CE_NORMAL call every 6 steps (short calls, taken
+// step by step), or CE_NORMAL calls every 150 steps (runs of steps) with the states in between
+// from the runs of a second memory stopped at each output.
+enum class Calls { kOneStep, kShortNormal, kLongNormal };
+struct CallCase {
+  const char* method;
+  int mode;
+};
+std::vector<double> StatesByCalls(const CallCase& cc, Calls calls) {
+  DampedForced prob;
+  Config c;
+  c.method = cc.method;
+  c.mode = cc.mode;
+  c.tend = 3;
+  std::vector<double> out;
+  Context ctx;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  Mem mem(CEodeCreate(ctx));
+  if (CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()) != CE_SUCCESS ||
+      CEodeSetUserData(mem.get(), &prob) != CE_SUCCESS ||
+      CEodeSetMethodByName(mem.get(), c.method.c_str()) != CE_SUCCESS ||
+      CEodeSetFixedStep(mem.get(), c.h) != CE_SUCCESS ||
+      CEodeSetLinearSolver(mem.get(), LS.get(), A.get()) != CE_SUCCESS ||
+      CEodeSetVelocityDependence(mem.get(), SUNTRUE) != CE_SUCCESS ||
+      CEodeSetImplicitMode(mem.get(), c.mode) != CE_SUCCESS) {
+    return out;
+  }
+  sunrealtype t = 0;
+  for (int k = 1; k <= 300; ++k) {
+    int flag = CE_SUCCESS;
+    if (calls == Calls::kOneStep) {
+      flag = CEodeEvolve(mem.get(), c.tend, x.get(), v.get(), &t, CE_ONE_STEP);
+    } else if (k % (calls == Calls::kShortNormal ? 6 : 150) == 0) {
+      flag = CEodeEvolve(mem.get(), c.h * k, x.get(), v.get(), &t, CE_NORMAL);
+    } else {
+      continue;
+    }
+    if (flag != CE_SUCCESS) return {};
+    if (k % 150 == 0 || (calls != Calls::kLongNormal && k % 6 == 0)) {
+      out.insert(out.end(), {static_cast<double>(t), NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)});
+    }
+  }
+  long int nst = 0;
+  CEodeGetNumSteps(mem.get(), &nst);
+  out.push_back(static_cast<double>(nst));
+  return out;
+}
+
+void PrintTo(const CallCase& c, std::ostream* os) { *os << c.method << " mode " << c.mode; }
+
+class ImplicitCalls : public ::testing::TestWithParam<CallCase> {};
+
+// Calls that take one step, or a few, run the implicit solve through the direct paths of a serial
+// run; one long call runs its steps back to back. Each gives the same states bit for bit.
+TEST_P(ImplicitCalls, OfEveryKindGiveBitwiseTheStatesOfOneLongRun) {
+  const std::vector<double> one = StatesByCalls(GetParam(), Calls::kOneStep);
+  const std::vector<double> shorter = StatesByCalls(GetParam(), Calls::kShortNormal);
+  const std::vector<double> longer = StatesByCalls(GetParam(), Calls::kLongNormal);
+  ASSERT_EQ(one.size(), 50U * 3 + 1);
+  ASSERT_EQ(shorter, one);
+  ASSERT_EQ(longer.size(), 2U * 3 + 1);
+  EXPECT_EQ(one.back(), 300);
+  for (int j = 0; j < 2; ++j) {  // steps 150 and 300: outputs 25 and 50
+    for (int q = 0; q < 3; ++q) EXPECT_EQ(longer[3 * j + q], one[3 * (25 * j + 24) + q]) << j;
+  }
+  EXPECT_EQ(longer.back(), one.back());
+}
+
+const CallCase kCallCases[] = {
+    {"G4_A34", CE_IMPLICIT_PC},
+    {"G6_O6", CE_IMPLICIT_AUTO},
+    {"G8_O8", CE_IMPLICIT_PC},
+    {"G4_A34", CE_IMPLICIT_NEWTON},
+};
+
+INSTANTIATE_TEST_SUITE_P(Solves, ImplicitCalls, ::testing::ValuesIn(kCallCases),
+                         [](const ::testing::TestParamInfo<CallCase>& info) {
+                           std::string name = info.param.method;
+                           name += info.param.mode == CE_IMPLICIT_PC     ? "Pc"
+                                   : info.param.mode == CE_IMPLICIT_AUTO ? "Auto"
+                                                                         : "Newton";
+                           name.erase(std::remove(name.begin(), name.end(), '_'), name.end());
+                           return name;
+                         });
+
 // M x'' = 3 f(t, x, x') with M = 3: the same motion, with the mass solve inside every correction.
 struct ScaledMass {
   DampedForced prob;
