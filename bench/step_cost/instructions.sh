@@ -7,6 +7,8 @@
 #   bench/step_cost/instructions.sh passes BUILD_DIR METHOD             bench_step: N_Vector data passes per step
 #   bench/step_cost/instructions.sh adaptive BUILD_DIR [METHOD N]...    bench_step: per accepted adaptive step
 #                                                                       against the fixed step
+#   bench/step_cost/instructions.sh implicit BUILD_DIR CONFIG[:SET[:normal]]...   bench_implicit_step: per step
+#                                                                       of a velocity-dependent configuration
 #   bench/step_cost/instructions.sh high-order BUILD_DIR [METHOD[+comp]]...   wp_high_order: per run and per step
 #   bench/step_cost/instructions.sh rk8pd BUILD_DIR                     wp_high_order: G8_O8 against GSL rk8pd
 #   bench/step_cost/instructions.sh fe-plate BUILD_DIR [NY ...]         wp_fe_plate: per step and DOF, and LL misses
@@ -16,7 +18,7 @@
 # Needs valgrind. The simulated last-level-cache misses (fe-plate) follow the cache valgrind reads
 # from cpuid; read them only where that size is real (or pass --LL= by hand).
 set -euo pipefail
-mode=${1:?mode: step, passes, adaptive, high-order, rk8pd, fe-plate or membrane}
+mode=${1:?mode: step, passes, adaptive, implicit, high-order, rk8pd, fe-plate or membrane}
 build=${2:?BUILD_DIR}
 shift 2
 command -v valgrind > /dev/null || { echo "valgrind not found (apt-get install valgrind)"; exit 1; }
@@ -95,6 +97,23 @@ passes)  # N_Vector operations that pass over the data, per step (callgrind's ca
     echo "$1 $v: $(( (b - a) / 100 )) N_Vector data operations per step"
   done
   rm -f "$out" ;;
+implicit)  # bench_implicit_step per step: 2000 and 12000 steps, both started again every 1000.
+  # CONFIG is "problem/name" (e.g. "top/auto"); SET replaces the problem's set; ":normal" takes
+  # each block in one CE_NORMAL call instead of CE_ONE_STEP calls ("pendulum/auto:G7_O7:normal").
+  bin=$build/bench/bench_implicit_step
+  [ -x "$bin" ] || { echo "$bin not built" >&2; exit 1; }
+  for spec in "$@"; do
+    IFS=: read -r cfg set calls <<< "$spec"
+    args=(--only "$cfg")
+    [ -n "$set" ] && args+=(--set "$set")
+    [ "$calls" = normal ] && args+=(--normal)
+    ir() {
+      valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" "${args[@]}" --steps "$1" 2>&1 |
+        sed -n 's/.*Collected : //p'
+    }
+    awk -v s="$spec" -v i="$(per "$(ir 2000)" "$(ir 12000)" 10000)" \
+      'BEGIN {printf "%-30s %8.1f instructions/step\n", s, i}'
+  done ;;
 high-order)  # fixed cost of a whole run and cost per step: 1 step x 1 run, 1 x 11, 842 x 1
   for mc in "$@"; do
     m=${mc%+comp} c=
@@ -161,5 +180,5 @@ membrane)  # per step at each N (default 10^5 and 10^6): 60 and 180 steps (two a
     awk -v n="$n" -v c="$c" -v l="$l" \
       'BEGIN {printf "membrane N=%-8s ceode %14.1f  leapfrog %14.1f instructions/step  ratio %.3f\n", n, c, l, c / l}'
   done ;;
-*) echo "unknown mode $mode (step, passes, adaptive, high-order, rk8pd, fe-plate, membrane)"; exit 2 ;;
+*) echo "unknown mode $mode (step, passes, adaptive, implicit, high-order, rk8pd, fe-plate, membrane)"; exit 2 ;;
 esac
