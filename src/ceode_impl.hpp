@@ -437,16 +437,16 @@ inline bool StepsRemain(const CEodeMemRec* ce, sunrealtype target) {
 }
 // Steps towards target, at most max_steps (>= 1) and at least one; *taken: how many succeeded.
 int TakeSteps(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
-// One step in the run's direct form, when it has one (the explicit step of the lean loop's
-// configuration, chosen by ChooseStep): TakeStep's effect and flag (*flag) without its dispatch.
-// false: no direct form, nothing done.
+// One step of the run's configuration (chosen by ChooseStep: the lean loop's explicit step
+// without its dispatch, TakeStep on the others): its effect and flag (*flag). false: the run
+// has not started, nothing done.
 bool TakeDirectStep(CEodeMemRec* ce, int* flag);
-// CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run has the lean configuration
-// on serial vectors (chosen at the start) within the span of times where the grid needs no test,
-// with no option set that needs the general path, the first call opens a fast path for the steps
-// up to the span's end, the stop time's margin or the guard's next check (closed by a restart and
-// StepOptionsChanged); on it a call with serial outputs is the step (TakeDirectStep's) and x, x'
-// at its end copied into xout, vout, tested as they are written; otherwise
+// CEodeEvolve's CE_ONE_STEP call after the access guard. Where the run is on serial vectors
+// within the span of times where the grid needs no test, with no option set that needs the
+// general path, the first call opens a fast path for the steps up to the span's end, the stop
+// time's margin or the guard's next check (closed by a restart and StepOptionsChanged); on it a
+// call with serial outputs is the step (the lean configuration's inlined, the others' TakeStep)
+// and x, x' at its end copied into xout, vout, tested as they are written; otherwise
 // EvolveOneStepGeneral, and after a failed step or outputs that are not finite, OneStepRest.
 // Hidden: CEodeEvolve reaches it by a jump, not through the library's symbol table.
 __attribute__((visibility("hidden"))) int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout,

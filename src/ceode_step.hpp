@@ -33,7 +33,7 @@ struct StepMem {
   SolveKind solve_kind = SolveKind::kExplicit;
   SolveFn solve = nullptr;    // the acceleration at t (TakeStep)
   UpdateFn update = nullptr;  // the derivatives and x(t + h) after the solve (TakeStep)
-  StepsFn steps = nullptr;    // TakeSteps: the lean loop or one TakeStep
+  StepsFn steps = nullptr;    // TakeSteps: the lean loop or ManySteps
   // TakeDirectStep: one step of the configuration (LeanOneStep on the lean one, else TakeStep)
   int (*one)(CEodeMemRec* ce) = nullptr;
   bool one_call = false;  // serial vectors: OneStepEvolve's and NormalEvolve's direct paths
