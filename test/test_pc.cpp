@@ -41,13 +41,14 @@ struct Config {
   int vel = CE_VELOCITY_DEPENDENT;  // CEodeSetVelocityMode's argument; -1: no velocity setter
   bool vel_boolean = false;         // vel through CEodeSetVelocityDependence (SUNTRUE/SUNFALSE)
   long int msbj = 0;                // 0: default
+  long int normal_every = 0;        // > 0: a CE_NORMAL call every so many steps, not one-step calls
   std::function<bool(void*)> then;  // further calls after the setup; false abandons the run
 };
 
 struct Outcome {
   int flag = CE_SUCCESS;
   double err_x = 0, err_v = 0;
-  std::vector<double> x, v;  // at every step
+  std::vector<double> t, x, v;  // at every step (every output with Config::normal_every)
   long int nst = 0, nfe = 0, npc = 0, nnls = 0, nfe_coupling = 0, nje = 0, nsetups = 0;
   sunrealtype coupling = 0;
   std::vector<std::string> warnings;
@@ -91,11 +92,18 @@ Outcome Integrate(const ExactProblem& prob, const Config& c) {
     return r;
   }
   const long int nsteps = std::lround(c.tend / c.h);
+  const long int every = std::max(c.normal_every, 1L);
   sunrealtype t = 0;
-  for (long int i = 0; i < nsteps; ++i) {
-    if (fail(CEodeEvolve(mem.get(), c.tend, x.get(), v.get(), &t, CE_ONE_STEP))) return r;
+  for (long int i = every; i <= nsteps; i += every) {
+    const bool normal = c.normal_every > 0;
+    const sunrealtype tout = normal ? c.h * static_cast<sunrealtype>(i) : c.tend;
+    if (fail(
+            CEodeEvolve(mem.get(), tout, x.get(), v.get(), &t, normal ? CE_NORMAL : CE_ONE_STEP))) {
+      return r;
+    }
     sunrealtype xe = 0, ve = 0;
     prob.Exact(t, &xe, &ve);
+    r.t.push_back(t);
     r.x.push_back(NV_Ith_S(x.get(), 0));
     r.v.push_back(NV_Ith_S(v.get(), 0));
     r.err_x = std::max(r.err_x, std::fabs(r.x.back() - xe));
@@ -335,76 +343,51 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, SerialCorrections, ::testing::ValuesIn(kBack
                            return name;
                          });
 
-// The states at steps 6, 12, ..., 300 of h = 0.01 on the damped forced oscillator, taken by
-// calls of kind: one CE_ONE_STEP call per step, a CE_NORMAL call every 6 steps (short calls, taken
-// step by step), or CE_NORMAL calls every 150 steps (runs of steps) with the states in between
-// from the runs of a second memory stopped at each output.
-enum class Calls { kOneStep, kShortNormal, kLongNormal };
+// One solve (mode) with one set, run by one-step calls, by CE_NORMAL calls every 6 steps (short
+// calls, taken step by step) and every 150 steps (runs of steps).
 struct CallCase {
   const char* method;
   int mode;
 };
-std::vector<double> StatesByCalls(const CallCase& cc, Calls calls) {
-  DampedForced prob;
-  Config c;
-  c.method = cc.method;
-  c.mode = cc.mode;
-  c.tend = 3;
-  std::vector<double> out;
-  Context ctx;
-  Vector x = SerialVector(1, ctx, prob.x0);
-  Vector v = SerialVector(1, ctx, prob.v0);
-  Matrix A(SUNDenseMatrix(1, 1, ctx));
-  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
-  Mem mem(CEodeCreate(ctx));
-  if (CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()) != CE_SUCCESS ||
-      CEodeSetUserData(mem.get(), &prob) != CE_SUCCESS ||
-      CEodeSetMethodByName(mem.get(), c.method.c_str()) != CE_SUCCESS ||
-      CEodeSetFixedStep(mem.get(), c.h) != CE_SUCCESS ||
-      CEodeSetLinearSolver(mem.get(), LS.get(), A.get()) != CE_SUCCESS ||
-      CEodeSetVelocityDependence(mem.get(), SUNTRUE) != CE_SUCCESS ||
-      CEodeSetImplicitMode(mem.get(), c.mode) != CE_SUCCESS) {
-    return out;
-  }
-  sunrealtype t = 0;
-  for (int k = 1; k <= 300; ++k) {
-    int flag = CE_SUCCESS;
-    if (calls == Calls::kOneStep) {
-      flag = CEodeEvolve(mem.get(), c.tend, x.get(), v.get(), &t, CE_ONE_STEP);
-    } else if (k % (calls == Calls::kShortNormal ? 6 : 150) == 0) {
-      flag = CEodeEvolve(mem.get(), c.h * k, x.get(), v.get(), &t, CE_NORMAL);
-    } else {
-      continue;
-    }
-    if (flag != CE_SUCCESS) return {};
-    if (k % 150 == 0 || (calls != Calls::kLongNormal && k % 6 == 0)) {
-      out.insert(out.end(), {static_cast<double>(t), NV_Ith_S(x.get(), 0), NV_Ith_S(v.get(), 0)});
-    }
-  }
-  long int nst = 0;
-  CEodeGetNumSteps(mem.get(), &nst);
-  out.push_back(static_cast<double>(nst));
-  return out;
-}
 
 void PrintTo(const CallCase& c, std::ostream* os) { *os << c.method << " mode " << c.mode; }
 
 class ImplicitCalls : public ::testing::TestWithParam<CallCase> {};
 
 // Calls that take one step, or a few, run the implicit solve through the direct paths of a serial
-// run; one long call runs its steps back to back. Each gives the same states bit for bit.
+// run; one long call runs its steps back to back. Each gives the same states bit for bit at the
+// same steps (300 of h = 0.01 on the damped forced oscillator).
 TEST_P(ImplicitCalls, OfEveryKindGiveBitwiseTheStatesOfOneLongRun) {
-  const std::vector<double> one = StatesByCalls(GetParam(), Calls::kOneStep);
-  const std::vector<double> shorter = StatesByCalls(GetParam(), Calls::kShortNormal);
-  const std::vector<double> longer = StatesByCalls(GetParam(), Calls::kLongNormal);
-  ASSERT_EQ(one.size(), 50U * 3 + 1);
-  ASSERT_EQ(shorter, one);
-  ASSERT_EQ(longer.size(), 2U * 3 + 1);
-  EXPECT_EQ(one.back(), 300);
-  for (int j = 0; j < 2; ++j) {  // steps 150 and 300: outputs 25 and 50
-    for (int q = 0; q < 3; ++q) EXPECT_EQ(longer[3 * j + q], one[3 * (25 * j + 24) + q]) << j;
-  }
-  EXPECT_EQ(longer.back(), one.back());
+  Config c;
+  c.method = GetParam().method;
+  c.mode = GetParam().mode;
+  c.tend = 3;
+  const DampedForced prob;
+  const Outcome one = Integrate(prob, c);
+  c.normal_every = 6;
+  const Outcome shorter = Integrate(prob, c);
+  c.normal_every = 150;
+  const Outcome longer = Integrate(prob, c);
+  ASSERT_EQ(one.flag, CE_SUCCESS);
+  ASSERT_EQ(shorter.flag, CE_SUCCESS);
+  ASSERT_EQ(longer.flag, CE_SUCCESS);
+  ASSERT_EQ(one.x.size(), 300U);
+  ASSERT_EQ(shorter.x.size(), 50U);
+  ASSERT_EQ(longer.x.size(), 2U);
+  // Outputs j of a run with outputs every m steps against the one-step run's step (j + 1) m.
+  const auto same = [&one](const Outcome& o, size_t m) {
+    for (size_t j = 0; j < o.x.size(); ++j) {
+      const size_t k = (j + 1) * m - 1;
+      EXPECT_EQ(o.t[j], one.t[k]) << "step " << k + 1;
+      EXPECT_EQ(o.x[j], one.x[k]) << "step " << k + 1;  // bit for bit, not to round-off
+      EXPECT_EQ(o.v[j], one.v[k]) << "step " << k + 1;
+    }
+  };
+  same(shorter, 6);
+  same(longer, 150);
+  EXPECT_EQ(one.nst, 300);
+  EXPECT_EQ(shorter.nst, 300);
+  EXPECT_EQ(longer.nst, 300);
 }
 
 const CallCase kCallCases[] = {
