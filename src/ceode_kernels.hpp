@@ -51,6 +51,9 @@ struct FusedTerms {
   bool exact;     // compensated, its increment summed error-free (ExactIncrement)
   bool lead_old = false;  // the accumulated term is X[0] (Combo::lead_old), not X[m - 1]
   sunrealtype c[kMaxDegree + 3];
+  // c[j] twice, for the small kernels' pairs of entries: each weight is then an aligned operand
+  // of the pair's product, with no splat per term and entry pair.
+  alignas(16) sunrealtype c2[kMaxDegree + 3][2];
   sunrealtype* X[kMaxDegree + 3];
   sunrealtype* old;
   sunrealtype* compnew;

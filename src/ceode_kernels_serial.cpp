@@ -228,13 +228,47 @@ __attribute__((always_inline)) inline void ShapedSum(const FusedPlan& fp, sunind
   StoreSum(tk, i, TermsAt<StepTerms(D, Ones, S)>(tk, i));
 }
 
-// UpdateSmall with the sums of one shape unrolled: the same operations in the same order.
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+// Entries i and i + 1 of sum S in a pair: TermsAt's operations lane by lane (the same values).
+template <int D, unsigned Ones, int S>
+__attribute__((always_inline)) inline void ShapedSumPair(const FusedPlan& fp, sunindextype i) {
+  const FusedTerms& tk = fp.terms[S];
+  const auto weight = [&tk](int j) { return *reinterpret_cast<const Pair*>(tk.c2[j]); };
+  Pair acc = weight(0) * Load(tk.X[0] + i, Pair{});
+  for (int j = 1; j < StepTerms(D, Ones, S); ++j) acc += weight(j) * Load(tk.X[j] + i, Pair{});
+  if (tk.old == nullptr) {
+    Store(tk.out + i, acc);
+  } else {
+    StoreSum(tk, i, acc[0]);
+    StoreSum(tk, i + 1, acc[1]);
+  }
+}
+constexpr bool kShapedPairs = true;
+#else
+template <int D, unsigned Ones, int S>
+inline void ShapedSumPair(const FusedPlan& fp, sunindextype i) {
+  ShapedSum<D, Ones, S>(fp, i);
+  ShapedSum<D, Ones, S>(fp, i + 1);
+}
+constexpr bool kShapedPairs = false;
+#endif
+
+// UpdateSmall with the sums of one shape unrolled: the same operations in the same order, two
+// entries at a time where SSE2 is (an entry's sums read only that entry of the sums before them).
 template <int D, unsigned Ones, std::size_t... S>
 inline sunrealtype UpdateShaped(const FusedPlan& fp, sunindextype n,
                                 std::index_sequence<S...> /*sums*/) {
   const sunrealtype* xout = fp.terms[StepSums(D) - 1].out;
   sunrealtype sum = 0;
-  for (sunindextype i = 0; i < n; ++i) {
+  sunindextype i = 0;
+  if constexpr (kShapedPairs) {
+    for (; i + 2 <= n; i += 2) {
+      (ShapedSumPair<D, Ones, static_cast<int>(S)>(fp, i), ...);
+      sum += std::fabs(xout[i]);
+      sum += std::fabs(xout[i + 1]);
+    }
+  }
+  for (; i < n; ++i) {
     (ShapedSum<D, Ones, static_cast<int>(S)>(fp, i), ...);
     sum += std::fabs(xout[i]);
   }
@@ -1014,6 +1048,7 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
       tk.compnew = SerialData(cs.compnew[cb.level]);
     }
     tk.out = SerialData(cb.out);
+    for (int j = 0; j < tk.m; ++j) tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
     tk.form = FormOf(tk.m, tk.c);
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;

@@ -626,10 +626,11 @@ INSTANTIATE_TEST_SUITE_P(TinyAndBlockTails, FusedKernelAgainstReference,
                          ::testing::ValuesIn(Cases()), CaseName);
 
 // The step's own plans (BuildUpdatePlan) of every named set, out of place and in place, at the
-// sizes of each serial kernel: entry by entry (5), the pair loop with its tail (3077) and with
-// streamed stores (2^19 + 5). Each must give the reference's outputs bit for bit; the reference
-// runs the out-of-place plan (its combinations must not write an input), and an in-place plan's
-// outputs are the same values in the history's vectors.
+// sizes of each serial kernel: the small kernels' pairs alone (2) and with a last entry (5), the
+// pair loop with its tail (3077) and with streamed stores (2^19 + 5). Each must give the
+// reference's outputs bit for bit; the reference runs the out-of-place plan (its combinations
+// must not write an input), and an in-place plan's outputs are the same values in the history's
+// vectors.
 class StepPlanAgainstReference : public ::testing::TestWithParam<sunindextype> {
  protected:
   static constexpr int kVectors = 2 * ceode::kMaxDegree + 2;  // D, Dnew, x(t), x(t + h)
@@ -768,8 +769,8 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceWhenTheRole
 }
 
 INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
-                         ::testing::Values(sunindextype{5}, 3 * ceode::kInPlaceMinLen + 5,
-                                           kStreamed),
+                         ::testing::Values(sunindextype{2}, sunindextype{5},
+                                           3 * ceode::kInPlaceMinLen + 5, kStreamed),
                          [](const ::testing::TestParamInfo<sunindextype>& info) {
                            return "Size" + std::to_string(info.param);
                          });
