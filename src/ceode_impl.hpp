@@ -563,6 +563,10 @@ int NewtonSolve(CEodeMemRec* ce, N_Vector b, const char* func);
 int VelJacobian(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv, SUNMatrix J,
                 const char* func);
 int LsInitialize(CEodeMemRec* ce, const char* func);
+// Whether M is not the identity (a mass function or a constant M attached; set before a start).
+inline bool HasMassMatrix(const CEodeMemRec* ce) {
+  return ce->ls.mfn != nullptr || ce->ls.M != nullptr;
+}
 int InitLinearSolver(CEodeMemRec* ce, SUNLinearSolver LS, const char* func);  // reports failure
 void LsFree(CEodeMemRec* ce);
 

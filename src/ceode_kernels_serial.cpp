@@ -243,14 +243,6 @@ __attribute__((always_inline)) inline void ShapedSumPair(const FusedPlan& fp, su
     StoreSum(tk, i + 1, acc[1]);
   }
 }
-constexpr bool kShapedPairs = true;
-#else
-template <int D, unsigned Ones, int S>
-inline void ShapedSumPair(const FusedPlan& fp, sunindextype i) {
-  ShapedSum<D, Ones, S>(fp, i);
-  ShapedSum<D, Ones, S>(fp, i + 1);
-}
-constexpr bool kShapedPairs = false;
 #endif
 
 // UpdateSmall with the sums of one shape unrolled: the same operations in the same order, two
@@ -261,13 +253,13 @@ inline sunrealtype UpdateShaped(const FusedPlan& fp, sunindextype n,
   const sunrealtype* xout = fp.terms[StepSums(D) - 1].out;
   sunrealtype sum = 0;
   sunindextype i = 0;
-  if constexpr (kShapedPairs) {
-    for (; i + 2 <= n; i += 2) {
-      (ShapedSumPair<D, Ones, static_cast<int>(S)>(fp, i), ...);
-      sum += std::fabs(xout[i]);
-      sum += std::fabs(xout[i + 1]);
-    }
+#if defined(__SSE2__) && defined(SUNDIALS_DOUBLE_PRECISION)
+  for (; i + 2 <= n; i += 2) {
+    (ShapedSumPair<D, Ones, static_cast<int>(S)>(fp, i), ...);
+    sum += std::fabs(xout[i]);
+    sum += std::fabs(xout[i + 1]);
   }
+#endif
   for (; i < n; ++i) {
     (ShapedSum<D, Ones, static_cast<int>(S)>(fp, i), ...);
     sum += std::fabs(xout[i]);

@@ -346,8 +346,8 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   // the last run go (its vectors may be gone).
   ce->pc.serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
   for (PcMem::Plan& p : ce->pc.plans) p = PcMem::Plan{};
-  const bool mass = ce->ls.mfn != nullptr || ce->ls.M != nullptr;  // set before a start only
-  ce->pc.planned = ce->pc.serial && !mass ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
+  ce->pc.planned =
+      ce->pc.serial && !HasMassMatrix(ce) ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
   if (HasConstraints(ce) || !ce->vel_dependent) return CE_SUCCESS;
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);

@@ -25,7 +25,7 @@ int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func) {
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,
               const char* func) {
   // No mass matrix (M = I): MassUpdate and MassSolve would do nothing; skip their calls.
-  if (ce->ls.mfn == nullptr && ce->ls.M == nullptr) return EvalRhs(ce, t, x, v, a, func);
+  if (!HasMassMatrix(ce)) return EvalRhs(ce, t, x, v, a, func);
   int flag = MassUpdate(ce, t, x, func);
   if (flag == CE_SUCCESS) flag = EvalRhs(ce, t, x, v, a, func);
   return flag == CE_SUCCESS ? MassSolve(ce, a, func) : flag;
@@ -745,8 +745,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   const bool serial = sm->fused && sm->serial;
   const bool mpi = sm->fused && sm->mpi;
   sm->update = serial ? UpdateOnSerial : (mpi ? UpdateOnMpi : UpdateOnReference);
-  const bool lean = (serial || mpi) && sm->solve_kind == SolveKind::kExplicit &&
-                    ce->ls.mfn == nullptr && ce->ls.M == nullptr;
+  const bool lean = (serial || mpi) && sm->solve_kind == SolveKind::kExplicit && !HasMassMatrix(ce);
   // G3_CD's carried half-step velocity (StepMem::leap) is a variant of the loop, chosen here.
   constexpr StepsFn kLean[2][2] = {{LeanOrOneStep<false, false>, LeanOrOneStep<false, true>},
                                    {LeanOrOneStep<true, false>, LeanOrOneStep<true, true>}};

@@ -86,7 +86,7 @@ int Allocate(Stepper* st, N_Vector y, const char* func) {
 // Problems the inner stepper cannot take (the forcing adds to x'' directly: a mass matrix would
 // have to multiply it, constraints would fight it), and, with st, a memory changed behind it.
 int StepperCheckMemory(CEodeMemRec* ce, const Stepper* st, const char* func) {
-  if (ce->ls.mfn != nullptr || ce->ls.M != nullptr || HasConstraints(ce)) {
+  if (HasMassMatrix(ce) || HasConstraints(ce)) {
     return ProcessError(ce, CE_ILL_INPUT, func,
                         "The inner stepper needs M = I and no constraints (the MRI forcing is "
                         "added to the acceleration): divide f by M in your right-hand side.");

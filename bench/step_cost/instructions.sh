@@ -33,7 +33,12 @@ count() {
   # Events: Ir [Dr Dw I1mr D1mr D1mw ILmr DLmr DLmw]
   echo "$out" | sed -n 's/.*Collected : //p' | awk '{ if (NF > 1) print $1, $8 + $9; else print $1 }'
 }
-per() { awk -v a="$1" -v b="$2" -v s="$3" 'BEGIN {printf "%.6e", (b - a) / s}'; }
+# per A B STEPS: (B - A) / STEPS; fails (the caller's assignment, under set -e, ends the script)
+# when a count is missing, as after a failed run.
+per() {
+  [ -n "$1" ] && [ -n "$2" ] || { echo "a count is missing (a run failed)" >&2; return 1; }
+  awk -v a="$1" -v b="$2" -v s="$3" 'BEGIN {printf "%.6e", (b - a) / s}'
+}
 
 case $mode in
 step)  # instructions per step of each bench_step variant: S1 and S2 steps after the same set-up,
@@ -108,11 +113,15 @@ implicit)  # bench_implicit_step per step: 2000 and 12000 steps, both started ag
     [ -n "$set" ] && args+=(--set "$set")
     [ "$calls" = normal ] && args+=(--normal)
     ir() {
-      valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" "${args[@]}" --steps "$1" 2>&1 |
-        sed -n 's/.*Collected : //p'
+      local out
+      out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" "${args[@]}" \
+        --steps "$1" 2>&1) || { echo "run failed: $bin ${args[*]} --steps $1" >&2; echo "$out" >&2; return 1; }
+      echo "$out" | sed -n 's/.*Collected : //p'
     }
-    awk -v s="$spec" -v i="$(per "$(ir 2000)" "$(ir 12000)" 10000)" \
-      'BEGIN {printf "%-30s %8.1f instructions/step\n", s, i}'
+    a=$(ir 2000)
+    z=$(ir 12000)
+    i=$(per "$a" "$z" 10000)
+    awk -v s="$spec" -v i="$i" 'BEGIN {printf "%-30s %8.1f instructions/step\n", s, i}'
   done ;;
 high-order)  # fixed cost of a whole run and cost per step: 1 step x 1 run, 1 x 11, 842 x 1
   for mc in "$@"; do
