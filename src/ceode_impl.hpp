@@ -469,9 +469,9 @@ void ChooseStep(CEodeMemRec* ce, bool restart);
 // The step module's part of a restart (Restart): the direct paths close until the next start's
 // ChooseStep, so that direct_tmax alone says whether the run is started.
 void StepRestart(CEodeMemRec* ce);
-// Closes OneStepEvolve's fast path (StepMem::fast_until) until its next checked call: called by
-// whatever sets an option the path depends on (the stop time, root functions, error control, the
-// guard's mode, period or pending check).
+// Closes the one-step fast spans (StepMem::fast_until, direct_until) until the next checked call:
+// called by whatever sets an option the path depends on (the stop time, root functions, error
+// control, the guard's mode, period or pending check).
 void StepOptionsChanged(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);

@@ -549,6 +549,15 @@ long int FastSpanEnd(const CEodeMemRec* ce, const StepMem& sm) {
   return k + 1;
 }
 
+// The arguments of a call on a fast span: serial outputs of the run's length, tret, a finite tout
+// (tout - tout is NaN exactly where tout is not, which the general path refuses).
+__attribute__((always_inline)) inline bool FastArguments(const CEodeMemRec* ce, sunrealtype tout,
+                                                         N_Vector xout, N_Vector vout,
+                                                         const sunrealtype* tret) {
+  return SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) && tret != nullptr &&
+         !std::isnan(tout - tout);
+}
+
 // One step of the configuration (StepMem::one; LeanOneStep not inlined here: OneStepEvolve's
 // alone) towards target = tcur + h, then the outputs, on a direct path's call (OneStepChecked's,
 // and the fast path's where the configuration is not the lean one).
@@ -568,9 +577,15 @@ __attribute__((noinline)) int DirectOneStep(CEodeMemRec* ce, sunrealtype target,
 // allows it from here on (FastSpanEnd).
 __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
                                              N_Vector vout, sunrealtype* tret) {
+  StepMem* sm = ce->step.get();
+  if (ce->nsteps_h < sm->direct_until && FastArguments(ce, tout, xout, vout, tret)) {
+    return DirectOneStep(ce, ce->tcur + ce->h, xout, vout, tret);  // TakeStep's span
+  }
   // Error control has no fast span (FastSpanEnd): its calls come here, and go on to its own path.
   if (AdaptOn(ce)) return AdaptCall(ce, tout, xout, vout, tret, CE_ONE_STEP);
-  ce->step->fast_until = FastSpanEnd(ce, *ce->step);
+  const long int span = FastSpanEnd(ce, *sm);
+  sm->fast_until = sm->lean_one ? span : 0;
+  sm->direct_until = sm->lean_one ? 0 : span;
   const sunrealtype target = ce->tcur + ce->h;
   const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
                       tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
@@ -646,13 +661,9 @@ __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* 
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
   static const char* func = "CEodeEvolve";
-  // tout - tout is NaN exactly where tout is not finite (which the general path refuses).
-  const bool fast = ce->nsteps_h < ce->step->fast_until && SerialOfLength(xout, ce->n) &&
-                    SerialOfLength(vout, ce->n) && tret != nullptr && !std::isnan(tout - tout);
+  const bool fast =
+      ce->nsteps_h < ce->step->fast_until && FastArguments(ce, tout, xout, vout, tret);
   if (!fast) return OneStepChecked(ce, tout, xout, vout, tret);
-  // The implicit, constrained and mass-matrix steps: TakeStep, whose guard test the span keeps
-  // from firing.
-  if (!ce->step->lean_one) return DirectOneStep(ce, ce->tcur + ce->h, xout, vout, tret);
   // LeanOneStep without its guard test (the span ends before a step with a check).
   const sunrealtype t = StepTime(ce, 1);
   const bool own_f = __builtin_expect(ce->adapters.rhs == nullptr, 1);
@@ -712,14 +723,18 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
 
+namespace {
+void CloseSpans(StepMem* sm) { sm->fast_until = sm->direct_until = 0; }
+}  // namespace
+
 void StepRestart(CEodeMemRec* ce) {
   if (ce->step == nullptr) return;
   ce->step->direct_tmax = -1;
-  ce->step->fast_until = 0;
+  CloseSpans(ce->step.get());
 }
 
 void StepOptionsChanged(CEodeMemRec* ce) {
-  if (ce->step != nullptr) ce->step->fast_until = 0;
+  if (ce->step != nullptr) CloseSpans(ce->step.get());
 }
 
 // The step of each path of docs/theory.md: TakeStep with the solve of the kind,
@@ -757,7 +772,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   sm->grid_tol = SUN_RCONST(1e-8) * ce->h;                       // GridTolerance's second term
   sm->grid_remain = ce->h - sm->grid_tol;
   sm->direct_tmax = sm->one_call ? DirectTimeSpan() * ce->h - std::fabs(ce->t_start_h) : -1;
-  sm->fast_until = 0;  // the next checked call opens it for this configuration
+  CloseSpans(sm);  // the next checked call opens them for this configuration
   BuildFastPhases(ce, sm);
 }
 

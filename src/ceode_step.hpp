@@ -47,6 +47,9 @@ struct StepMem {
   // DirectOptions tests are as they were when OneStepChecked found them so (FastSpanEnd), so
   // that the call tests nothing but its arguments. 0: closed (StepOptionsChanged).
   long int fast_until = 0;
+  // The same span for the other configurations (not lean_one), taken at the top of
+  // OneStepChecked, so that the fast path tests nothing more for the lean one.
+  long int direct_until = 0;
   // The fast path's commit, per configuration (by plan_ix, one_call runs): the data of x(tcur)
   // and D_1 after its step, the outputs' sources, and the configuration that follows; and the
   // history's swap where it is a fixed one (swap: 2, D_1 and D_2 at degree 3; 4, RotateHistory's
