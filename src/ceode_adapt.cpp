@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <new>
 
 namespace ceode {
@@ -183,7 +185,7 @@ bool SunControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sun
   auto* C = static_cast<SUNAdaptController>(ce->adapt->sun_controller);
   if (C == nullptr) return false;
   sunrealtype hnew = 0;
-  if (SUNAdaptController_EstimateStep(C, hbase, ce->adapt->order, err, &hnew) != SUN_SUCCESS ||
+  if (SUNAdaptController_EstimateStep(C, hbase, ce->adapt->set.order, err, &hnew) != SUN_SUCCESS ||
       SUNAdaptController_UpdateH(C, hbase, err) != SUN_SUCCESS || !(hnew > 0) ||
       !std::isfinite(hnew)) {
     return false;
@@ -198,8 +200,7 @@ bool SunControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sun
 
 }  // namespace
 
-void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,
-                       RemapTerm* remap, int* nremap) {
+void ComputeSetCoefficients(int d, const sunrealtype* params, SetCoefficients* sc) {
   long double gamma[kMaxDegree][kTerms] = {};
   HistoryGammas(d, params, gamma);
   int ox = 0;
@@ -209,25 +210,19 @@ void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype
   } else {
     MethodOrders(d, params, &ox, &ov, nullptr, nullptr);
   }
-  *order = std::max(1, std::min(ox, d));
-  *cerr = ErrorConstant(d, params, *order, gamma);
-  *nremap = 0;
+  *sc = SetCoefficients{};
+  sc->order = std::max(1, std::min(ox, d));
+  sc->cerr = ErrorConstant(d, params, sc->order, gamma);
   for (int k = 1; k < d; ++k) {
     if (k == 2) continue;  // D_2 is the acceleration itself
     for (int j = 1; k + j <= d; ++j) {
       if (std::fabs(gamma[k][j]) > 1e-10L) {
-        remap[(*nremap)++] = {k, j, static_cast<sunrealtype>(gamma[k][j])};
+        sc->remap[sc->nremap++] = {k, j, static_cast<sunrealtype>(gamma[k][j])};
       }
     }
   }
-}
-
-void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[kGammaTerms]) {
-  long double g[kMaxDegree][kTerms] = {};
-  HistoryGammas(d, params, g);
-  for (int k = 0; k < kMaxDegree; ++k) {
-    for (int l = 0; l < kGammaTerms; ++l)
-      gamma[k][l] = k < d ? static_cast<sunrealtype>(g[k][l]) : 0;
+  for (int k = 0; k < d; ++k) {
+    for (int l = 0; l < kGammaTerms; ++l) sc->gamma[k][l] = static_cast<sunrealtype>(gamma[k][l]);
   }
 }
 
@@ -300,7 +295,7 @@ int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
             CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
-    for (int j = 1; ok && j <= std::max(1, am.order - 1); ++j)
+    for (int j = 1; ok && j <= std::max(1, am.set.order - 1); ++j)
       ok = CloneOnce(&am.dd[b][j], ce->xcur);
   }
   return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
@@ -323,12 +318,12 @@ sunrealtype InitialStep(CEodeMemRec* ce, sunrealtype span) {
   if (nx > 0 && na > 0) tau = std::min(tau, std::sqrt(nx / na));
   if (nv > 0 && na > 0) tau = std::min(tau, nv / na);
   if (tau == SUN_BIG_REAL && na > 0) tau = std::sqrt(2 / na);
-  const int p = am.order;
+  const int p = am.set.order;
   sunrealtype h = 0.1 * span;
   if (tau > 0 && tau < SUN_BIG_REAL) {
     const sunrealtype top = std::max(
         {na * std::pow(tau, -(p - 1)), nv * std::pow(tau, -p), nx * std::pow(tau, -(p + 1))});
-    const sunrealtype c = std::max(std::fabs(am.cerr), SUN_UNIT_ROUNDOFF);
+    const sunrealtype c = std::max(std::fabs(am.set.cerr), SUN_UNIT_ROUNDOFF);
     if (top > 0) h = std::min(h, std::pow(kTarget / (c * top * am.err_scale), 1.0 / (p + 1)));
   }
   return h;
@@ -379,19 +374,46 @@ void ClearRun(CEodeMemRec* ce) {
   am->ewt_next_ready = false;
 }
 
+// A named set's SetCoefficients, computed once for the process: they depend on the table's
+// parameters alone, and every run of a set (each start, each new memory) needs them.
+const SetCoefficients& NamedSetCoefficients(const MethodSet& m) {
+  struct Entry {
+    std::once_flag once;
+    SetCoefficients sc;
+  };
+  static const std::unique_ptr<Entry[]> cache(new Entry[NumMethodSets()]);
+  Entry& e = cache[&m - &MethodSetAt(0)];
+  std::call_once(e.once, [&m, &e] { ComputeSetCoefficients(m.degree, m.params.data(), &e.sc); });
+  return e.sc;
+}
+
+// The method's SetCoefficients into am.set, unless they are those of the method already (a new
+// start of the same method).
+void SetCoefficientsOfMethod(const CEodeMemRec* ce, AdaptMem* am) {
+  const int d = ce->degree;
+  if (am->set_degree == d && std::equal(ce->params, ce->params + d - 1, am->set_params)) return;
+  am->set_degree = 0;  // until the coefficients are complete (an exception leaves none)
+  if (const MethodSet* named = NamedSetWithParams(d, ce->params)) {
+    am->set = NamedSetCoefficients(*named);
+  } else {
+    ComputeSetCoefficients(d, ce->params, &am->set);
+  }
+  std::copy(ce->params, ce->params + d - 1, am->set_params);
+  am->set_degree = d;
+}
+
 // The method's error, remap and refresh coefficients (at each start: the method may have changed).
 int MethodCoefficients(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
   try {
-    AdaptCoefficients(ce->degree, ce->params, &am.order, &am.cerr, am.remap, &am.nremap);
-    AdaptHistorySeries(ce->degree, ce->params, am.gamma);
+    SetCoefficientsOfMethod(ce, &am);
   } catch (...) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
-  am.pfac = Factorial(am.order - 1);
+  am.pfac = Factorial(am.set.order - 1);
   am.refresh = ce->degree >= 6 && !HasConstraints(ce);
   RefreshTables(&am, ce->degree);
-  am.eta_grow = am.refresh ? kEtaMax : GrowthBound(ce->degree, am.remap, am.nremap);
+  am.eta_grow = am.refresh ? kEtaMax : GrowthBound(ce->degree, am.set.remap, am.set.nremap);
   HoldBand(&am, ce->degree);
   return CE_SUCCESS;
 }
@@ -417,7 +439,7 @@ int AdaptStart(CEodeMemRec* ce, const char* func, bool* accel) {
   sunrealtype tol = am.tol_kind == 2 ? 1 : am.rtol;
   if (am.tol_kind == 0 && tol == 0) tol = am.atol;
   if (am.tol_kind == 1 && tol == 0) tol = N_VMaxNorm(am.atol_vec);
-  am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.order);
+  am.err_scale = std::pow(std::min<sunrealtype>(tol, 1), -1.0 / am.set.order);
   const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL &&
                       (am.tol_kind != 1 || N_VGetVectorID(am.atol_vec) == SUNDIALS_NVEC_SERIAL);
   am.kernels = {serial, ce->n};
@@ -499,7 +521,7 @@ void AdaptStartHistory(CEodeMemRec* ce) {
   // divided differences (a, a', ..., a^(d-3)); the zero start has only a.
   const int mult = ce->zero_start ? 1 : d - 2;
   am.cur = 0;
-  for (int j = 1; j <= am.order - 2; ++j) {
+  for (int j = 1; j <= am.set.order - 2; ++j) {
     if (j < mult) N_VScale(1 / Factorial(j), ce->D[j + 2], am.dd[0][j]);
   }
   am.ndata = mult;
@@ -509,7 +531,7 @@ void AdaptStartHistory(CEodeMemRec* ce) {
 
 sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err) {
   const AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
+  const sunrealtype k = am.set.order + 1;
   sunrealtype eta = std::isfinite(err) ? 0.9 * std::pow(err, -1 / k) : 0.25;
   eta = std::min(0.9, std::max(kEtaMin, eta));
   return std::max(ce->h * eta, am.hmin);
@@ -580,7 +602,7 @@ sunrealtype PrevLog(const AdaptMem& am) { return std::log(std::max(am.err_prev, 
 __attribute__((noinline)) sunrealtype ExactRatio(CEodeMemRec* ce, sunrealtype err,
                                                  sunrealtype hbase, sunrealtype v, bool had_prev) {
   AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
+  const sunrealtype k = am.set.order + 1;
   const sunrealtype le = std::log(v);
   const sunrealtype lep = !had_prev ? le : (am.lerr_prev_exact ? am.lerr_prev : PrevLog(am));
   am.lerr_prev_approx = le;
@@ -608,7 +630,7 @@ sunrealtype Enveloped(const AdaptMem& am, sunrealtype err) {
   if (am.err_prev > 0) {
     sunrealtype grow = 1;  // eta_prev^(p+1)
     if (am.eta_prev != 1) {
-      for (int i = 0; i <= am.order; ++i) grow *= am.eta_prev;
+      for (int i = 0; i <= am.set.order; ++i) grow *= am.eta_prev;
     }
     err = std::max(err, kEnvelope * am.err_prev * grow);
   }
@@ -618,7 +640,7 @@ sunrealtype Enveloped(const AdaptMem& am, sunrealtype err) {
 // The controller's ratio from the error norm err of the last accepted step of hbase.
 sunrealtype ControllerRatio(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase) {
   AdaptMem& am = *ce->adapt;
-  const sunrealtype k = am.order + 1;
+  const sunrealtype k = am.set.order + 1;
   err = Enveloped(am, err);
   if (err == 0) {
     // An estimate of exactly 0 (x'' = 0, a solution polynomial of degree below p + 1): no error
@@ -648,7 +670,7 @@ bool KeepsStep(AdaptMem& am, sunrealtype err) {
   if (err == 0) return false;
   const sunrealtype le_approx = ApproxLog(std::max(err, 1e-10) / kTarget);
   const sunrealtype lep_approx = am.err_prev > 0 ? am.lerr_prev_approx : le_approx;
-  if (!BandKeepsStep(am, le_approx, lep_approx, am.order + 1)) return false;
+  if (!BandKeepsStep(am, le_approx, lep_approx, am.set.order + 1)) return false;
   am.lerr_prev_approx = le_approx;
   am.err_prev = err;
   am.lerr_prev_exact = false;
@@ -920,9 +942,10 @@ int CEodeMethodErrorConstant(int degree, const sunrealtype* params, int* order, 
     if (!std::isfinite(params[i])) return CE_ILL_INPUT;
   }
   try {
-    ceode::RemapTerm remap[ceode::kMaxDegree * ceode::kMaxDegree];
-    int nremap = 0;
-    ceode::AdaptCoefficients(degree, params, order, cerr, remap, &nremap);
+    ceode::SetCoefficients sc;
+    ceode::ComputeSetCoefficients(degree, params, &sc);
+    *order = sc.order;
+    *cerr = sc.cerr;
     return std::isfinite(*cerr) ? CE_SUCCESS : CE_ILL_INPUT;
   } catch (...) {
     return CE_MEM_FAIL;

@@ -22,6 +22,16 @@ struct RemapTerm {
 // Terms of the consistent history's series D_k = sum_l gamma_kl h^l y^(k+l) that the refresh uses.
 constexpr int kGammaTerms = kMaxDegree + 1;
 
+// What error control derives from a set's parameters alone: the order p, C_{p+1}, the remap and
+// the consistent history's series coefficients gamma[k][l], k < d, l < kGammaTerms.
+struct SetCoefficients {
+  int order = 0;
+  sunrealtype cerr = 0;
+  int nremap = 0;
+  RemapTerm remap[kMaxDegree * kMaxDegree] = {};
+  sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
+};
+
 struct AdaptMem {
   // Options
   bool on = false;   // tolerances given and no fixed step set after them
@@ -41,19 +51,19 @@ struct AdaptMem {
   void* schedule_data = nullptr;
   sunrealtype tout_hint = 0;  // the first CEodeEvolve's tout: bounds the first step
 
-  // The method's coefficients (with the method, at each start)
-  int order = 0;         // p: order in x of the set
-  sunrealtype cerr = 0;  // C_{p+1}: local error C h^{p+1} y^{(p+1)}
+  // The method's coefficients (with the method, at each start): p, C_{p+1} (the local error
+  // C h^{p+1} y^{(p+1)}), the remap and the series; set_degree and set_params the set they
+  // belong to (set_degree 0: none yet).
+  SetCoefficients set;
+  int set_degree = 0;
+  sunrealtype set_params[kMaxDegree] = {};
   sunrealtype pfac = 0;  // (p - 1)!: y^{(p+1)} = (p - 1)! a[t_n, ..., t_{n-p+1}]
   // 1 / tol^(1/p): the local error is held to tol^((p+1)/p) in the weights, so that the global
   // error is proportional to tol (docs/theory.md section 12.3).
   sunrealtype err_scale = 1;
-  int nremap = 0;
-  RemapTerm remap[kMaxDegree * kMaxDegree] = {};
   // The history is refreshed instead of remapped when the step changes (degree 6 and more, no
   // constraints: the constrained solve's position weights follow the remap, 12.6).
   bool refresh = false;
-  sunrealtype gamma[kMaxDegree][kGammaTerms] = {};
   // The refresh's rows as polynomials in h (RefreshTables, with the coefficients): row r
   // (D_3 .. D_{d-1}, then yd) weighs the interpolant's power coefficient i by
   // refresh_k[i][r] h^(i - 1 - r) (zero for i <= r); by coefficient, so that one pass serves all
@@ -165,8 +175,8 @@ inline void RemapWeights(const AdaptMem& am, int d, sunrealtype h, sunrealtype* 
     hp[j] = hp[j - 1] * h;
     mp[j] = mp[j - 1] * am.hmap;
   }
-  for (int i = 0; i < am.nremap; ++i) {
-    rc[i] = am.remap[i].gamma * (hp[am.remap[i].j] - mp[am.remap[i].j]);
+  for (int i = 0; i < am.set.nremap; ++i) {
+    rc[i] = am.set.remap[i].gamma * (hp[am.set.remap[i].j] - mp[am.set.remap[i].j]);
   }
 }
 
@@ -205,11 +215,9 @@ void AdaptSetTarget(CEodeMemRec* ce, sunrealtype tout);  // CEodeEvolve's tout
 void AdaptKeepStep(CEodeMemRec* ce);
 void AdaptDisable(CEodeMemRec* ce);  // CEodeSetFixedStep
 void AdaptReset(CEodeMemRec* ce, bool counters);
-// The coefficients of an arbitrary set (also for the tests): C_{p+1}, the order, the remap.
-void AdaptCoefficients(int d, const sunrealtype* params, int* order, sunrealtype* cerr,
-                       RemapTerm* remap, int* nremap);
-// The consistent history's series coefficients gamma[k][l], k < d, l < kGammaTerms.
-void AdaptHistorySeries(int d, const sunrealtype* params, sunrealtype (*gamma)[kGammaTerms]);
+// Those of an arbitrary set, computed (series in long double: some 40 000 instructions at degree
+// 7).
+void ComputeSetCoefficients(int d, const sunrealtype* params, SetCoefficients* sc);
 
 // ceode_adapt_refresh.cpp
 // The node's history for a next step of h, rebuilt from the interpolant of the last p

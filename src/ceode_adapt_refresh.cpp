@@ -45,9 +45,9 @@ sunrealtype PowerDifference(sunrealtype x, sunrealtype y, int j) {
 // The row of D_k, k >= 3, at s = 0: gamma_kl h^l P^(m)(t_n), m = k + l - 2, reads m! times the
 // interpolant's power coefficient m, with h^(m - (k - 2)).
 void ConsistentRow(const AdaptMem& am, int k, sunrealtype* row) {
-  for (int l = 0; k + l - 2 <= am.order - 1 && l < kGammaTerms; ++l) {
+  for (int l = 0; k + l - 2 <= am.set.order - 1 && l < kGammaTerms; ++l) {
     const int m = k + l - 2;
-    row[m] = am.gamma[k][l] * Falling(m, m);
+    row[m] = am.set.gamma[k][l] * Falling(m, m);
   }
 }
 
@@ -56,11 +56,11 @@ void ConsistentRow(const AdaptMem& am, int k, sunrealtype* row) {
 // with h^(i - (d - 2)), free of the difference's cancellation.
 void RateRow(const AdaptMem& am, int d, sunrealtype* row) {
   const int k = d - 1;
-  for (int l = 0; k + l - 2 <= am.order - 1 && l < kGammaTerms; ++l) {
+  for (int l = 0; k + l - 2 <= am.set.order - 1 && l < kGammaTerms; ++l) {
     const int m = k + l - 2;
-    for (int i = m + 1; i < am.order; ++i) {
+    for (int i = m + 1; i < am.set.order; ++i) {
       const sunrealtype sign = (i - m) % 2 == 0 ? -1 : 1;
-      row[i] += am.gamma[k][l] * Falling(i, m) * sign;
+      row[i] += am.set.gamma[k][l] * Falling(i, m) * sign;
     }
   }
 }
@@ -123,17 +123,17 @@ constexpr auto kRefreshWeightsFns = RefreshWeightsTable(std::make_index_sequence
 sunrealtype TopScale(const AdaptMem& am) {
   if (am.est_h == am.hlast) return am.est_scale;
   sunrealtype hp = 1;
-  for (int i = 0; i <= am.order; ++i) hp *= am.hlast;
-  return am.cerr * hp * am.pfac;
+  for (int i = 0; i <= am.set.order; ++i) hp *= am.hlast;
+  return am.set.cerr * hp * am.pfac;
 }
 
 // D_1 keeps its value (the velocity is no parasitic component) and moves its h-dependent part
 // from hmap to h with the remap's own terms (RemapWeights' values), from the history before it
-// is rebuilt. The terms come by k (AdaptCoefficients): those of D_1 first.
+// is rebuilt. The terms come by k (ComputeSetCoefficients): those of D_1 first.
 void MoveVelocity(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
   const int d = ce->degree;
-  for (int i = 0; i < am->nremap && am->remap[i].k == 1; ++i) {
-    const RemapTerm& r = am->remap[i];
+  for (int i = 0; i < am->set.nremap && am->set.remap[i].k == 1; ++i) {
+    const RemapTerm& r = am->set.remap[i];
     const sunrealtype c = r.gamma * PowerDifference(h, am->hmap, r.j);
     am->kernels.Axpy(c, 1 + r.j == d ? am->yd : ce->D[1 + r.j], ce->D[1]);
   }
@@ -158,7 +158,7 @@ void RefreshTables(AdaptMem* am, int d) {
 }
 
 bool RefreshHistory(CEodeMemRec* ce, AdaptMem* am, sunrealtype h) {
-  const int p = am->order;
+  const int p = am->set.order;
   if (!am->refresh || am->ndata < p || p < 2) return false;  // the table is not full yet
   const sunrealtype scale = TopScale(*am);
   if (scale == 0 || !std::isfinite(scale)) return false;

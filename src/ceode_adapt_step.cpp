@@ -35,12 +35,12 @@ void RemapTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype h, AdaptPosition* w) 
   if (h == am->hmap || RefreshHistory(ce, am, h)) return;
   const int d = ce->degree;
   RemapWeights(*am, d, h, w->rc);
-  for (int i = 0; i < am->nremap; ++i) {
-    const RemapTerm& r = am->remap[i];
+  for (int i = 0; i < am->set.nremap; ++i) {
+    const RemapTerm& r = am->set.remap[i];
     w->rY[i] = r.k + r.j == d ? am->yd : ce->D[r.k + r.j];
     w->rD[i] = ce->D[r.k];
   }
-  w->nremap = am->nremap;
+  w->nremap = am->set.nremap;
   am->hmap = h;
 }
 
@@ -60,8 +60,8 @@ void PositionTerms(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hprev,
   // history is remapped for the node's own step, as a refreshed one is.
   sunrealtype top_shift = 0;
   if (hmap != hprev) {
-    for (int i = 0; i < am.nremap; ++i) {
-      if (am.remap[i].k == d - 1) top_shift += am.remap[i].gamma * (hmap - hprev);
+    for (int i = 0; i < am.set.nremap; ++i) {
+      if (am.set.remap[i].k == d - 1) top_shift += am.set.remap[i].gamma * (hmap - hprev);
     }
   }
   const sunrealtype yd_coef = -tw[d - 1] * (top_shift + (1 - ce->params[0]) * ce->h);
@@ -197,14 +197,14 @@ void DerivativeWeights(CEodeMemRec* ce, AdaptMem* am) {
 // step stands in for the missing one: an overestimate while h is below the solution's time scale,
 // so the first step is tested too; none while the history is shorter still.
 void EstimateTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
-  const int p = am->order;
+  const int p = am->set.order;
   const int jmax = std::min(p - 1, am->ndata);
   w->ndiff = jmax;
   w->dd_data = am->dd_data;  // the differences' data: their table and the node's half of it
   const sunrealtype h = ce->h;
   if (h != am->est_h) {
     am->est_h = h;
-    am->est_scale = am->cerr * IntPow(h, p + 1) * am->pfac;
+    am->est_scale = am->set.cerr * IntPow(h, p + 1) * am->pfac;
   }
   w->scale = am->est_scale;
   w->est_kind = AdaptAfterF::kEstLast;
@@ -237,14 +237,14 @@ void EstimateNodeTerms(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, AdaptAfterF
     for (int j = 0; j < kMaxDegree; ++j) w->r[j] = 1 / (t - am->tnode[j]);
   }
   if (w->est_kind == AdaptAfterF::kEstCopy) {
-    w->est_src = am->order == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][jmax];
+    w->est_src = am->set.order == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][jmax];
   }
 }
 
 // The differences' vectors of EstimateTerms for the operations one by one (the serial pass reads
 // their data from dd_data).
 void DifferenceVectors(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
-  const int p = am->order;
+  const int p = am->set.order;
   for (int j = 1; j <= w->ndiff; ++j) {
     w->dnew[j - 1] = j == 1 ? ce->Dnew[2] : am->dd[1 - am->cur][j - 1];
     w->dold[j - 1] = j == 1 ? ce->D[2] : am->dd[am->cur][j - 1];
@@ -282,7 +282,7 @@ void NextPositionTerms(CEodeMemRec* ce, AdaptMem* am, AdaptAfterF* w) {
 // weights' kind only, with the pass they choose: most steps keep all three, and the fields stay.
 void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
   AdaptAfterF& w = am->after;
-  const int ndiff = std::min(am->order - 1, am->ndata);
+  const int ndiff = std::min(am->set.order - 1, am->ndata);
   if (ce->h == am->shape_h && ndiff == w.ndiff && weights == w.weights) return;
   am->shape_h = ce->h;
   w.D = ce->D;  // the arrays themselves: the buffers trade places inside them
@@ -369,8 +369,8 @@ void AffineStepWeights(const CEodeMemRec* ce, const AdaptMem& am, sunrealtype hn
   for (sunrealtype& c : yd) c /= h;
   const Co Dunmapped[kMaxDegree] = {D[0], D[1], D[2], D[3], D[4], D[5], D[6], D[7]};
   sunrealtype top_shift = 0;
-  for (int i = 0; i < am.nremap; ++i) {
-    const RemapTerm& r = am.remap[i];
+  for (int i = 0; i < am.set.nremap; ++i) {
+    const RemapTerm& r = am.set.remap[i];
     const sunrealtype c = r.gamma * (IntPow(hn, r.j) - IntPow(h, r.j));
     axpy(c, r.k + r.j == d ? yd : Dunmapped[r.k + r.j], &D[r.k]);
     if (r.k == d - 1) top_shift += r.gamma * (hn - h);

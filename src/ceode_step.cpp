@@ -756,7 +756,13 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
   }
   constexpr SolveFn kSolve[] = {SolveExplicit, SolveImplicit, SolvePC, SolveAuto, ConstrSolveStep};
   sm->solve = kSolve[static_cast<int>(sm->solve_kind)];
-  BuildPlans(ce, sm);  // in place or not depends on the solve
+  // In place or not depends on the solve. Error control steps with passes of its own
+  // (ceode_adapt_step.cpp), and a fixed step starts the method again: no plans then.
+  if (AdaptOn(ce)) {
+    NoPlans(sm);
+  } else {
+    BuildPlans(ce, sm);
+  }
   const bool serial = sm->fused && sm->serial;
   const bool mpi = sm->fused && sm->mpi;
   sm->update = serial ? UpdateOnSerial : (mpi ? UpdateOnMpi : UpdateOnReference);

@@ -95,6 +95,8 @@ struct StepMem {
 // ceode_step_plans.cpp: the six plans (and their kernels) from the current vectors, and which
 // backend runs them (in_place_active, serial, mpi, len, xin_ready). Reads sm->solve_kind.
 void BuildPlans(CEodeMemRec* ce, StepMem* sm);
+// None, for a method whose steps error control takes: no kernel, no serial or MPI backend.
+void NoPlans(StepMem* sm);
 
 }  // namespace ceode
 

@@ -169,4 +169,10 @@ void BuildPlans(CEodeMemRec* ce, StepMem* sm) {
   }
 }
 
+void NoPlans(StepMem* sm) {
+  sm->in_place_active = sm->xin_ready = sm->leap = false;
+  sm->serial = sm->mpi = false;
+  for (int i = 0; i < kNumPlans; ++i) sm->kernels[i] = sm->kernels_xin[i] = nullptr;
+}
+
 }  // namespace ceode

@@ -756,6 +756,45 @@ TEST(ErrorControl, FixedStepAfterTolerancesGivesTheFixedRunsBits) {
   EXPECT_EQ(out[0], out[1]);
 }
 
+// A memory keeps the coefficients error control derives from its set between starts; a new set
+// (named, then given by its parameters, then the first again) must bring its own. Each run in
+// the one memory ends on the bits of a new memory with that set.
+TEST(ErrorControl, AMemoryThatChangesItsSetRunsAsANewMemoryWithThatSet) {
+  struct SetCase {
+    int degree;
+    std::vector<sunrealtype> params;
+  };
+  std::vector<SetCase> cases;
+  for (const char* name : {"G7_O7", "G6_O5"}) {
+    for (int i = 0; i < ceode::NumMethodSets(); ++i) {
+      const ceode::MethodSet& m = ceode::MethodSetAt(i);
+      if (std::string(m.name) == name) {
+        cases.push_back({m.degree, {m.params.begin(), m.params.begin() + m.degree - 1}});
+      }
+    }
+  }
+  ASSERT_EQ(cases.size(), 2U);
+  SetCase user = cases[1];
+  user.params[0] *= 1 + 1e-3;  // a set of no name: its coefficients are computed
+  cases.push_back(user);
+  cases.push_back(cases[0]);
+  const auto run = [](void* mem, N_Vector x, N_Vector v, const SetCase& c) {
+    KeplerSetup().Load(x, v);
+    EXPECT_EQ(CEodeReInit(mem, 0, x, v), CE_SUCCESS);
+    EXPECT_EQ(CEodeSetMethod(mem, c.degree, c.params.data()), CE_SUCCESS);
+    sunrealtype t = 0;
+    EXPECT_EQ(CEodeEvolve(mem, 5, x, v, &t, CE_NORMAL), CE_SUCCESS);
+    return std::vector<double>{NV_Ith_S(x, 0), NV_Ith_S(x, 1)};
+  };
+  KeplerMem shared("G3_CD", 1e-8);
+  for (const SetCase& c : cases) {
+    KeplerMem fresh("G3_CD", 1e-8);
+    const std::vector<double> alone = run(fresh.mem.get(), fresh.x.get(), fresh.v.get(), c);
+    const std::vector<double> kept = run(shared.mem.get(), shared.x.get(), shared.v.get(), c);
+    EXPECT_EQ(kept, alone) << "degree " << c.degree << ", p_0 = " << c.params[0];
+  }
+}
+
 // ---- the fixed-step bounds -------------------------------------------------------------------
 
 // The library's default bounds (docs/api.md, CEodeSetFixedStepBounds): [0.97, 1.5] up to degree 6,
