@@ -587,9 +587,8 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
   sm->fast_until = sm->lean_one ? span : 0;
   sm->direct_until = sm->lean_one ? 0 : span;
   const sunrealtype target = ce->tcur + ce->h;
-  const bool direct = SerialOfLength(xout, ce->n) && SerialOfLength(vout, ce->n) &&
-                      tret != nullptr && std::isfinite(tout) && ce->started && ce->step->one_call &&
-                      DirectConfiguration(ce) && StepsRemain(ce, target);
+  const bool direct = FastArguments(ce, tout, xout, vout, tret) && ce->started &&
+                      ce->step->one_call && DirectConfiguration(ce) && StepsRemain(ce, target);
   if (!direct) return EvolveOneStepGeneral(ce, tout, xout, vout, tret);
   return DirectOneStep(ce, target, xout, vout, tret);
 }
