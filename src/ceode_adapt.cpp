@@ -282,7 +282,7 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
 namespace {
 
 bool CloneOnce(N_Vector* v, N_Vector tmpl) {
-  if (*v == nullptr) *v = N_VClone(tmpl);
+  if (*v == nullptr) *v = CloneVector(tmpl);
   return *v != nullptr;
 }
 
@@ -840,7 +840,7 @@ int CEodeSVtolerances(void* mem, sunrealtype reltol, N_Vector abstol) {
     return ProcessError(ce, CE_ILL_INPUT, __func__, "abstol has a negative or non-finite entry.");
   }
   AdaptMem& am = *ce->adapt;
-  if (am.atol_vec == nullptr) am.atol_vec = N_VClone(ce->xcur);
+  if (am.atol_vec == nullptr) am.atol_vec = ceode::CloneVector(ce->xcur);
   if (am.atol_vec == nullptr) return ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
   N_VScale(1, abstol, am.atol_vec);
   am.atol_min = N_VMin(abstol);

@@ -532,9 +532,9 @@ int AllocWork(CEodeMemRec* ce, ConWork* w, const char* func) {
   }
   N_Vector* svecs[] = {&w->xtrial, &w->fval, &w->r1, &w->delta, &w->vtmp,
                        &w->inc,    &w->xpt,  &w->a0, &w->vbase};
-  for (N_Vector* v : svecs) *v = N_VClone(ce->xcur);
+  for (N_Vector* v : svecs) *v = CloneVector(ce->xcur);
   N_Vector* lvecs[] = {&w->lam, &w->lam_prev, &w->s, &w->gam};
-  for (N_Vector* v : lvecs) *v = N_VClone(ce->con.lambda);
+  for (N_Vector* v : lvecs) *v = CloneVector(ce->con.lambda);
   bool ok = w->Gt != nullptr && w->Gh != nullptr && (w->J != nullptr || !ce->vel_dependent);
   for (N_Vector* v : svecs) ok = ok && *v != nullptr;
   for (N_Vector* v : lvecs) ok = ok && *v != nullptr;
@@ -748,8 +748,8 @@ int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi, CEo
                                "The constraint template vector is empty: its length is nc.");
   }
   ceode::ConstrFree(ce);
-  ce->con.lambda = N_VClone(phi_template);
-  ce->con.phi = N_VClone(phi_template);
+  ce->con.lambda = ceode::CloneVector(phi_template);
+  ce->con.phi = ceode::CloneVector(phi_template);
   if (ce->con.lambda == nullptr || ce->con.phi == nullptr) {
     ceode::ConstrFree(ce);
     return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");

@@ -100,7 +100,7 @@ void Destroy(FirstOrder* fo) {
 bool Build(FirstOrder* fo, N_Vector y0, SUNContext ctx) {
   if (fo->many) {
     N_Vector parts[2] = {N_VGetSubvector_ManyVector(y0, 0), N_VGetSubvector_ManyVector(y0, 1)};
-    fo->xdot = N_VClone(parts[0]);
+    fo->xdot = CloneVector(parts[0]);
     fo->y = N_VNew_ManyVector(2, parts, ctx);
     fo->ydot = N_VNew_ManyVector(2, parts, ctx);
     return fo->xdot != nullptr && fo->y != nullptr && fo->ydot != nullptr;

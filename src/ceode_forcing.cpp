@@ -56,7 +56,7 @@ void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const s
 
 // *w cloned from CEODE's vectors if missing; false: out of memory.
 bool Clone(const CEodeMemRec* ce, N_Vector* w) {
-  if (*w == nullptr) *w = N_VClone(ce->xcur);
+  if (*w == nullptr) *w = CloneVector(ce->xcur);
   return *w != nullptr;
 }
 

@@ -87,7 +87,7 @@ int AllocWork(CEodeMemRec* ce, const char* func) {
   auto* g = new GuardWork;
   ce->guard.work = g;
   for (N_Vector* v : {&g->q_prev, &g->q, &g->w, &g->mw, &g->xp, &g->f0}) {
-    *v = N_VClone(ce->xcur);
+    *v = CloneVector(ce->xcur);
     if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
   }
   g->alpha.reserve(kMaxLanczos);
@@ -288,7 +288,7 @@ sunrealtype Orthogonalise(GuardWork* g, int k, int col) {
 // Arnoldi vectors are cloned when first needed: a symmetric f never allocates them.
 int EnsureBasis(CEodeMemRec* ce, GuardWork* g, int k, const char* func) {
   while (static_cast<int>(g->basis.size()) < k) {
-    N_Vector v = N_VClone(ce->xcur);
+    N_Vector v = CloneVector(ce->xcur);
     if (v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (guard).");
     g->basis.push_back(v);
   }
@@ -789,7 +789,7 @@ int CEodeSetGuardMass(void* mem, N_Vector mass) {
   } else if ((flag = ceode::CheckGuardMass(ce, __func__, mass)) != CE_SUCCESS) {
     return flag;
   } else {
-    if (g->wts == nullptr) g->wts = N_VClone(ce->xcur);
+    if (g->wts == nullptr) g->wts = ceode::CloneVector(ce->xcur);
     if (g->wts == nullptr) return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
     N_VScale(1, mass, g->wts);
   }

@@ -60,9 +60,9 @@ int Alloc(IcWork* w, const char* func) {
   CEodeMemRec* ce = w->ce;
   w->G = MakeG(ce);
   N_Vector* cvecs[] = {&w->phi, &w->phit, &w->ptmp, &w->lam};
-  for (N_Vector* v : cvecs) *v = N_VClone(ce->con.phi);
+  for (N_Vector* v : cvecs) *v = CloneVector(ce->con.phi);
   N_Vector* svecs[] = {&w->dx, &w->xsave, &w->vsave};
-  for (N_Vector* v : svecs) *v = N_VClone(ce->xcur);
+  for (N_Vector* v : svecs) *v = CloneVector(ce->xcur);
   bool ok = w->G != nullptr;
   for (N_Vector* v : cvecs) ok = ok && *v != nullptr;
   for (N_Vector* v : svecs) ok = ok && *v != nullptr;

@@ -508,6 +508,11 @@ void VelocityOffset(int d, const StepCoeffs& co, N_Vector* D, N_Vector V0);
 void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_Vector xnext,
                      N_Vector xnew, UpdatePlan* plan);
 
+// ceode_vectors.cpp
+// A new vector like tmpl, for the memory's own use: N_VClone's, or for NVECTOR_SERIAL the same
+// vector in one allocation (N_VDestroy frees it; its clones are made the same way).
+N_Vector CloneVector(N_Vector tmpl);
+
 // ceode_start.cpp
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur, then ChooseStep
 // Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of

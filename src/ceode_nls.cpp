@@ -138,7 +138,7 @@ void ErrorWeights(CEodeMemRec* ce) {
 
 int NlsInitialize(CEodeMemRec* ce, const char* func) {
   if (!ce->vel_dependent || HasConstraints(ce)) return CE_SUCCESS;
-  if (ce->nls.delta == nullptr && (ce->nls.delta = N_VClone(ce->ycor)) == nullptr) {
+  if (ce->nls.delta == nullptr && (ce->nls.delta = CloneVector(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   if (ce->nls.NLS == nullptr) {

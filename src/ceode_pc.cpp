@@ -352,7 +352,7 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
-  if (ce->pc.dir == nullptr && (ce->pc.dir = N_VClone(ce->ycor)) == nullptr) {
+  if (ce->pc.dir == nullptr && (ce->pc.dir = CloneVector(ce->ycor)) == nullptr) {
     return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   const int flag = EstimateCoupling(ce, func);

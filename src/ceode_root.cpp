@@ -84,8 +84,8 @@ int StartRoots(CEodeMemRec* ce, CERootMem* rm, sunrealtype t, const char* func) 
   if (rm->x == nullptr || N_VGetLength(rm->x) != ce->n) {
     if (rm->x != nullptr) N_VDestroy(rm->x);
     if (rm->v != nullptr) N_VDestroy(rm->v);
-    rm->x = N_VClone(ce->xcur);
-    rm->v = N_VClone(ce->xcur);
+    rm->x = CloneVector(ce->xcur);
+    rm->v = CloneVector(ce->xcur);
     if (rm->x == nullptr || rm->v == nullptr) {
       return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory (root finding vectors).");
     }

@@ -349,7 +349,7 @@ int SaddleInit(CEodeMemRec* ce, Saddle* s, const char* func) {
     return ProcessError(ce, CE_LINIT_FAIL, func,
                         "With constraints the mass matrix must be dense or sparse.");
   }
-  s->sol = N_VClone(s->b);
+  s->sol = CloneVector(s->b);
   if (s->sol == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   return InitLinearSolver(ce, s->LS, func);
 }

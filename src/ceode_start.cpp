@@ -14,7 +14,7 @@ int AllocVectors(CEodeMemRec* ce, N_Vector tmpl) {
   N_Vector* all[] = {&ce->xcur, &ce->xnext, &ce->xnew, &ce->vtmp, &ce->atmp,    &ce->tmp1,
                      &ce->tmp2, &ce->tmp3,  &ce->D[1], &ce->D[2], &ce->Dnew[1], &ce->Dnew[2]};
   for (N_Vector* v : all) {
-    *v = N_VClone(tmpl);
+    *v = CloneVector(tmpl);
     if (*v == nullptr) return CE_MEM_FAIL;
   }
   return CE_SUCCESS;
@@ -26,14 +26,14 @@ bool NeedsSolverWork(const CEodeMemRec* ce) {
          HasConstraints(ce);
 }
 
-// Each N_VClone costs about a thousand instructions in an unoptimised SUNDIALS build (the
-// operation table is copied entry by entry): an explicit run without a mass matrix, linear or
-// nonlinear solver never clones these seven.
+// The solvers' work vectors: an explicit run without a mass matrix, linear or nonlinear solver
+// never clones these seven (a vector of another type than NVECTOR_SERIAL costs a full N_VClone,
+// CloneVector).
 int AllocSolverWork(CEodeMemRec* ce, const char* func) {
   if (ce->zero != nullptr) return CE_SUCCESS;
   N_Vector* work[] = {&ce->ftmp, &ce->V0, &ce->apred, &ce->ycor, &ce->ewt, &ce->lstmp, &ce->zero};
   for (N_Vector* v : work) {
-    if (*v == nullptr) *v = N_VClone(ce->xcur);
+    if (*v == nullptr) *v = CloneVector(ce->xcur);
     if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   N_VConst(0, ce->zero);
@@ -193,7 +193,7 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
 namespace {
 
 bool CloneIfMissing(N_Vector* v, N_Vector tmpl) {
-  if (*v == nullptr) *v = N_VClone(tmpl);
+  if (*v == nullptr) *v = CloneVector(tmpl);
   return *v != nullptr;
 }
 

@@ -74,9 +74,9 @@ int SplitVector(Stepper* st, N_Vector y, Views& view, Halves* out, const char* f
 }
 
 int Allocate(Stepper* st, N_Vector y, const char* func) {
-  st->y_own = N_VClone(y);
-  st->ytmp = N_VClone(y);
-  st->u = N_VClone(st->ce->xcur);
+  st->y_own = CloneVector(y);
+  st->ytmp = CloneVector(y);
+  st->u = CloneVector(st->ce->xcur);
   if (st->y_own == nullptr || st->ytmp == nullptr || st->u == nullptr) {
     return ProcessError(st->ce, CE_MEM_FAIL, func, "Out of memory.");
   }

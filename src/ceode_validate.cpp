@@ -51,10 +51,9 @@ bool StepCoeffsUsable(int degree, const sunrealtype* params, sunrealtype h, bool
                       size_t len) {
   StepCoeffs co;
   ComputeStepCoeffs(degree, params, h, &co);
-  sunrealtype fact = 1;
+  sunrealtype hp = 1;
   for (int i = 1; i <= degree; ++i) {
-    fact *= i;
-    const sunrealtype hp = std::pow(h, i) / fact;
+    hp = hp * h / i;  // h^i / i! as a running product
     if (!FiniteNonzero(hp)) {
       SetWhy(why, len, "h^%d/%d! = %g is %s in floating point", i, i, static_cast<double>(hp),
              hp == 0 ? "zero" : "not finite");

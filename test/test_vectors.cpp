@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "ceode_impl.hpp"
 #include "test_util.hpp"
 
 namespace {
@@ -182,6 +183,59 @@ TEST(SerialAndOpenMP, GiveTheSameNumbersOnTheDampedForcedOscillatorWithFixedPoin
   std::printf("[ vectors  ] G5 scalar fixed point: max relative difference = %.3e (%s)\n",
               cmp.max_rel, cmp.bitwise ? "bitwise identical" : "not bitwise identical");
   EXPECT_LE(cmp.max_rel, 1e-14);
+}
+
+// The vectors a memory makes for itself (ceode::CloneVector): a serial template gives a serial
+// vector in one allocation that any caller (SUNDIALS' solvers, the user's f) may clone, clone
+// empty, fill and destroy as any NVECTOR_SERIAL vector; the sanitizer pass checks the frees.
+TEST(MemoryVectors, AreSerialVectorsThatCloneAndDestroyAsAnyOther) {
+  Context ctx;
+  Vector tmpl(N_VNew_Serial(5, ctx));
+  ASSERT_EQ(N_VEnableFusedOps_Serial(tmpl.get(), SUNTRUE), 0);
+  N_VConst(1, tmpl.get());
+  N_Vector v = ceode::CloneVector(tmpl.get());
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(N_VGetVectorID(v), SUNDIALS_NVEC_SERIAL);
+  EXPECT_EQ(N_VGetLength(v), 5);
+  EXPECT_NE(N_VGetArrayPointer(v), N_VGetArrayPointer(tmpl.get()));
+  EXPECT_EQ(v->ops->nvlinearcombination, tmpl.get()->ops->nvlinearcombination);
+  EXPECT_EQ(v->sunctx, tmpl.get()->sunctx);
+  for (int i = 0; i < 5; ++i) N_VGetArrayPointer(v)[i] = i;
+  N_VLinearSum(1, tmpl.get(), 2, v, v);
+  EXPECT_EQ(N_VGetArrayPointer(v)[4], 9);
+  N_Vector w = N_VClone(v);
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(N_VGetLength(w), 5);
+  EXPECT_NE(N_VGetArrayPointer(w), N_VGetArrayPointer(v));
+  N_VScale(2, v, w);
+  EXPECT_EQ(N_VGetArrayPointer(w)[4], 18);
+  N_Vector e = N_VCloneEmpty(w);
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(N_VGetArrayPointer(e), nullptr);
+  sunrealtype buf[5] = {};
+  N_VSetArrayPointer(buf, e);
+  N_VConst(3, e);
+  EXPECT_EQ(buf[2], 3);
+  N_VDestroy(e);
+  N_VDestroy(w);
+  N_VDestroy(v);
+  Vector empty(N_VNew_Serial(0, ctx));
+  N_Vector z = ceode::CloneVector(empty.get());
+  ASSERT_NE(z, nullptr);
+  EXPECT_EQ(N_VGetLength(z), 0);
+  N_VDestroy(z);
+}
+
+// Vectors of other types are N_VClone's own.
+TEST(MemoryVectors, OfOtherTypesAreTheTypesOwnClones) {
+  Context ctx;
+  Vector tmpl(MakeOpenMP(4, ctx));
+  N_Vector v = ceode::CloneVector(tmpl.get());
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(N_VGetVectorID(v), SUNDIALS_NVEC_OPENMP);
+  EXPECT_EQ(v->ops->nvclone, tmpl.get()->ops->nvclone);
+  EXPECT_EQ(v->ops->nvdestroy, tmpl.get()->ops->nvdestroy);
+  N_VDestroy(v);
 }
 
 }  // namespace
