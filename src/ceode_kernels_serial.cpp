@@ -1040,13 +1040,15 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
       tk.compnew = SerialData(cs.compnew[cb.level]);
     }
     tk.out = SerialData(cb.out);
-    for (int j = 0; j < tk.m; ++j) tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
     tk.form = FormOf(tk.m, tk.c);
     // In place: the accumulated quantity written over itself, entry by entry after it is read.
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
     tk.exact = tk.old != nullptr && ExactIncrement(cb.level);
     const int own = !tk.in_place ? -1 : (tk.lead_old ? 0 : tk.m - 1);  // read before written
-    for (int j = 0; j < tk.m; ++j) distinct = distinct && (j == own || tk.X[j] != tk.out);
+    for (int j = 0; j < tk.m; ++j) {  // no short-circuit: a plan is built every start
+      tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
+      distinct &= j == own || tk.X[j] != tk.out;
+    }
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
