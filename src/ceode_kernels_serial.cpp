@@ -1225,6 +1225,9 @@ bool RefreshPlanCoefficients(const UpdatePlan& plan, KernelPlan* kp) {
     if (!kp->serial) continue;
     FusedTerms& tk = kp->fused.terms[k];
     std::copy(cb.c, cb.c + cb.m, tk.c + (tk.lead_old ? 1 : 0));  // the accumulated term's 1 stays
+    if (kp->fused.shape != 0) {  // the shaped kernels read the weights' pairs
+      for (int j = 0; j < tk.m; ++j) tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
+    }
     same_forms = same_forms && FormOf(tk.m, tk.c) == tk.form;
   }
   return same_forms;

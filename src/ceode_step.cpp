@@ -429,7 +429,8 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     e.over = over;
     e.carried = kLeap && over;
     e.moved += over ? 0 : 1;
-    ip = (ip + (over ? 3 : 1)) % kNumPlans;  // over: the positions keep their buffers
+    ip += over ? 3 : 1;                    // over: the positions keep their buffers
+    if (ip >= kNumPlans) ip -= kNumPlans;  // a compare, where % 6 is a multiply and shifts
   }
   return LeanExit(ce, sm, ip, e, taken);
 }
