@@ -26,9 +26,8 @@ bool NeedsSolverWork(const CEodeMemRec* ce) {
          HasConstraints(ce);
 }
 
-// The solvers' work vectors: an explicit run without a mass matrix, linear or nonlinear solver
-// never clones these seven (a vector of another type than NVECTOR_SERIAL costs a full N_VClone,
-// CloneVector).
+// The solvers' work vectors, cloned by the (re)start that needs them: an explicit run without a
+// mass matrix, linear or nonlinear solver makes none of these seven.
 int AllocSolverWork(CEodeMemRec* ce, const char* func) {
   if (ce->zero != nullptr) return CE_SUCCESS;
   N_Vector* work[] = {&ce->ftmp, &ce->V0, &ce->apred, &ce->ycor, &ce->ewt, &ce->lstmp, &ce->zero};

@@ -28,6 +28,8 @@ struct SerialBlock {
 };
 constexpr std::size_t kDataOffset =
     (sizeof(SerialBlock) + kDataAlign - 1) / kDataAlign * kDataAlign;
+// The vector is the allocation's start: freeing it frees the block.
+static_assert(offsetof(SerialBlock, vec) == 0, "the vector opens its block");
 
 void DestroyBlock(N_Vector v) { std::free(v); }
 N_Vector CloneBlock(N_Vector w);
