@@ -719,6 +719,39 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNam
   EXPECT_GE(shaped, 3 * 9) << "plans with a kernel of their own";
 }
 
+// A plan refreshed to another h (RefreshPlanCoefficients, as error control does when h changes)
+// must give the outputs of the reference at that h bit for bit: the weights and the pairs of them
+// that the shaped kernels read (a refresh that kept the old pairs fails at 2 and 5 entries).
+TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceAfterANewStepsWeights) {
+  int refreshed = 0;
+  for (int s = 0; s < ceode::NumMethodSets(); ++s) {
+    const ceode::MethodSet& set = ceode::MethodSetAt(s);
+    const int d = set.degree;
+    ceode::StepCoeffs co;
+    ceode::ComputeStepCoeffs(d, set.params.data(), 0.013, &co);
+    Fill();
+    ceode::UpdateReference(Plan(d, co, false), {});
+    std::vector<std::vector<sunrealtype>> ref;  // x(t + h), then level 1 .. d - 1
+    ref.push_back(Entries(kVectors - 1));
+    for (int k = 1; k < d; ++k) ref.push_back(Entries(NewSlot(d, k, false)));
+    ceode::KernelPlan kp;
+    kp.plan = Plan(d, Coeffs(set), false);
+    ceode::PreparePlan(true, &kp);
+    ASSERT_TRUE(kp.serial) << set.name;
+    if (!ceode::RefreshPlanCoefficients(Plan(d, co, false), &kp)) continue;  // another form
+    ++refreshed;
+    Fill();
+    ceode::RunPlan(kp, GetParam());
+    long differing = 0;
+    for (int k = 0; k < d; ++k) {
+      const std::vector<sunrealtype> got = Entries(k == 0 ? kVectors - 1 : NewSlot(d, k, false));
+      for (size_t i = 0; i < got.size(); ++i) differing += got[i] != ref[k][i] ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0) << set.name;
+  }
+  EXPECT_GE(refreshed, 9) << "plans refreshed in place";
+}
+
 // A plan of a named set's shape whose first sum that reads a history vector also read by a later
 // sum reads it from another vector (G3_CD's plan has no such vector): the roles do not match
 // (RolesMatch), and the shape's kernel that reads every term through its pointer (UpdatePairs) runs
