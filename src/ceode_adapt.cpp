@@ -281,22 +281,18 @@ int AdaptWeights(CEodeMemRec* ce, N_Vector x, const char* func) {
 
 namespace {
 
-bool CloneOnce(N_Vector* v, N_Vector tmpl) {
-  if (*v == nullptr) *v = CloneVector(tmpl);
-  return *v != nullptr;
-}
-
 int AllocAdaptVectors(CEodeMemRec* ce, const char* func) {
   AdaptMem& am = *ce->adapt;
   const bool ahead = am.kernels.serial;  // the next position in the serial pass after f
-  bool ok = CloneOnce(&am.ewt, ce->xcur) && CloneOnce(&am.ewt_next, ce->xcur) &&
-            (!ahead || (CloneOnce(&am.ewt_spec, ce->xcur) && CloneOnce(&am.xspec, ce->xcur))) &&
-            CloneOnce(&am.ele, ce->xcur) && CloneOnce(&am.est, ce->xcur) &&
-            CloneOnce(&am.yd, ce->xcur) && CloneOnce(&am.yd_next, ce->xcur);
+  bool ok =
+      CloneMissing(&am.ewt, ce->xcur) && CloneMissing(&am.ewt_next, ce->xcur) &&
+      (!ahead || (CloneMissing(&am.ewt_spec, ce->xcur) && CloneMissing(&am.xspec, ce->xcur))) &&
+      CloneMissing(&am.ele, ce->xcur) && CloneMissing(&am.est, ce->xcur) &&
+      CloneMissing(&am.yd, ce->xcur) && CloneMissing(&am.yd_next, ce->xcur);
   if (ok) N_VConst(0, am.ele);
   for (int b = 0; b < 2; ++b) {
     for (int j = 1; ok && j <= std::max(1, am.set.order - 1); ++j)
-      ok = CloneOnce(&am.dd[b][j], ce->xcur);
+      ok = CloneMissing(&am.dd[b][j], ce->xcur);
   }
   return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
 }

@@ -54,12 +54,6 @@ void CombineForcing(sunrealtype a, N_Vector base, sunrealtype s, int nw, const s
   N_VLinearCombination(m, c, X, out);
 }
 
-// *w cloned from CEODE's vectors if missing; false: out of memory.
-bool Clone(const CEodeMemRec* ce, N_Vector* w) {
-  if (*w == nullptr) *w = CloneVector(ce->xcur);
-  return *w != nullptr;
-}
-
 // The forced right-hand side g(t, x, u - r_x) + r_v + r_x' (data: the memory).
 int ForcedRhs(sunrealtype t, N_Vector x, N_Vector u, N_Vector f, void* mem) {
   auto* ce = static_cast<CEodeMemRec*>(mem);
@@ -120,7 +114,7 @@ int SetForcing(CEodeMemRec* ce, Forcing* fc, sunrealtype tshift, sunrealtype tsc
                         static_cast<double>(tshift), static_cast<double>(tscale));
   } else if (n > 1 && !(tscale != 0)) {
     flag = ProcessError(ce, CE_ILL_INPUT, func, "tscale = 0 with a non-constant forcing.");
-  } else if (n > 0 && !Clone(ce, &fc->vg)) {
+  } else if (n > 0 && !CloneMissing(&fc->vg, ce->xcur)) {
     flag = ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   fc->n = flag == CE_SUCCESS ? n : 0;
@@ -163,10 +157,12 @@ void KeepEnd(CEodeMemRec* ce, Forcing* fc) {
   if (ce->vel_dependent || ce->zero_start || !ce->started) return;
   const sunrealtype t = ce->tcur;
   for (int k = 2; k < ce->degree; ++k) {
-    if (!Clone(ce, &e.g[k])) return;
+    if (!CloneMissing(&e.g[k], ce->xcur)) return;
     ForcingAccel(*fc, t, k - 2, ce->D[k], -1, e.g[k]);
   }
-  if (!Clone(ce, &e.rx) || !Clone(ce, &e.jump) || !Clone(ce, &e.xp)) return;
+  if (!CloneMissing(&e.rx, ce->xcur) || !CloneMissing(&e.jump, ce->xcur) ||
+      !CloneMissing(&e.xp, ce->xcur))
+    return;
   ForcingX(*fc, t, 0, nullptr, 1, e.rx);
   e.t = t;
   e.degree = ce->degree;

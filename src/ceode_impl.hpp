@@ -512,6 +512,8 @@ void BuildUpdatePlan(int d, const StepCoeffs& co, N_Vector* D, N_Vector* Dn, N_V
 // A new vector like tmpl, for the memory's own use: N_VClone's, or for NVECTOR_SERIAL the same
 // vector in one allocation (N_VDestroy frees it; its clones are made the same way).
 N_Vector CloneVector(N_Vector tmpl);
+// *v = CloneVector(tmpl) unless *v exists; false: out of memory.
+bool CloneMissing(N_Vector* v, N_Vector tmpl);
 
 // ceode_start.cpp
 int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur, then ChooseStep

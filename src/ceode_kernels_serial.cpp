@@ -1011,6 +1011,15 @@ bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
 
 // Each combination with its accumulated term (or, compensated, minus its compensation)
 // appended, exactly as RunCombo hands it to Combine.
+namespace {
+
+// The weights twice (c2), which the shaped kernels read as pairs (ShapedSumPair).
+void PairWeights(FusedTerms* tk) {
+  for (int j = 0; j < tk->m; ++j) tk->c2[j][0] = tk->c2[j][1] = tk->c[j];
+}
+
+}  // namespace
+
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp) {
   fp->n = plan.n;
   bool distinct = true;  // no sum writes a vector it reads (the kernels rely on it)
@@ -1045,10 +1054,8 @@ bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* f
     tk.in_place = cb.old != nullptr && cb.old == cb.out && !cs.on;
     tk.exact = tk.old != nullptr && ExactIncrement(cb.level);
     const int own = !tk.in_place ? -1 : (tk.lead_old ? 0 : tk.m - 1);  // read before written
-    for (int j = 0; j < tk.m; ++j) {  // no short-circuit: a plan is built every start
-      tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
-      distinct &= j == own || tk.X[j] != tk.out;
-    }
+    PairWeights(&tk);
+    for (int j = 0; j < tk.m; ++j) distinct &= j == own || tk.X[j] != tk.out;
     distinct = distinct && (tk.old == nullptr ||
                             (tk.old != tk.out && tk.compnew != tk.out && tk.compnew != tk.old));
   }
@@ -1225,9 +1232,7 @@ bool RefreshPlanCoefficients(const UpdatePlan& plan, KernelPlan* kp) {
     if (!kp->serial) continue;
     FusedTerms& tk = kp->fused.terms[k];
     std::copy(cb.c, cb.c + cb.m, tk.c + (tk.lead_old ? 1 : 0));  // the accumulated term's 1 stays
-    if (kp->fused.shape != 0) {  // the shaped kernels read the weights' pairs
-      for (int j = 0; j < tk.m; ++j) tk.c2[j][0] = tk.c2[j][1] = tk.c[j];
-    }
+    if (kp->fused.shape != 0) PairWeights(&tk);  // only the shaped kernels read the pairs
     same_forms = same_forms && FormOf(tk.m, tk.c) == tk.form;
   }
   return same_forms;

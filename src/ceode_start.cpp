@@ -32,8 +32,7 @@ int AllocSolverWork(CEodeMemRec* ce, const char* func) {
   if (ce->zero != nullptr) return CE_SUCCESS;
   N_Vector* work[] = {&ce->ftmp, &ce->V0, &ce->apred, &ce->ycor, &ce->ewt, &ce->lstmp, &ce->zero};
   for (N_Vector* v : work) {
-    if (*v == nullptr) *v = CloneVector(ce->xcur);
-    if (*v == nullptr) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
+    if (!CloneMissing(v, ce->xcur)) return ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
   }
   N_VConst(0, ce->zero);
   return CE_SUCCESS;
@@ -191,24 +190,19 @@ int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, 
 
 namespace {
 
-bool CloneIfMissing(N_Vector* v, N_Vector tmpl) {
-  if (*v == nullptr) *v = CloneVector(tmpl);
-  return *v != nullptr;
-}
-
 // The derivative vectors of the degree (and their compensations) exist once per degree.
 int AllocHistory(CEodeMemRec* ce, const char* func) {
   const int d = ce->degree;
   bool ok = true;
   for (int k = 1; k < d; ++k) {
-    ok = ok && CloneIfMissing(&ce->D[k], ce->xcur) && CloneIfMissing(&ce->Dnew[k], ce->xcur);
+    ok = ok && CloneMissing(&ce->D[k], ce->xcur) && CloneMissing(&ce->Dnew[k], ce->xcur);
   }
   for (int k = 0; ce->compensated && k <= d - 2; ++k) {
-    ok = ok && CloneIfMissing(&ce->comp[k], ce->xcur) && CloneIfMissing(&ce->compnew[k], ce->xcur);
+    ok = ok && CloneMissing(&ce->comp[k], ce->xcur) && CloneMissing(&ce->compnew[k], ce->xcur);
     if (ok) N_VConst(0, ce->comp[k]);
   }
   for (int k = 0; ce->compensated && k < kCompWork; ++k) {
-    ok = ok && CloneIfMissing(&ce->compwork[k], ce->xcur);
+    ok = ok && CloneMissing(&ce->compwork[k], ce->xcur);
   }
   return ok ? CE_SUCCESS : ProcessError(ce, CE_MEM_FAIL, func, "Out of memory.");
 }

@@ -68,4 +68,9 @@ N_Vector CloneVector(N_Vector tmpl) {
   return NewBlock(tmpl, true);
 }
 
+bool CloneMissing(N_Vector* v, N_Vector tmpl) {
+  if (*v == nullptr) *v = CloneVector(tmpl);
+  return *v != nullptr;
+}
+
 }  // namespace ceode
