@@ -38,28 +38,13 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
   return flag;
 }
 
-namespace {
-
-// Access's report, out of line: the guard itself is two tests.
-__attribute__((noinline, cold)) void AccessFailed(CEodeMemRec* ce, const char* func) {
+int AccessFailed(CEodeMemRec* ce, const char* func) {
   if (ce == nullptr) {
-    ProcessError(nullptr, CE_MEM_NULL, func,
-                 "The CEODE memory is NULL: create it with CEodeCreate first.");
-    return;
+    return ProcessError(nullptr, CE_MEM_NULL, func,
+                        "The CEODE memory is NULL: create it with CEodeCreate first.");
   }
-  ProcessError(ce, CE_NO_MALLOC, func,
-               "The CEODE memory is not initialised: call CEodeInit first.");
-}
-
-}  // namespace
-
-int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init) {
-  *ce = static_cast<CEodeMemRec*>(mem);
-  if (*ce != nullptr && (!need_init || (*ce)->initialized)) return CE_SUCCESS;
-  // The flag here, not AccessFailed's: the caller's compiler sees that it is never CE_SUCCESS
-  // and keeps nothing live across the report (CEodeEvolve's entry is then the two tests).
-  AccessFailed(*ce, func);
-  return *ce == nullptr ? CE_MEM_NULL : CE_NO_MALLOC;
+  return ProcessError(ce, CE_NO_MALLOC, func,
+                      "The CEODE memory is not initialised: call CEodeInit first.");
 }
 
 void Restart(CEodeMemRec* ce) {
@@ -402,6 +387,7 @@ int InitProblem(CEodeMemRec* ce, const char* func, CEodeRhsFn f, sunrealtype t0,
   if (flag != CE_SUCCESS) return ProcessError(ce, flag, func, "Out of memory.");
   ce->n = N_VGetLength(x0);
   ce->f = f;
+  SelectRhs(ce);
   ce->initialized = true;
   PcSetVelocityRequest(ce, ce->pc.vel_request);  // a new problem: its f is probed anew
   return CEodeReInit(ce, t0, x0, v0);

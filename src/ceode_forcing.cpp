@@ -84,11 +84,10 @@ int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f) 
 
 void SelectRhs(CEodeMemRec* ce) {
   const Forcing* fc = ce->adapters.forcing;
-  if (fc != nullptr && fc->n > 0) {
-    ce->adapters.rhs = ForcedRhs;
-  } else {
-    ce->adapters.rhs = ce->adapters.first_order != nullptr ? FirstOrderRhs : nullptr;
-  }
+  CEodeRhsFn adapter = ce->adapters.first_order != nullptr ? FirstOrderRhs : nullptr;
+  if (fc != nullptr && fc->n > 0) adapter = ForcedRhs;
+  ce->adapters.rhs = adapter != nullptr ? adapter : ce->f;
+  ce->adapters.rhs_data = adapter != nullptr ? static_cast<void*>(ce) : ce->user_data;
 }
 
 void FreeForcing(Forcing* fc) {

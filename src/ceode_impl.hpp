@@ -121,8 +121,11 @@ struct Forcing;     // ceode_forcing.cpp
 // What CEODE evaluates when it is not the user's f(t, x, v, user_data) alone, and what a Reset
 // hands the next start. f and user_data always stay the user's: the adapters read them.
 struct Adapters {
-  // Called as rhs(t, x, v, f, ce) in place of f (nullptr: f itself); set by SelectRhs only.
+  // The right-hand side as the steps call it, rhs(t, x, v, f, rhs_data): the user's f with
+  // user_data, or an adapter's with the memory. Set by SelectRhs only, whenever f, user_data or
+  // an adapter changes, so that no step decides it again.
   CEodeRhsFn rhs = nullptr;
+  void* rhs_data = nullptr;
   FirstOrder* first_order = nullptr;  // CEodeInitFirstOrder's F gives the acceleration
   Forcing* forcing = nullptr;         // the inner stepper's, on top of either (ceode_forcing.hpp)
   void* stepper = nullptr;            // the inner stepper that drives this memory
@@ -391,8 +394,19 @@ int ProcessError(CEodeMemRec* ce, int flag, const char* func, const char* fmt, .
 // The restart rule: after a change of the method, the problem or a solver, the next CEodeEvolve
 // rebuilds the solvers and the history at the current time.
 void Restart(CEodeMemRec* ce);
-// The access guard every exported function starts with.
-int Access(void* mem, const char* func, CEodeMemRec** ce, bool need_init = false);
+// Access's report (ceode.cpp), out of line: CE_MEM_NULL or CE_NO_MALLOC.
+__attribute__((noinline, cold)) int AccessFailed(CEodeMemRec* ce, const char* func);
+// The access guard every exported function starts with: two tests, inline, so that each caller's
+// compiler sees that a refusal's flag is never CE_SUCCESS; a caller that returns it makes the
+// report its tail call and keeps no frame for it (CEodeEvolve's entry is then the two tests).
+__attribute__((always_inline)) inline int Access(void* mem, const char* func, CEodeMemRec** ce,
+                                                 bool need_init = false) {
+  *ce = static_cast<CEodeMemRec*>(mem);
+  if (*ce != nullptr && (!need_init || (*ce)->initialized)) return CE_SUCCESS;
+  const int flag = AccessFailed(*ce, func);
+  if (flag == CE_SUCCESS) __builtin_unreachable();
+  return flag;
+}
 // The single exit of a successful CEodeEvolve: the step checks the positions' growth at no extra
 // cost, so a velocity that overflowed with finite positions (a set whose velocity weights are
 // extreme for this h) is caught here, once per call, and never returned with success. finite:
@@ -710,8 +724,7 @@ void FirstOrderFree(CEodeMemRec* ce);
 // The right-hand side as CEODE evaluates it: the user's f, or the adapters' in its place.
 __attribute__((always_inline)) inline int CallRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x,
                                                   N_Vector v, N_Vector f) {
-  return ce->adapters.rhs == nullptr ? ce->f(t, x, v, f, ce->user_data)
-                                     : ce->adapters.rhs(t, x, v, f, ce);
+  return ce->adapters.rhs(t, x, v, f, ce->adapters.rhs_data);
 }
 // f(t, x, v), counted, failures reported (inline: the implicit steps call it once or twice a
 // step, at n of a few as costly as the step's arithmetic).
@@ -727,7 +740,7 @@ int BaseRhs(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector f);
 inline CEodeRhsFn RhsIdentity(const CEodeMemRec* ce) {
   return ce->f != nullptr ? ce->f : FirstOrderRhs;
 }
-// Sets adapters.rhs from the attached adapters (ceode_forcing.cpp).
+// Sets adapters.rhs and rhs_data from f, user_data and the attached adapters (ceode_forcing.cpp).
 void SelectRhs(CEodeMemRec* ce);
 // x and v of a first-order vector y = [x; v] with halves of length n: a ManyVector's two parts,
 // or windows on a serial y's array through view[0], view[1] (empty serial vectors, made when

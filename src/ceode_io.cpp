@@ -182,6 +182,7 @@ int CEodeSetUserData(void* mem, void* user_data) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   ce->user_data = user_data;
+  ceode::SelectRhs(ce);  // the steps call f with the new data
   return CE_SUCCESS;
 }
 

@@ -394,10 +394,8 @@ __attribute__((noinline)) int LeanExplicitSteps(CEodeMemRec* ce, StepMem* sm, su
     RotateVectors(ce, sm);
   }
   const sunrealtype bound = GrowthBound(ce);  // xl1_start is fixed between restarts
-  // The right-hand side is chosen once: the user's f directly, or the adapters' (CallRhs).
-  const bool own_f = ce->adapters.rhs == nullptr;
-  const CEodeRhsFn rhs = own_f ? ce->f : ce->adapters.rhs;
-  void* const rhs_data = own_f ? ce->user_data : static_cast<void*>(ce);
+  const CEodeRhsFn rhs = ce->adapters.rhs;    // CallRhs's, kept in registers across the run
+  void* const rhs_data = ce->adapters.rhs_data;
   const long int count = LeanStepCount(ce, target, max_steps);
   LeapRun run;
   if constexpr (kLeap) PrepareLeapRun(*sm, pv, ip, count, &run);
@@ -608,7 +606,9 @@ void BuildFastPhases(CEodeMemRec* ce, StepMem* sm) {
   for (int j = 0; j < kNumPlans; ++j) {
     const int ip = sm->plan_ix;
     RotateVectors(ce, sm);
-    sm->fast_phases[ip] = {NV_DATA_S(ce->xcur), NV_DATA_S(ce->D[1]), sm->plan_ix};
+    sm->fast_phases.x[ip] = NV_DATA_S(ce->xcur);
+    sm->fast_phases.v[ip] = NV_DATA_S(ce->D[1]);
+    sm->fast_phases.next[ip] = sm->plan_ix;
   }
 }
 
@@ -632,7 +632,9 @@ __attribute__((always_inline)) inline sunrealtype FastUpdate(const CEodeMemRec* 
 // position it wrote (BuildUpdatePlan), so a NaN or Inf in it failed the growth check already.
 __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* sm, sunrealtype t,
                                                       N_Vector xout, N_Vector vout) {
-  const StepMem::FastPhase& ph = sm->fast_phases[sm->plan_ix];
+  const StepMem::FastPhases& ph = sm->fast_phases;
+  const auto ip = static_cast<unsigned>(sm->plan_ix);  // 0..5: its load is the index's widening
+  const int next = ph.next[ip];
   if (__builtin_expect(sm->swap == 2, 1)) {
     SwapSlots<2>(ce->D + 1, ce->Dnew + 1);
   } else if (sm->swap == 4) {
@@ -641,13 +643,13 @@ __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* 
     RotateHistory(ce, *sm);
   }
   RotatePositions(ce);
-  sm->plan_ix = ph.next;
+  sm->plan_ix = next;
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
   if (ce->n != 1) return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
-  const sunrealtype v = ph.v[0];
-  NV_DATA_S(xout)[0] = ph.x[0];
+  const sunrealtype v = ph.v[ip][0];
+  NV_DATA_S(xout)[0] = ph.x[ip][0];
   NV_DATA_S(vout)[0] = v;
   return !std::isnan(v - v);  // v - v is NaN exactly where v is not finite
 }
@@ -666,9 +668,7 @@ int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vou
   if (!fast) return OneStepChecked(ce, tout, xout, vout, tret);
   // LeanOneStep without its guard test (the span ends before a step with a check).
   const sunrealtype t = StepTime(ce, 1);
-  const bool own_f = __builtin_expect(ce->adapters.rhs == nullptr, 1);
-  const int rv = own_f ? ce->f(t, ce->xnext, ce->D[1], ce->Dnew[2], ce->user_data)
-                       : CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
+  const int rv = CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
   ++ce->nfe;
   if (rv != 0) return FastRhsFailed(ce, rv, t, xout, vout, tret);
   const sunrealtype xl1 = FastUpdate(ce);

@@ -51,15 +51,16 @@ struct StepMem {
   // OneStepChecked, so that the fast path tests nothing more for the lean one.
   long int direct_until = 0;
   // The fast path's commit, per configuration (by plan_ix, one_call runs): the data of x(tcur)
-  // and D_1 after its step, the outputs' sources, and the configuration that follows; and the
-  // history's swap where it is a fixed one (swap: 2, D_1 and D_2 at degree 3; 4, RotateHistory's
-  // four slots at degree 4; 0, RotateHistory), one test for the configuration.
-  struct FastPhase {
-    const sunrealtype* x = nullptr;
-    const sunrealtype* v = nullptr;
-    int next = 0;
+  // and D_1 after its step, the outputs' sources, and the configuration that follows, in arrays
+  // of their own (each entry is then one indexed load); and the history's swap where it is a
+  // fixed one (swap: 2, D_1 and D_2 at degree 3; 4, RotateHistory's four slots at degree 4; 0,
+  // RotateHistory), one test for the configuration.
+  struct FastPhases {
+    std::array<const sunrealtype*, kNumPlans> x{};
+    std::array<const sunrealtype*, kNumPlans> v{};
+    std::array<int, kNumPlans> next{};
   };
-  std::array<FastPhase, kNumPlans> fast_phases{};
+  FastPhases fast_phases;
   int swap = 0;
   // The step's growth check in one test (LeanOneStep): ||x(t + h)||_1 passes while it is at or
   // below this, the lesser of GrowthBound and the absolute limit (NaN and Inf do not).

@@ -227,6 +227,34 @@ TEST_F(HarmonicRun, OneStepModeTakesOneStepPerCallAcrossTheDirectSpan) {
   }
 }
 
+// User data set between one-step calls reaches f at the next step: a switch to another problem
+// record (w = 2) after 20 steps gives bit for bit the run in which the record f already reads
+// changes to w = 2 at that point; had the steps kept the old record, they would go on at w = 1.
+TEST_F(HarmonicRun, UserDataSetBetweenOneStepCallsReachesFAtTheNextStep) {
+  Harmonic other = prob_;
+  other.w = 2;
+  std::vector<sunrealtype> xs;
+  for (const bool switch_record : {true, false}) {
+    prob_.w = 1;
+    ASSERT_EQ(CEodeSetUserData(mem(), &prob_), CE_SUCCESS);
+    Vector x0 = SerialVector(1, ctx_, prob_.x0);
+    Vector v0 = SerialVector(1, ctx_, prob_.v0);
+    ASSERT_EQ(CEodeReInit(mem(), 0, x0.get(), v0.get()), CE_SUCCESS);
+    sunrealtype t = 0;
+    for (int k = 1; k <= 40; ++k) {
+      if (k == 21 && switch_record) ASSERT_EQ(CEodeSetUserData(mem(), &other), CE_SUCCESS);
+      if (k == 21 && !switch_record) prob_.w = 2;
+      ASSERT_EQ(Evolve(10, &t, CE_ONE_STEP), CE_SUCCESS);
+      if (switch_record) {
+        xs.push_back(X());
+      } else {
+        EXPECT_EQ(X(), xs[k - 1]) << "step " << k;
+      }
+    }
+  }
+  prob_.w = 1;
+}
+
 // g = t - 0.2537: a root inside the step from 0.25 to 0.26.
 int RootInStep(sunrealtype t, N_Vector /*x*/, N_Vector /*v*/, sunrealtype* g, void* /*data*/) {
   g[0] = t - SUN_RCONST(0.2537);
