@@ -646,6 +646,12 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
     } else if (c.ls == CeodeOpts::kKlu && p.vjac != nullptr) {
       o->A = SUNSparseMatrix(p.n, p.n, p.vjac_nnz, CSR_MAT, ctx);
       o->LS = o->A != nullptr ? SUNLinSol_KLU(o->x, o->A, ctx) : nullptr;
+      // KLU's ordering 0, AMD: the Newton matrix has df/dv's pattern, symmetric on the FE
+      // scenes (K's), for which AMD's factors are sparser than those of the default COLAMD.
+      if (o->LS != nullptr &&
+          Failed(SUNLinSol_KLUSetOrdering(o->LS, 0), "SUNLinSol_KLUSetOrdering")) {
+        return true;
+      }
     }
     if ((c.ls != CeodeOpts::kNone &&
          (o->LS == nullptr ||
