@@ -570,8 +570,8 @@ int MassSolve(CEodeMemRec* ce, N_Vector b, const char* func);  // b <- M^{-1} b
 int NewtonSetup(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector fv,
                 sunrealtype kappa, const char* func);
 // The serial direct Newton iteration factors the Newton matrix with its own pivots when the
-// attached solver is SUNLinSol_Dense on a dense A (returns whether it does); then x <- A^{-1} x
-// on the raw array of x.
+// attached solver is SUNLinSol_Dense on a dense A of at most 64 unknowns (returns whether it
+// does); then x <- A^{-1} x on the raw array of x.
 bool LsUseOwnLu(CEodeMemRec* ce, bool use);
 void LsSolveOwnLu(CEodeMemRec* ce, sunrealtype* x);
 // Forgets what A holds; with counters, zeroes the module's counters too (CEodeReInit).

@@ -312,9 +312,13 @@ bool NewtonMatrixStale(const CEodeMemRec* ce, sunrealtype kappa) {
          ce->nst - ls.nst_lastsetup >= ls.msbj || ls.mass_dirty || !KappaServes(ls, kappa);
 }
 
+// Where the own LU replaces SUNLinSol_Dense: on a few unknowns, whose solve costs less than a
+// call into SUNDIALS; from there on the two are the same loops.
+constexpr sunindextype kOwnLuMaxN = 64;
+
 bool LsUseOwnLu(CEodeMemRec* ce, bool use) {
   LsMem& ls = ce->ls;
-  ls.own_lu = use && ls.LS != nullptr && ls.A != nullptr &&
+  ls.own_lu = use && ce->n <= kOwnLuMaxN && ls.LS != nullptr && ls.A != nullptr &&
               SUNLinSolGetID(ls.LS) == SUNLINEARSOLVER_DENSE &&
               SUNMatGetID(ls.A) == SUNMATRIX_DENSE;
   return ls.own_lu;
