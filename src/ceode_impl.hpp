@@ -175,7 +175,7 @@ struct LsMem {
 struct NlsRaw {
   sunindextype n = 0;
   sunrealtype *apred = nullptr, *atmp = nullptr, *vtmp = nullptr, *V0 = nullptr, *ftmp = nullptr,
-              *lstmp = nullptr, *ewt = nullptr, *ycor = nullptr, *delta = nullptr;
+              *ewt = nullptr, *ycor = nullptr, *delta = nullptr;
 };
 
 // The nonlinear solve of the velocity-dependent step (ceode_nls.cpp, ceode_nls_direct.cpp).

@@ -1009,8 +1009,6 @@ bool CompensatedSumOnData(const Combo& cb, const Compensation& cs) {
   return true;
 }
 
-// Each combination with its accumulated term (or, compensated, minus its compensation)
-// appended, exactly as RunCombo hands it to Combine.
 namespace {
 
 // The weights twice (c2), which the shaped kernels read as pairs (ShapedSumPair).
@@ -1020,6 +1018,8 @@ void PairWeights(FusedTerms* tk) {
 
 }  // namespace
 
+// Each combination with its accumulated term (or, compensated, minus its compensation)
+// appended, exactly as RunCombo hands it to Combine.
 bool BuildFusedPlan(const UpdatePlan& plan, const Compensation& cs, FusedPlan* fp) {
   fp->n = plan.n;
   bool distinct = true;  // no sum writes a vector it reads (the kernels rely on it)

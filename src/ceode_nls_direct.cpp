@@ -51,16 +51,16 @@ int Residual(CEodeMemRec* ce, const NlsRaw& r) {
 int Iterate(CEodeMemRec* ce, const NlsRaw& r, bool own_lu, int m) {
   sunrealtype* d = r.delta;
   for (sunindextype i = 0; i < r.n; ++i) d[i] = -d[i];
+  // Both solves leave the solution in delta: the own LU works in place, NlsLinearSolve copies it
+  // back from its solution vector.
   if (own_lu) {
-    for (sunindextype i = 0; i < r.n; ++i) r.lstmp[i] = d[i];
-    LsSolveOwnLu(ce, r.lstmp);
+    LsSolveOwnLu(ce, d);
   } else {
     const int rv = NlsLinearSolve(ce->nls.delta, ce);
     if (rv != 0) return rv;
   }
   sunrealtype sum = 0;
   for (sunindextype i = 0; i < r.n; ++i) {
-    d[i] = r.lstmp[i];
     r.ycor[i] = r.ycor[i] + d[i];
     const sunrealtype p = d[i] * r.ewt[i];
     sum += p * p;
@@ -122,7 +122,6 @@ void DirectArrays(CEodeMemRec* ce) {
                        SerialData(ce->vtmp),
                        SerialData(ce->V0),
                        SerialData(ce->ftmp),
-                       SerialData(ce->lstmp),
                        SerialData(ce->ewt),
                        SerialData(ce->ycor),
                        SerialData(ce->nls.delta)};
