@@ -53,6 +53,11 @@ constexpr int kArnoldiDim = 20;
 // Recommended steps and CEodeGetStableStep's default: this fraction of the limit,
 // so that a step at the recommendation stays stable even at a Jordan-block edge.
 constexpr sunrealtype kRecommendSafety = 0.99;
+// The warm start (WarmStart): the Lanczos vectors are kept while their entries fit in this many
+// (64 MiB at double precision), the pseudo-random start enters with the M-norm of the last top
+// Ritz vector beside it, and every kColdEvery-th estimate starts cold.
+constexpr sunindextype kWarmEntries = sunindextype{1} << 23;
+constexpr int kColdEvery = 8;
 
 struct GuardWork {
   N_Vector q_prev = nullptr;  // Lanczos vectors q_{j-1}, q_j, and the next one
@@ -75,9 +80,15 @@ struct GuardWork {
   sunrealtype sig = 0;      // the last difference quotient's step
   // Arnoldi, for a non-symmetric K: its M-orthonormal basis (cloned when first needed) and
   // Hessenberg matrix; which estimator the last estimate came from (for the warning)
+  // (Lanczos keeps its vectors there too while they fit in kWarmEntries entries, for the warm
+  // vector.)
   std::vector<N_Vector> basis;
   Eigen::MatrixXd H;
   bool arnoldi = false;
+  // The last estimate's top Ritz vector (M-normalised), the next estimate's start (WarmStart).
+  N_Vector warm = nullptr;
+  bool warm_ok = false;
+  int warm_runs = 0;  // estimates started from it since the last cold start
 };
 
 GuardWork* Work(CEodeMemRec* ce) { return static_cast<GuardWork*>(ce->guard.work); }
@@ -208,7 +219,8 @@ int StiffnessTimes(CEodeMemRec* ce, GuardWork* g, const char* func) {
 
 // Top eigenvalue theta of the Lanczos tridiagonal and its residual norm
 // beta_k |e_k^T z| (z the unit Ritz vector).
-void TopRitz(const GuardWork* g, sunrealtype beta_k, sunrealtype* theta, sunrealtype* res) {
+void TopRitz(const GuardWork* g, sunrealtype beta_k, sunrealtype* theta, sunrealtype* res,
+             Eigen::VectorXd* z = nullptr) {
   const int k = static_cast<int>(g->alpha.size());
   const Eigen::VectorXd diag = Eigen::Map<const Eigen::VectorXd>(g->alpha.data(), k);
   const Eigen::VectorXd sub = Eigen::Map<const Eigen::VectorXd>(g->beta.data(), k - 1);
@@ -216,6 +228,7 @@ void TopRitz(const GuardWork* g, sunrealtype beta_k, sunrealtype* theta, sunreal
   es.computeFromTridiagonal(diag, sub, Eigen::ComputeEigenvectors);
   *theta = es.eigenvalues()(k - 1);
   *res = std::fabs(beta_k * es.eigenvectors()(k - 1, k - 1));
+  if (z != nullptr) *z = es.eigenvectors().col(k - 1);
 }
 
 // The symmetry test's two numbers at step j: c = <q_{j-1}, A q_j>_M and a bound on the part of it
@@ -420,17 +433,76 @@ int SwitchToArnoldi(CEodeMemRec* ce, GuardWork* g, bool mass, int j, sunrealtype
   return ArnoldiTop(ce, g, mass, 1, beta, budget - 1, func, lam_hat);
 }
 
+// The start vector into g->q: the pseudo-random one (StartVector), with the last estimate's top
+// Ritz vector before it when there is one. Near the top mode the iteration then stops after a few
+// products where a cold start takes dozens; the random part, and a cold start every kColdEvery-th
+// estimate, keep a mode that rose past the old top within reach (docs/theory.md, the runtime
+// guard).
+void WarmStart(GuardWork* g) {
+  StartVector(g->q);
+  const bool warm = g->warm_ok && g->warm_runs + 1 < kColdEvery;
+  g->warm_ok = false;
+  if (!warm) {
+    g->warm_runs = 0;
+    return;
+  }
+  ++g->warm_runs;
+  MassTimes(g, g->q, g->mw);
+  const sunrealtype rnorm = std::sqrt(N_VDotProd(g->q, g->mw));
+  N_VLinearSum(1, g->warm, 1 / rnorm, g->q, g->q);
+}
+
+// The top Ritz vector sum_i z_i basis[i] (M-normalised: z is a unit vector, the basis
+// M-orthonormal) as the next estimate's warm start.
+void KeepWarm(GuardWork* g, const Eigen::VectorXd& z) {
+  const int k = static_cast<int>(z.size());
+  if (g->warm == nullptr) g->warm = N_VClone(g->q);
+  if (g->warm == nullptr) return;
+  std::vector<sunrealtype> c(z.data(), z.data() + k);
+  if (N_VLinearCombination(k, c.data(), g->basis.data(), g->warm) != 0) return;
+  g->warm_ok = true;
+}
+
+// The iteration's start: q_0 from WarmStart, M-normalised, and q_{-1} = 0; returns how many of
+// its vectors are kept for the next warm start.
+int LanczosStart(GuardWork* g) {
+  g->alpha.clear();
+  g->beta.clear();
+  WarmStart(g);
+  MassTimes(g, g->q, g->mw);
+  N_VScale(1 / std::sqrt(N_VDotProd(g->q, g->mw)), g->q, g->q);
+  N_VConst(0, g->q_prev);
+  const sunindextype n = std::max<sunindextype>(1, N_VGetLength(g->q));
+  return static_cast<int>(std::min<sunindextype>(kMaxLanczos, kWarmEntries / n));
+}
+
+// q_j into basis[j], for the top Ritz vector at the end.
+int KeepVector(CEodeMemRec* ce, GuardWork* g, int j, const char* func) {
+  const int flag = EnsureBasis(ce, g, j + 1, func);
+  if (flag == CE_SUCCESS) N_VScale(1, g->q, g->basis[j]);
+  return flag;
+}
+
+// At a check: the top Ritz pair (theta, its residual res), whether both it and beta are finite,
+// and whether it has converged (an invariant space, or res below kLanczosTol of theta); then, with
+// the basis kept, its vector becomes the next warm start.
+bool RitzConverged(GuardWork* g, sunrealtype beta, bool breakdown, bool kept, sunrealtype* theta,
+                   sunrealtype* res, bool* finite) {
+  Eigen::VectorXd z;
+  TopRitz(g, beta, theta, res, kept ? &z : nullptr);
+  *finite = std::isfinite(*theta) && std::isfinite(beta);
+  if (!*finite || !(breakdown || *res <= kLanczosTol * (std::fabs(*theta) + SUN_UNIT_ROUNDOFF))) {
+    return false;
+  }
+  if (kept) KeepWarm(g, z);
+  return true;
+}
+
 // lam_hat >= omega_max^2: the top Ritz value plus its residual norm once that is
 // below kLanczosTol of it (for a symmetric pencil an eigenvalue lies within the
 // residual of theta); at the iteration cap theta + beta_k, the safer Lanczos bound.
 int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunrealtype* lam_hat) {
-  int flag = CE_SUCCESS;
-  g->alpha.clear();
-  g->beta.clear();
-  StartVector(g->q);
-  MassTimes(g, g->q, g->mw);
-  N_VScale(1 / std::sqrt(N_VDotProd(g->q, g->mw)), g->q, g->q);
-  N_VConst(0, g->q_prev);
+  const int keep = LanczosStart(g);
   sunrealtype beta_prev = 0;
   sunrealtype theta = 0;
   sunrealtype res = 0;
@@ -438,7 +510,9 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
   sunrealtype amax = 0;  // scale of the operator seen so far
   Coupling cp;
   for (int j = 0; j < kMaxLanczos; ++j) {
-    if ((flag = LanczosStep(ce, g, mass, beta_prev, func, &beta, &cp)) != CE_SUCCESS) return flag;
+    int flag = j < keep ? KeepVector(ce, g, j, func) : CE_SUCCESS;
+    if (flag == CE_SUCCESS) flag = LanczosStep(ce, g, mass, beta_prev, func, &beta, &cp);
+    if (flag != CE_SUCCESS) return flag;
     amax = std::max(amax, std::fabs(g->alpha.back()));
     if (j >= 1 && NotSymmetric(cp, beta_prev, amax)) {
       return SwitchToArnoldi(ce, g, mass, j, beta_prev, cp.c, func, lam_hat);
@@ -448,9 +522,10 @@ int LanczosTop(CEodeMemRec* ce, GuardWork* g, bool mass, const char* func, sunre
     const bool check =
         j + 1 >= kMinLanczos && (j + 1 <= kEveryStepChecks || (j + 1) % kCheckEvery == 0);
     if (breakdown || j + 1 == kMaxLanczos || check) {
-      TopRitz(g, beta, &theta, &res);
-      if (!std::isfinite(theta) || !std::isfinite(beta)) break;
-      if (breakdown || res <= kLanczosTol * (std::fabs(theta) + SUN_UNIT_ROUNDOFF)) {
+      bool finite = true;
+      const bool converged = RitzConverged(g, beta, breakdown, j < keep, &theta, &res, &finite);
+      if (!finite) break;
+      if (converged) {
         *lam_hat = theta + res;
         return CE_SUCCESS;
       }
@@ -656,7 +731,7 @@ void GuardFree(CEodeMemRec* ce) {
   ce->guard.carried = false;
   GuardWork* g = Work(ce);
   if (g == nullptr) return;
-  for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0, g->wts}) {
+  for (N_Vector v : {g->q_prev, g->q, g->w, g->mw, g->xp, g->f0, g->wts, g->warm}) {
     if (v != nullptr) N_VDestroy(v);
   }
   for (N_Vector v : g->basis) N_VDestroy(v);
@@ -667,7 +742,10 @@ void GuardFree(CEodeMemRec* ce) {
 
 void GuardReset(CEodeMemRec* ce, bool counters) {
   GuardMem& g = ce->guard;
-  if (g.work != nullptr) Work(ce)->mass_ready = false;
+  if (g.work != nullptr) {
+    Work(ce)->mass_ready = false;
+    Work(ce)->warm_ok = false;  // each run's first estimate starts cold
+  }
   g.accel = false;
   // The user's frequency, when set, is not an estimate to carry.
   g.carried = g.reuse && !(g.omega_user > 0) && g.omega_est > 0 && std::isfinite(g.omega_est);
