@@ -54,9 +54,10 @@ constexpr int kArnoldiDim = 20;
 // so that a step at the recommendation stays stable even at a Jordan-block edge.
 constexpr sunrealtype kRecommendSafety = 0.99;
 // The warm start (WarmStart): the Lanczos vectors are kept while their entries fit in this many
-// (64 MiB at double precision), the pseudo-random start enters with the M-norm of the last top
-// Ritz vector beside it, and every kColdEvery-th estimate starts cold.
-constexpr sunindextype kWarmEntries = sunindextype{1} << 23;
+// (32 MiB at double precision, allocated as the iteration reaches them), the pseudo-random start
+// enters with the M-norm of the last top Ritz vector beside it, and every kColdEvery-th estimate
+// starts cold.
+constexpr sunindextype kWarmEntries = sunindextype{1} << 22;
 constexpr int kColdEvery = 8;
 
 struct GuardWork {
