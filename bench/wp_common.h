@@ -464,6 +464,7 @@ struct Problem {
   ARKPostProcessFn post_step = nullptr;
   // -- CEODE's extras --
   CEodeVelJacFn vjac = nullptr;  // df/dv (nullptr: difference quotients)
+  Vec vel_diag;                  // df/dv's constant diagonal where f is affine in v (or empty)
   long vjac_nnz = 0;             // nonzeros of df/dv in CSR (CeodeOpts::kKlu)
   CEodeMassFn mass = nullptr;    // constant mass matrix (nullptr: M = I)
   Vec lumped_mass;               // the guard's inner product (CEodeSetGuardMass)
@@ -585,6 +586,7 @@ struct CeodeOpts {
   // guard keeps its defaults (its stable-step cap is part of the adaptive step, and its f
   // evaluations are counted with the run's), and output mode does not round a step.
   bool adaptive = false;
+  bool diagonal = false;  // CEodeSetVelJacDiagonal with the problem's vel_diag
 };
 
 struct CeodeStats {
@@ -667,6 +669,14 @@ inline bool CeodeAttach(SUNContext ctx, const Problem& p, const CeodeOpts& c, Ce
          Failed(CEodeSetMaxNonlinIters(mem, c.max_nonlin_iters), "CEodeSetMaxNonlinIters"))) {
       return true;
     }
+  }
+  if (c.diagonal && !p.vel_diag.empty()) {
+    N_Vector d = N_VNew_Serial(p.n, ctx);  // copied by the setter
+    if (d == nullptr) return true;
+    std::copy(p.vel_diag.begin(), p.vel_diag.end(), N_VGetArrayPointer(d));
+    const bool failed = Failed(CEodeSetVelJacDiagonal(mem, d), "CEodeSetVelJacDiagonal");
+    N_VDestroy(d);
+    if (failed) return true;
   }
   // The guard's estimate caps the adaptive step: in the lumped-mass inner product it is an upper
   // bound of omega_max (CEodeSetGuardMass), as a user of a lumped-mass model sets it.

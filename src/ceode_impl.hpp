@@ -94,7 +94,7 @@ struct RootMemFree {
 // The acceleration solve of a step, chosen once per start: explicit (docs/theory.md section
 // 4.1), the nonlinear solver (4.2), prediction-correction (4.3), either by the coupling (AUTO,
 // 4.3), or the constrained solve (section 8).
-enum class SolveKind { kExplicit, kNewton, kPC, kAuto, kConstrained };
+enum class SolveKind { kExplicit, kNewton, kPC, kAuto, kConstrained, kDiagonal };
 
 // What the factored matrix of the attached linear solver holds.
 enum class Holds { kNothing, kMass, kNewton };
@@ -240,6 +240,11 @@ struct PcMem {
   Plan plans[2];
   int plan_last = 1;              // the slot the last step used
   PcPlannedFn planned = nullptr;  // nullptr on other backends or with a mass matrix
+  // CEodeSetVelJacDiagonal: f affine in x' with df/dx' = diag(c) (a copy of c), the step's solve
+  // exact in one f (SolveDiagonal); 1 / (1 - kappa c) for the step diag_h (0: none yet).
+  N_Vector diag = nullptr;
+  N_Vector diag_inv = nullptr;
+  sunrealtype diag_h = 0;
 };
 
 // The runtime stability guard (ceode_guard.cpp).
@@ -634,6 +639,9 @@ bool VelocityUnread(const CEodeMemRec* ce);
 const char* VelocityDependenceName(const CEodeMemRec* ce);
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func);  // CE_IMPLICIT_AUTO: PC or the nonlinear solver, refreshed
+// With CEodeSetVelJacDiagonal: a = f(t, x, V0) / (1 - kappa c), exact for f affine in x'.
+int SolveDiagonal(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
+                  const char* func);
 
 // ceode_constraints.cpp
 bool HasConstraints(const CEodeMemRec* ce);

@@ -341,6 +341,24 @@ constexpr auto kPlannedFns = PlannedTable(std::make_index_sequence<kMaxDegree - 
 
 }  // namespace
 
+namespace {
+
+// The diagonal solve for a run: it needs f to return accelerations (no mass matrix); its factors
+// are formed at the first step (the start's h and kappa are new).
+int ChooseDiagonalSolve(CEodeMemRec* ce, const char* func) {
+  if (HasMassMatrix(ce)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "CEodeSetVelJacDiagonal's solve needs f to return accelerations, but a "
+                        "mass matrix is set: remove one of the two (a lumped mass goes into f and "
+                        "into c as c_i / m_i).");
+  }
+  ce->pc.diag_h = 0;
+  SetImplicitSolve(ce, SolveKind::kDiagonal);
+  return CE_SUCCESS;
+}
+
+}  // namespace
+
 int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   // The velocity combinations' backend, once per start (the step module's rule); the plans of
   // the last run go (its vectors may be gone).
@@ -349,6 +367,7 @@ int ChooseImplicitSolve(CEodeMemRec* ce, const char* func) {
   ce->pc.planned =
       ce->pc.serial && !HasMassMatrix(ce) ? kPlannedFns[ce->degree - kMinDegree] : nullptr;
   if (HasConstraints(ce) || !ce->vel_dependent) return CE_SUCCESS;
+  if (ce->pc.diag != nullptr) return ChooseDiagonalSolve(ce, func);
   const int mode = ImplicitMode(ce);
   SetImplicitSolve(ce, mode == CE_IMPLICIT_PC ? SolveKind::kPC : SolveKind::kNewton);
   if (mode != CE_IMPLICIT_AUTO) return CE_SUCCESS;
@@ -483,6 +502,85 @@ int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_V
   return SolveAutoChecked(ce, t, tnext, x, a, check, func);
 }
 
+namespace {
+
+// 1 / (1 - kappa c) for the step's h into diag_inv; CE_ILL_INPUT where an entry of 1 - kappa c is
+// not positive (a velocity dependence that pumps energy in, too strong for the step).
+int DiagonalFactors(CEodeMemRec* ce, const char* func) {
+  PcMem& pc = ce->pc;
+  N_VScale(-ce->co.kappa, pc.diag, pc.diag_inv);
+  N_VAddConst(pc.diag_inv, 1, pc.diag_inv);
+  const sunrealtype smallest = N_VMin(pc.diag_inv);
+  if (!(smallest > 0)) {
+    return ProcessError(ce, CE_ILL_INPUT, func,
+                        "1 - kappa c has the entry %g <= 0 at h = %g (kappa = %g): a positive "
+                        "entry of the diagonal given to CEodeSetVelJacDiagonal (energy pumped in) "
+                        "is too large for this step; reduce h.",
+                        static_cast<double>(smallest), static_cast<double>(ce->co.h),
+                        static_cast<double>(ce->co.kappa));
+  }
+  N_VInv(pc.diag_inv, pc.diag_inv);
+  pc.diag_h = ce->co.h;
+  return CE_SUCCESS;
+}
+
+// a *= 1 / (1 - kappa c) after a = f(t, x, V0): N_VProd's products, on serial data without its
+// call.
+inline void ApplyDiagonal(CEodeMemRec* ce, N_Vector a) {
+  const PcMem& pc = ce->pc;
+  if (!pc.serial) {
+    N_VProd(a, pc.diag_inv, a);
+    return;
+  }
+  sunrealtype* ad = SerialData(a);
+  const sunrealtype* s = SerialData(pc.diag_inv);
+  for (sunindextype i = 0; i < ce->n; ++i) ad[i] *= s[i];
+}
+
+// SolveDiagonal on the serial backend for degree D: V0 from the plan of the step's configuration
+// (PcPlanFor; the corrected velocity's weights less a's), then f and the factors.
+template <int D>
+int DiagonalPlannedOf(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector a, const char* func) {
+  const PcMem::Plan& p = PcPlanFor(ce, a);
+  PlannedCombination<D - 1>(ce->n, p.cc, p.x, p.out);
+  const int flag = EvalRhs(ce, t, x, ce->vtmp, a, func);
+  if (flag == CE_SUCCESS) ApplyDiagonal(ce, a);
+  return flag;
+}
+
+using DiagonalFn = int (*)(CEodeMemRec*, sunrealtype, N_Vector, N_Vector, const char*);
+template <std::size_t... I>
+constexpr std::array<DiagonalFn, sizeof...(I)> DiagonalTable(std::index_sequence<I...> /*d*/) {
+  return {&DiagonalPlannedOf<static_cast<int>(I) + kMinDegree>...};
+}
+// By the degree d = kMinDegree .. kMaxDegree.
+constexpr auto kDiagonalFns =
+    DiagonalTable(std::make_index_sequence<kMaxDegree - kMinDegree + 1>{});
+
+}  // namespace
+
+// f(t, x, V0 + kappa a) = f(t, x, V0) + kappa c a for f affine in x' with df/dx' = diag(c): the
+// step's equation a = f(t, x, V0 + kappa a) has the solution a = f(t, x, V0) / (1 - kappa c), one
+// evaluation and no iteration (docs/theory.md section 4.3). The factors follow h.
+int SolveDiagonal(CEodeMemRec* ce, sunrealtype t, sunrealtype /*tnext*/, N_Vector x, N_Vector a,
+                  const char* func) {
+  if (ce->pc.diag_h != ce->co.h) {
+    const int flag = DiagonalFactors(ce, func);
+    if (flag != CE_SUCCESS) return flag;
+  }
+  // The plans exist on the serial backend without a mass matrix, the diagonal solve's case.
+  if (ce->pc.planned != nullptr) return kDiagonalFns[ce->degree - kMinDegree](ce, t, x, a, func);
+  const int d = ce->degree;
+  sunrealtype c[kMaxDegree] = {};
+  N_Vector X[kMaxDegree] = {};
+  CorrectedVelocityWeights(ce->co, d, c);  // V0's d - 1 weights, a's left out
+  std::copy(ce->D + 1, ce->D + d, X);
+  VelocityCombination(ce, d - 1, c, X, ce->vtmp);
+  const int flag = EvalRhs(ce, t, x, ce->vtmp, a, func);
+  if (flag == CE_SUCCESS) ApplyDiagonal(ce, a);
+  return flag;
+}
+
 void PcReset(CEodeMemRec* ce, bool counters) {
   PcMem& pc = ce->pc;
   if (counters) pc.nsteps = pc.ncorr = pc.nfe = 0;
@@ -491,8 +589,10 @@ void PcReset(CEodeMemRec* ce, bool counters) {
 }
 
 void PcFree(CEodeMemRec* ce) {
-  if (ce->pc.dir != nullptr) N_VDestroy(ce->pc.dir);
-  ce->pc.dir = nullptr;
+  for (N_Vector* v : {&ce->pc.dir, &ce->pc.diag, &ce->pc.diag_inv}) {
+    if (*v != nullptr) N_VDestroy(*v);
+    *v = nullptr;
+  }
 }
 
 void PcMethodChanged(CEodeMemRec* ce) {
@@ -547,6 +647,38 @@ int CEodeSetPCCorrections(void* mem, int k) {
         "k = %d: use 1 or 2 corrections (0: the set's default, docs/theory.md 4.3).", k);
   }
   ce->pc.corrections = k;
+  return CE_SUCCESS;
+}
+
+int CEodeSetVelJacDiagonal(void* mem, N_Vector c) {
+  CEodeMemRec* ce = nullptr;
+  int flag = ceode::Access(mem, __func__, &ce);
+  if (flag != CE_SUCCESS) return flag;
+  ceode::PcMem& pc = ce->pc;
+  if (c == nullptr) {  // removed: the next start chooses as CEodeSetImplicitMode says
+    for (N_Vector* v : {&pc.diag, &pc.diag_inv}) {
+      if (*v != nullptr) N_VDestroy(*v);
+      *v = nullptr;
+    }
+    ceode::Restart(ce);
+    return CE_SUCCESS;
+  }
+  if (!ce->initialized) {
+    return ceode::ProcessError(ce, CE_NO_MALLOC, __func__,
+                               "The diagonal needs the problem's size: call CEodeInit first.");
+  }
+  if (N_VGetLength(c) != ce->n || !ceode::IsFinite(c)) {
+    return ceode::ProcessError(ce, CE_ILL_INPUT, __func__,
+                               "c has %ld entries (the problem has %ld) or a NaN or Inf: give "
+                               "df/dx' as a vector cloned from x0.",
+                               static_cast<long>(N_VGetLength(c)), static_cast<long>(ce->n));
+  }
+  for (N_Vector* v : {&pc.diag, &pc.diag_inv}) {
+    if (*v == nullptr) *v = ceode::CloneVector(ce->xcur);
+    if (*v == nullptr) return ceode::ProcessError(ce, CE_MEM_FAIL, __func__, "Out of memory.");
+  }
+  N_VScale(1, c, pc.diag);
+  ceode::Restart(ce);  // the solve is chosen at the start
   return CE_SUCCESS;
 }
 

@@ -743,6 +743,7 @@ void StepOptionsChanged(CEodeMemRec* ce) {
 //   kPC           SolvePC (ceode_pc.cpp; section 4.3),
 //   kAuto         SolveAuto (ceode_pc.cpp: PC or Newton by the coupling; section 4.3),
 //   kConstrained  ConstrSolveStep (ceode_constraints.cpp; section 8),
+//   kDiagonal     SolveDiagonal (ceode_pc.cpp: f affine in x' with a diagonal Jacobian; 4.3),
 // then the update on the backend the vectors allow (serial, this rank's part of NVECTOR_PARALLEL,
 // or the N_Vector reference). The explicit step without a mass matrix on the serial backend takes
 // many steps per call in the lean loop (LeanExplicitSteps).
@@ -754,7 +755,8 @@ void ChooseStep(CEodeMemRec* ce, bool restart) {
                      : ce->vel_dependent ? sm->implicit
                                          : SolveKind::kExplicit;
   }
-  constexpr SolveFn kSolve[] = {SolveExplicit, SolveImplicit, SolvePC, SolveAuto, ConstrSolveStep};
+  constexpr SolveFn kSolve[] = {SolveExplicit, SolveImplicit,   SolvePC,
+                                SolveAuto,     ConstrSolveStep, SolveDiagonal};
   sm->solve = kSolve[static_cast<int>(sm->solve_kind)];
   // In place or not depends on the solve. Error control steps with passes of its own
   // (ceode_adapt_step.cpp), and a fixed step starts the method again: no plans then.

@@ -43,6 +43,7 @@ struct Config {
   long int msbj = 0;                // 0: default
   long int normal_every = 0;        // > 0: a CE_NORMAL call every so many steps, not one-step calls
   std::function<bool(void*)> then;  // further calls after the setup; false abandons the run
+  sunrealtype diagonal = NAN;       // finite: CEodeSetVelJacDiagonal with this entry
 };
 
 struct Outcome {
@@ -89,6 +90,10 @@ Outcome Integrate(const ExactProblem& prob, const Config& c) {
   }
   if (c.then && !c.then(mem.get())) {
     r.flag = CE_ILL_INPUT;
+    return r;
+  }
+  Vector diagonal = SerialVector(1, ctx, c.diagonal);
+  if (std::isfinite(c.diagonal) && fail(CEodeSetVelJacDiagonal(mem.get(), diagonal.get()))) {
     return r;
   }
   const long int nsteps = std::lround(c.tend / c.h);
@@ -210,6 +215,145 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, PredictorCorrector, ::testing::ValuesIn(kSet
                            return std::string(info.param.label);
                          });
 
+// ---------------------------------------------------------------------------
+// The diagonal solve (CEodeSetVelJacDiagonal): the damped oscillator's f is affine in x' with
+// df/dx' = -2 zeta w, so the step's equation is solved exactly in one evaluation.
+
+class DiagonalSolve : public ::testing::TestWithParam<SetCase> {};
+
+// Newton at tight tolerances solves the same equation: the two runs agree far below the error,
+// the fitted orders are Newton's, and every step costs one f (the start's evaluations aside).
+TEST_P(DiagonalSolve, GivesNewtonsSolutionAndOrderWithOneEvaluationAStep) {
+  const SetCase& c = GetParam();
+  DampedForced prob;
+  const std::vector<double> hs = ConvergenceSteps(c.hmax);
+  std::vector<double> ed, en;
+  long int start_f = -1;
+  for (double h : hs) {
+    Config cfg;
+    cfg.method = c.method;
+    cfg.h = h;
+    cfg.then = [](void* m) { return CEodeSetNonlinTolerances(m, 1e-15, 1e-15) == CE_SUCCESS; };
+    const Outcome newton = Integrate(prob, cfg);
+    cfg.diagonal = -2 * prob.zeta * prob.w;
+    const Outcome diag = Integrate(prob, cfg);
+    ASSERT_EQ(newton.flag, CE_SUCCESS);
+    ASSERT_EQ(diag.flag, CE_SUCCESS);
+    EXPECT_LE(MaxDiff(diag.x, newton.x), 1e-3 * diag.err_x) << h;
+    EXPECT_EQ(diag.npc + diag.nnls, 0) << h;  // neither prediction-correction nor Newton
+    if (start_f < 0) start_f = diag.nfe - diag.nst;
+    EXPECT_EQ(diag.nfe - diag.nst, start_f) << h;
+    ed.push_back(diag.err_x);
+    en.push_back(newton.err_x);
+  }
+  const double order = FitOrder(hs, ed), newton_order = FitOrder(hs, en);
+  std::printf("[ diagonal ] %-7s order %.3f (Newton %.3f), %ld f at the start\n", c.method, order,
+              newton_order, start_f);
+  EXPECT_GT(ed.back(), 1e-11);  // above round-off, or the fit measures noise
+  EXPECT_NEAR(order, c.order, kOrderTol);
+  EXPECT_NEAR(order, newton_order, kOrderTol / 4);
+}
+
+const SetCase kDiagonalSets[] = {
+    {"G3_CD", 0, 2, 0.04, "CentralDifferences"},
+    {"G4_A34", 0, 3, 0.04, "G4AlphaThreeQuarters"},
+    {"G5_ONES", 0, 4, 0.08, "G5Ones"},
+};
+INSTANTIATE_TEST_SUITE_P(NamedSets, DiagonalSolve, ::testing::ValuesIn(kDiagonalSets),
+                         [](const ::testing::TestParamInfo<SetCase>& info) {
+                           return std::string(info.param.label);
+                         });
+
+// Error control changes kappa with h: the factors follow, and the run meets its tolerance with one
+// f a step.
+TEST(DiagonalSolve, FollowsTheStepUnderErrorControl) {
+  Context ctx;
+  DampedForced prob;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Vector c = SerialVector(1, ctx, -2 * prob.zeta * prob.w);
+  Mem mem(CEodeCreate(ctx));
+  ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G5_O4"), CE_SUCCESS);
+  ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-8, 1e-8), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), c.get()), CE_SUCCESS);
+  sunrealtype t = 0;
+  ASSERT_EQ(CEodeEvolve(mem.get(), 10, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  sunrealtype xe = 0, ve = 0;
+  prob.Exact(t, &xe, &ve);
+  long int nst = 0, nfe = 0, netf = 0;
+  CEodeGetNumSteps(mem.get(), &nst);
+  CEodeGetNumRhsEvals(mem.get(), &nfe);
+  CEodeGetNumErrTestFails(mem.get(), &netf);
+  std::printf(
+      "[ diagonal ] adaptive G5_O4 tol 1e-8: %ld steps, %ld f, %ld failed tests, error %.2e\n", nst,
+      nfe, netf, std::fabs(NV_Ith_S(x.get(), 0) - xe));
+  EXPECT_LE(std::fabs(NV_Ith_S(x.get(), 0) - xe), 1e-6);
+  EXPECT_GT(nst, 100);
+  EXPECT_LE(nfe - nst - netf, 10);  // one f a step and a retry, the start's few besides
+}
+
+void CollectMessages(int, const char*, const char*, char* msg, void* data) {
+  static_cast<std::vector<std::string>*>(data)->push_back(msg);
+}
+
+int UnitMass(sunrealtype, N_Vector, SUNMatrix M, void*, N_Vector, N_Vector, N_Vector) {
+  SM_ELEMENT_D(M, 0, 0) = 1;
+  return 0;
+}
+
+// Bad input leaves the memory usable: a wrong length or a NaN at the call, a mass matrix or a
+// step too large for a positive entry at the start, each named; NULL removes the diagonal.
+TEST(DiagonalSolve, RefusesBadInputWithAFlagNamingTheCauseAndStaysUsable) {
+  Context ctx;
+  DampedForced prob;
+  Vector x = SerialVector(1, ctx, prob.x0);
+  Vector v = SerialVector(1, ctx, prob.v0);
+  Vector two = SerialVector(2, ctx, -0.2);
+  Vector nan = SerialVector(1, ctx, NAN);
+  Vector pumping = SerialVector(1, ctx, 1000);
+  Vector good = SerialVector(1, ctx, -2 * prob.zeta * prob.w);
+  Mem mem(CEodeCreate(ctx));
+  std::vector<std::string> msgs;
+  ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), good.get()), CE_NO_MALLOC);
+  ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetErrHandlerFn(mem.get(), CollectMessages, &msgs), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetFixedStep(mem.get(), 0.01), CE_SUCCESS);
+  EXPECT_EQ(CEodeSetVelJacDiagonal(mem.get(), two.get()), CE_ILL_INPUT);
+  EXPECT_EQ(CEodeSetVelJacDiagonal(mem.get(), nan.get()), CE_ILL_INPUT);
+  ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), pumping.get()), CE_SUCCESS);
+  sunrealtype t = 0;
+  EXPECT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_ILL_INPUT);
+  ASSERT_FALSE(msgs.empty());
+  EXPECT_NE(msgs.back().find("reduce h"), std::string::npos) << msgs.back();
+  Matrix M(SUNDenseMatrix(1, 1, ctx));
+  Matrix A(SUNDenseMatrix(1, 1, ctx));
+  LinearSolver LS(SUNLinSol_Dense(x.get(), A.get(), ctx));
+  ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), good.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetLinearSolver(mem.get(), LS.get(), A.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetMassFn(mem.get(), UnitMass, M.get(), SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeReInit(mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_ILL_INPUT);
+  EXPECT_NE(msgs.back().find("mass matrix"), std::string::npos) << msgs.back();
+  ASSERT_EQ(CEodeSetMassFn(mem.get(), nullptr, nullptr, SUNTRUE), CE_SUCCESS);
+  ASSERT_EQ(CEodeReInit(mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
+  EXPECT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  long int nst = 0, nfe = 0;
+  CEodeGetNumSteps(mem.get(), &nst);
+  CEodeGetNumRhsEvals(mem.get(), &nfe);
+  EXPECT_EQ(nst, 100);
+  EXPECT_LE(nfe, nst + 5);  // the diagonal solve
+  ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), nullptr), CE_SUCCESS);
+  ASSERT_EQ(CEodeReInit(mem.get(), 0, x.get(), v.get()), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetImplicitMode(mem.get(), CE_IMPLICIT_PC), CE_SUCCESS);
+  ASSERT_EQ(CEodeSetPCCorrections(mem.get(), 2), CE_SUCCESS);
+  EXPECT_EQ(CEodeEvolve(mem.get(), 1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+  CEodeGetNumRhsEvals(mem.get(), &nfe);
+  EXPECT_GE(nfe, 200);  // removed: two corrections a step again
+}
+
 // One correction gives a degree-d set the global order d - 1 (predictor error O(h^(d-2)) in a,
 // one order per correction, kappa = O(h) in v): G4_A54's claimed third order, not the fourth it
 // measures with Newton (test_convergence); the set's default, two corrections, gives the fourth
@@ -267,12 +411,13 @@ INSTANTIATE_TEST_SUITE_P(EveryNamedSet, DefaultCorrections,
 
 struct BackendCase {
   const char* method;
-  int mode;       // CE_IMPLICIT_PC or CE_IMPLICIT_AUTO
-  bool adaptive;  // tolerances: h changes, and every new h makes the plans again
+  int mode;               // CE_IMPLICIT_PC or CE_IMPLICIT_AUTO
+  bool adaptive;          // tolerances: h changes, and every new h makes the plans again
+  bool diagonal = false;  // CEodeSetVelJacDiagonal's solve instead of the mode's
 };
 
 void PrintTo(const BackendCase& c, std::ostream* os) {
-  *os << c.method << (c.mode == CE_IMPLICIT_PC ? " PC" : " AUTO")
+  *os << c.method << (c.diagonal ? " diagonal" : (c.mode == CE_IMPLICIT_PC ? " PC" : " AUTO"))
       << (c.adaptive ? ", tolerances" : ", fixed step");
 }
 
@@ -292,6 +437,8 @@ std::vector<double> BackendRun(const BackendCase& c, bool fused) {
   EXPECT_EQ(CEodeSetFusedKernel(mem.get(), fused ? SUNTRUE : SUNFALSE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetVelocityDependence(mem.get(), SUNTRUE), CE_SUCCESS);
   EXPECT_EQ(CEodeSetImplicitMode(mem.get(), c.mode), CE_SUCCESS);
+  Vector diagonal = SerialVector(3, ctx, -2 * prob.zeta * prob.w);
+  if (c.diagonal) EXPECT_EQ(CEodeSetVelJacDiagonal(mem.get(), diagonal.get()), CE_SUCCESS);
   if (c.adaptive) {
     EXPECT_EQ(CEodeSStolerances(mem.get(), SUN_RCONST(1e-7), SUN_RCONST(1e-7)), CE_SUCCESS);
   } else {
@@ -310,8 +457,12 @@ std::vector<double> BackendRun(const BackendCase& c, bool fused) {
   long int npc = 0, nnls = 0, nfc = 0;
   sunrealtype coupling = 0;
   EXPECT_EQ(CEodeGetImplicitStats(mem.get(), &npc, &nnls, &nfc, &coupling), CE_SUCCESS);
-  EXPECT_GT(npc, 40);  // the steps are prediction-correction's (46 or more)
-  EXPECT_EQ(nnls, 0);
+  if (c.diagonal) {
+    EXPECT_EQ(npc + nnls, 0);  // neither solve: the diagonal one
+  } else {
+    EXPECT_GT(npc, 40);  // the steps are prediction-correction's (46 or more)
+    EXPECT_EQ(nnls, 0);
+  }
   return out;
 }
 
@@ -327,17 +478,20 @@ TEST_P(SerialCorrections, GiveBitwiseTheNumbersOfTheNVectorOperations) {
 }
 
 const BackendCase kBackendCases[] = {
-    {"G3_CD", CE_IMPLICIT_PC, false},  {"G4_A34", CE_IMPLICIT_AUTO, false},
-    {"G5_O4", CE_IMPLICIT_PC, false},  {"G6_O5", CE_IMPLICIT_AUTO, false},
-    {"G7_O7", CE_IMPLICIT_PC, false},  {"G8_O8", CE_IMPLICIT_AUTO, false},
-    {"G4_A34", CE_IMPLICIT_PC, true},  {"G6_O5", CE_IMPLICIT_PC, true},
-    {"G8_O8", CE_IMPLICIT_AUTO, true},
+    {"G3_CD", CE_IMPLICIT_PC, false},        {"G4_A34", CE_IMPLICIT_AUTO, false},
+    {"G5_O4", CE_IMPLICIT_PC, false},        {"G6_O5", CE_IMPLICIT_AUTO, false},
+    {"G7_O7", CE_IMPLICIT_PC, false},        {"G8_O8", CE_IMPLICIT_AUTO, false},
+    {"G4_A34", CE_IMPLICIT_PC, true},        {"G6_O5", CE_IMPLICIT_PC, true},
+    {"G8_O8", CE_IMPLICIT_AUTO, true},       {"G5_O4", CE_IMPLICIT_AUTO, false, true},
+    {"G8_O8", CE_IMPLICIT_AUTO, true, true},
 };
 
 INSTANTIATE_TEST_SUITE_P(NamedSets, SerialCorrections, ::testing::ValuesIn(kBackendCases),
                          [](const ::testing::TestParamInfo<BackendCase>& info) {
                            std::string name = info.param.method;
-                           name += info.param.mode == CE_IMPLICIT_PC ? "Pc" : "Auto";
+                           name += info.param.diagonal                 ? "Diagonal"
+                                   : info.param.mode == CE_IMPLICIT_PC ? "Pc"
+                                                                       : "Auto";
                            name += info.param.adaptive ? "WithTolerances" : "AtAFixedStep";
                            name.erase(std::remove(name.begin(), name.end(), '_'), name.end());
                            return name;

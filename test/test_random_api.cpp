@@ -665,7 +665,7 @@ void Sequence::Tolerances() {
 
 void Sequence::Velocity() {
   void* m = MemArg();
-  switch (Int(0, 6)) {
+  switch (Int(0, 7)) {
     case 0:
       Call("CEodeSetVelocityMode", m, [&] {
         return CEodeSetVelocityMode(m, static_cast<CEodeVelocityMode>(IntArg({0, 1, 2})));
@@ -689,6 +689,11 @@ void Sequence::Velocity() {
     case 5:
       Call("CEodeSetNonlinTolerances", m, [&] {
         return CEodeSetNonlinTolerances(m, Real({1e-10, 1e-6}), Real({0, 1e-12}));
+      });
+      break;
+    case 6:
+      Call("CEodeSetVelJacDiagonal", m, [&] {
+        return CEodeSetVelJacDiagonal(m, Vec(N(), Real({-0.5, 0, 0.2})));
       });
       break;
     default:
@@ -1235,6 +1240,7 @@ void Sequence::Canonical() {
     CEodeSetMassFn(m, nullptr, nullptr, SUNTRUE),
     CEodeSetLinearSolver(m, obj_.ls_dense[1].get(), obj_.dense[1].get()),
     CEodeSetVelJacFn(m, nullptr),
+    CEodeSetVelJacDiagonal(m, nullptr),
     CEodeSetVelocityMode(m, CE_VELOCITY_INDEPENDENT),
     CEodeSetStabilityGuard(m, CE_GUARD_OFF, 0),
     CEodeSetMaxFrequency(m, 0),

@@ -6,7 +6,8 @@
 // (within 1e-11).
 // Methods: CEODE's sets at h = 10/N, velocity dependence declared, Newton (dense, analytic
 // df/dtheta') and AUTO, N = 100 ... 1e5 (with AUTO, the sets a user picks for a smooth problem,
-// G5_O4 ... G8_O8, also at N = 150, 250, 300, 400, 700, where they cross 1e-9); a set's sweep
+// G5_O4 ... G8_O8, also at N = 150, 250, 300, 400, 700, where they cross 1e-9; those sets also with
+// the exact one-f solve of CEodeSetVelJacDiagonal, "-diag", on that grid); a set's sweep
 // stops below an error of 3e-14. Only theta(10) counts (Problem::end_only): CEODE and SUNDIALS
 // integrate to t = 10 in one normal-mode call, as a user who wants the final state. ARKODE ERKStep
 // with Kutta's RK3 at the same h; ERKStep adaptive, CVODE Adams and BDF at rtol = atol = 1e-3 ...
@@ -110,7 +111,7 @@ void PrintAgainstRk4(const wp::Table& table, const std::vector<std::string>& set
   double tc = -1;
   std::string best = "not reached";
   for (const std::string& set : sets) {
-    for (const std::string& m : {set, set + "-auto"}) {  // Newton and AUTO curves alike
+    for (const std::string& m : {set, set + "-auto", set + "-diag"}) {  // every solve alike
       const double t = wp::TimeAtError(table.rows(), "CEODE", m, e);
       if (t > 0 && (tc < 0 || t < tc)) tc = t, best = m;
     }
@@ -167,11 +168,13 @@ wp::Problem MakeProblem(Scene* scene) {
   p.v0 = {0.0};
   p.err = Err;
   p.vjac = VelJac;
+  p.vel_diag = {-0.5};  // f is affine in theta'
   p.end_only = true;
   return p;
 }
 
-// CEODE's sets (implicit path, Newton and AUTO, analytic df/dtheta').
+// CEODE's sets (implicit path, Newton and AUTO, analytic df/dtheta'; on the finer grid also the
+// exact one-f solve of CEodeSetVelJacDiagonal, "-diag").
 void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table* table) {
   wp::CeodeOpts c;
   c.vel = true;
@@ -189,6 +192,17 @@ void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table*
       }
     }
   }
+  c.diagonal = true;
+  for (const std::string& m : plan.sets) {
+    if (!OnFineGrid(m)) continue;
+    c.method = m.c_str();
+    for (double h : plan.fine_steps) {
+      wp::Outcome o;
+      if (!wp::MeasureCeode(table, ctx, p, c, h, m + "-diag", &o)) continue;
+      if (o.error < kRoundOff) break;
+    }
+  }
+  c.diagonal = false;
   // Error control at the library's default implicit step (AUTO).
   c.implicit_mode = CE_IMPLICIT_AUTO;
   for (const std::string& m : plan.adaptive_sets) {

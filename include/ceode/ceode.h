@@ -220,6 +220,12 @@ SUNDIALS_EXPORT int CEodeSetMassFn(void* mem, CEodeMassFn mfn, SUNMatrix M,
 SUNDIALS_EXPORT int CEodeSetLinearSolver(void* mem, SUNLinearSolver LS, SUNMatrix A);
 SUNDIALS_EXPORT int CEodeSetNonlinearSolver(void* mem, SUNNonlinearSolver NLS);
 SUNDIALS_EXPORT int CEodeSetVelJacFn(void* mem, CEodeVelJacFn jac);
+/* f affine in x' with the constant Jacobian df/dx' = diag(c) (a copy is kept; f returns
+ * accelerations, no mass matrix): a velocity-dependent step then solves for the acceleration
+ * exactly, a = f(t, x, V0) / (1 - kappa c), with one f and no iteration, whatever
+ * CEodeSetImplicitMode says (Rayleigh damping C = alpha M with lumped masses: c_i = -alpha;
+ * dampers to ground). NULL removes it; a CEodeInit of another size too. */
+SUNDIALS_EXPORT int CEodeSetVelJacDiagonal(void* mem, N_Vector c);
 
 /* Position constraints Phi(x, t) = 0 with Jacobian G (phi = G = NULL removes them) */
 SUNDIALS_EXPORT int CEodeSetConstraints(void* mem, N_Vector phi_template, CEodeConstrFn phi,
