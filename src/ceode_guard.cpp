@@ -79,10 +79,9 @@ struct GuardWork {
   std::vector<sunrealtype> alpha, beta;
   sunrealtype f0_norm = 0;  // ||f(x)||_2: the scale of the difference quotients' rounding
   sunrealtype sig = 0;      // the last difference quotient's step
-  // Arnoldi, for a non-symmetric K: its M-orthonormal basis (cloned when first needed) and
-  // Hessenberg matrix; which estimator the last estimate came from (for the warning)
-  // (Lanczos keeps its vectors there too while they fit in kWarmEntries entries, for the warm
-  // vector.)
+  // Arnoldi, for a non-symmetric K: its M-orthonormal basis (cloned when first needed), where
+  // Lanczos also keeps its vectors for the warm vector while they fit in kWarmEntries entries,
+  // and Hessenberg matrix; which estimator the last estimate came from (for the warning)
   std::vector<N_Vector> basis;
   Eigen::MatrixXd H;
   bool arnoldi = false;

@@ -93,7 +93,7 @@ struct RootMemFree {
 
 // The acceleration solve of a step, chosen once per start: explicit (docs/theory.md section
 // 4.1), the nonlinear solver (4.2), prediction-correction (4.3), either by the coupling (AUTO,
-// 4.3), or the constrained solve (section 8).
+// 4.3), the constrained solve (section 8), or the exact one for a diagonal df/dx' (4.3).
 enum class SolveKind { kExplicit, kNewton, kPC, kAuto, kConstrained, kDiagonal };
 
 // What the factored matrix of the attached linear solver holds.
