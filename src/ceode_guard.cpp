@@ -454,13 +454,11 @@ void WarmStart(GuardWork* g) {
 
 // The top Ritz vector sum_i z_i basis[i] (M-normalised: z is a unit vector, the basis
 // M-orthonormal) as the next estimate's warm start.
-void KeepWarm(GuardWork* g, const Eigen::VectorXd& z) {
-  const int k = static_cast<int>(z.size());
-  if (g->warm == nullptr) g->warm = N_VClone(g->q);
-  if (g->warm == nullptr) return;
-  std::vector<sunrealtype> c(z.data(), z.data() + k);
-  if (N_VLinearCombination(k, c.data(), g->basis.data(), g->warm) != 0) return;
-  g->warm_ok = true;
+void KeepWarm(GuardWork* g, Eigen::VectorXd* z) {
+  if (g->warm == nullptr) g->warm = CloneVector(g->q);
+  if (g->warm == nullptr) return;  // no warm start: the next estimate starts cold
+  const int k = static_cast<int>(z->size());
+  g->warm_ok = N_VLinearCombination(k, z->data(), g->basis.data(), g->warm) == 0;
 }
 
 // The iteration's start: q_0 from WarmStart, M-normalised, and q_{-1} = 0; returns how many of
@@ -494,7 +492,7 @@ bool RitzConverged(GuardWork* g, sunrealtype beta, bool breakdown, bool kept, su
   if (!*finite || !(breakdown || *res <= kLanczosTol * (std::fabs(*theta) + SUN_UNIT_ROUNDOFF))) {
     return false;
   }
-  if (kept) KeepWarm(g, z);
+  if (kept) KeepWarm(g, &z);
   return true;
 }
 

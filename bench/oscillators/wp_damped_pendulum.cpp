@@ -176,6 +176,15 @@ wp::Problem MakeProblem(Scene* scene) {
 // CEODE's sets (implicit path, Newton and AUTO, analytic df/dtheta'; on the finer grid also the
 // exact one-f solve of CEodeSetVelJacDiagonal, "-diag").
 void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table* table) {
+  // One curve over steps, stopped below round-off.
+  const auto sweep = [&](const wp::CeodeOpts& c, const std::vector<double>& steps,
+                         const std::string& label) {
+    for (double h : steps) {
+      wp::Outcome o;
+      if (!wp::MeasureCeode(table, ctx, p, c, h, label, &o)) continue;
+      if (o.error < kRoundOff) break;
+    }
+  };
   wp::CeodeOpts c;
   c.vel = true;
   // Newton (the default), then AUTO: prediction-correction where kappa ||df/dv|| is small.
@@ -185,22 +194,14 @@ void RunCeode(SUNContext ctx, const wp::Problem& p, const Plan& plan, wp::Table*
       const std::string label = mode == CE_IMPLICIT_AUTO ? m + "-auto" : m;
       c.method = m.c_str();
       const bool fine = mode == CE_IMPLICIT_AUTO && OnFineGrid(m);
-      for (double h : fine ? plan.fine_steps : plan.steps) {
-        wp::Outcome o;
-        if (!wp::MeasureCeode(table, ctx, p, c, h, label, &o)) continue;
-        if (o.error < kRoundOff) break;
-      }
+      sweep(c, fine ? plan.fine_steps : plan.steps, label);
     }
   }
   c.diagonal = true;
   for (const std::string& m : plan.sets) {
     if (!OnFineGrid(m)) continue;
     c.method = m.c_str();
-    for (double h : plan.fine_steps) {
-      wp::Outcome o;
-      if (!wp::MeasureCeode(table, ctx, p, c, h, m + "-diag", &o)) continue;
-      if (o.error < kRoundOff) break;
-    }
+    sweep(c, plan.fine_steps, m + "-diag");
   }
   c.diagonal = false;
   // Error control at the library's default implicit step (AUTO).
