@@ -237,7 +237,9 @@ inline bool SerialOfLength(N_Vector v, sunindextype n) {
 // N_VL1Norm by rounding (n * unit round-off relative); the outputs are bitwise those of
 // UpdateReference.
 sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n);
-// The kernel UpdateSerial runs on the plan at length n, for a caller that runs it many times.
+// The kernel for a caller that runs the plan many times at length n: UpdateSerial's, or at a few
+// entries one that reads each value once, which takes a test of the plan's vectors to choose
+// (more than the run it spares for a plan run once). The same outputs.
 using SerialKernelFn = sunrealtype (*)(const FusedPlan&, sunindextype);
 SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n);
 // Systems smaller than this take the entry-by-entry kernels of the plan's shape, whose cost is a

@@ -273,18 +273,15 @@ sunrealtype UpdateShape(const FusedPlan& fp, sunindextype n) {
   return n == 1 ? UpdateShaped<D, Ones>(fp, 1, kSums) : UpdateShaped<D, Ones>(fp, n, kSums);
 }
 
-// The shapes with a kernel of their own: every degree with no p_k = 1, and the named sets that
-// have some (G3_CD: p_0; G5: p_1 .. p_3; G5_ONES: all). Other plans take UpdateSmall.
+// The shapes with kernels of their own (SmallKernel, PairKernel): every degree with no p_k = 1,
+// and the named sets that have some (G3_CD: p_0; G5: p_1 .. p_3; G5_ONES: all). Other plans take
+// UpdateSmall.
 struct Shape {
   int d;
   unsigned ones;
-  sunrealtype (*run)(const FusedPlan&, sunindextype);
 };
-constexpr Shape kShapes[] = {
-    {3, 0, &UpdateShape<3, 0>}, {3, 1, &UpdateShape<3, 1>},   {4, 0, &UpdateShape<4, 0>},
-    {5, 0, &UpdateShape<5, 0>}, {5, 14, &UpdateShape<5, 14>}, {5, 15, &UpdateShape<5, 15>},
-    {6, 0, &UpdateShape<6, 0>}, {7, 0, &UpdateShape<7, 0>},   {8, 0, &UpdateShape<8, 0>},
-};
+constexpr Shape kShapes[] = {{3, 0},  {3, 1}, {4, 0}, {5, 0}, {5, 14},
+                             {5, 15}, {6, 0}, {7, 0}, {8, 0}};
 constexpr int kNumShapes = static_cast<int>(sizeof(kShapes) / sizeof(kShapes[0]));
 
 // Four partial sums: the norm is a dependency chain of additions otherwise, slower than the
@@ -772,6 +769,72 @@ SerialKernelFn RolesKernel() {
   return &UpdateRoles<D, Ones>;
 }
 
+// Systems of a few unknowns whose plan reads its vectors in the roles: entry by entry, each value
+// loaded once and each result kept in a register for the sums after it (UpdateShape loads a
+// value again, through its pointer, for every sum that weighs it, and reads each result back from
+// its store). The pointers and weights are read from the plan where they lie (a RolePlan's copy
+// of them costs more than a few entries' sums). UpdateShape's operations in its order, and its
+// norm, summed entry by entry. From kRolesFew entries on, UpdateShape's pairs of entries take
+// fewer instructions.
+constexpr sunindextype kRolesFew = 4;
+// The first term that reads input role r, as sum * kMaxTerms + term (-1: none).
+constexpr int FirstRead(int d, unsigned ones, int r) {
+  for (int s = 0; s < StepSums(d); ++s) {
+    for (int j = 0; j < StepTerms(d, ones, s); ++j) {
+      if (TermRole(d, ones, s, j) == r) return s * kMaxTerms + j;
+    }
+  }
+  return -1;
+}
+template <int D, unsigned Ones, int S, int J>
+__attribute__((always_inline)) inline sunrealtype FewTerms(const FusedPlan& fp,
+                                                           const sunrealtype* v, sunrealtype acc) {
+  if constexpr (J == StepTerms(D, Ones, S)) {
+    return acc;
+  } else {
+    const sunrealtype x = v[TermRole(D, Ones, S, J)];
+    const sunrealtype t = UnitTerm(D, Ones, S, J) ? x : fp.terms[S].c[J] * x;
+    return FewTerms<D, Ones, S, J + 1>(fp, v, acc + t);
+  }
+}
+template <int D, unsigned Ones, int S>
+__attribute__((always_inline)) inline sunrealtype FewSums(const FusedPlan& fp, sunrealtype* v,
+                                                          sunindextype i) {
+  const sunrealtype r =
+      FewTerms<D, Ones, S, 1>(fp, v, fp.terms[S].c[0] * v[TermRole(D, Ones, S, 0)]);
+  fp.terms[S].out[i] = r;
+  if constexpr (S + 1 < StepSums(D)) {
+    v[OutRole(D, S)] = r;
+    return FewSums<D, Ones, S + 1>(fp, v, i);
+  } else {
+    return r;
+  }
+}
+template <int D, unsigned Ones, int R>
+__attribute__((always_inline)) inline void FewLoads(const FusedPlan& fp, sunrealtype* v,
+                                                    sunindextype i) {
+  if constexpr (R <= D) {
+    constexpr int kAt = FirstRead(D, Ones, R);
+    if constexpr (kAt >= 0) v[R] = fp.terms[kAt / kMaxTerms].X[kAt % kMaxTerms][i];
+    FewLoads<D, Ones, R + 1>(fp, v, i);
+  }
+}
+template <int D, unsigned Ones>
+sunrealtype UpdateRolesFew(const FusedPlan& fp, sunindextype n) {
+  sunrealtype sum = 0;
+  for (sunindextype i = 0; i < n; ++i) {
+    sunrealtype v[NumRoles(D)];
+    FewLoads<D, Ones, 0>(fp, v, i);
+    sum += std::fabs(FewSums<D, Ones, 0>(fp, v, i));
+  }
+  return sum;
+}
+template <int D, unsigned Ones>
+SerialKernelFn SmallKernel(const FusedPlan& fp, sunindextype n, bool many) {
+  if (many && n < kRolesFew && RolesMatch<D, Ones>(fp)) return &UpdateRolesFew<D, Ones>;
+  return &UpdateShape<D, Ones>;
+}
+
 // ---- G3_CD's kick and drift (LeapKernels) ----
 // Whether fp is G3_CD's plan in the leapfrog's form (ceode_step_plans.cpp, LeapForm): v =
 // (1 v_old + c a_old) + c a into the velocity's buffer, u = 1 v + c a (a work vector, which these
@@ -904,6 +967,10 @@ template <int D, unsigned Ones>
 SerialKernelFn PairKernel(const FusedPlan& /*fp*/, sunindextype /*n*/) {
   return &UpdatePairsAuto<D, Ones>;
 }
+template <int D, unsigned Ones>
+SerialKernelFn SmallKernel(const FusedPlan& /*fp*/, sunindextype /*n*/, bool /*many*/) {
+  return &UpdateShape<D, Ones>;
+}
 constexpr bool kHavePairs = false;
 bool IsLeapPlan(const FusedPlan& /*fp*/) { return false; }
 template <bool kFromV, bool kToU>
@@ -920,24 +987,38 @@ constexpr std::array<PairKernelFn, kNumShapes> PairTable(std::index_sequence<I..
 }
 constexpr std::array<PairKernelFn, kNumShapes> kPairs =
     PairTable(std::make_index_sequence<kNumShapes>{});
+using SmallKernelFn = SerialKernelFn (*)(const FusedPlan&, sunindextype, bool);
+template <std::size_t... I>
+constexpr std::array<SmallKernelFn, kNumShapes> SmallTable(std::index_sequence<I...> /*shapes*/) {
+  return {&SmallKernel<kShapes[I].d, kShapes[I].ones>...};
+}
+constexpr std::array<SmallKernelFn, kNumShapes> kSmall =
+    SmallTable(std::make_index_sequence<kNumShapes>{});
 
 sunrealtype UpdateOne(const FusedPlan& fp, sunindextype /*n*/) {
   return UpdateSmall(fp, 1);  // one unknown: the entry loop folds away
 }
 sunrealtype UpdateFew(const FusedPlan& fp, sunindextype n) { return UpdateSmall(fp, n); }
 
-}  // namespace
-
-SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
+// many: the plan runs many times (SerialKernel), so a kernel that takes a test to choose pays.
+SerialKernelFn ChooseKernel(const FusedPlan& fp, sunindextype n, bool many) {
   if (fp.compensated) return &UpdateCompensated;
-  if (fp.shape > 0 && n < kSmallSystem) return kShapes[fp.shape - 1].run;
+  if (fp.shape > 0 && n < kSmallSystem) return kSmall[fp.shape - 1](fp, n, many);
   if (kHaveLeap && n >= kSmallSystem && IsLeapPlan(fp)) return LeapKernel<true, false>(fp, n);
   if (kHavePairs && fp.shape > 0 && !fp.compensated) return kPairs[fp.shape - 1](fp, n);
   if (n == 1) return &UpdateOne;
   return n < kSmallSystem ? &UpdateFew : &UpdateBlocked;
 }
 
-sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) { return SerialKernel(fp, n)(fp, n); }
+}  // namespace
+
+SerialKernelFn SerialKernel(const FusedPlan& fp, sunindextype n) {
+  return ChooseKernel(fp, n, true);
+}
+
+sunrealtype UpdateSerial(const FusedPlan& fp, sunindextype n) {
+  return ChooseKernel(fp, n, false)(fp, n);
+}
 
 bool LeapKernelsOf(const FusedPlan& fp, sunindextype n, LeapKernels* k) {
   if (!kHaveLeap || n < kSmallSystem || !IsLeapPlan(fp)) return false;

@@ -155,9 +155,18 @@ void BuildPlans(CEodeMemRec* ce, StepMem* sm) {
   sm->xin_ready = xin && fusable && (ce->degree > 3 || ce->co.wz_old == 0);
   sm->serial = fusable && serial;
   sm->mpi = fusable && mpi;
+  // Below kSmallSystem entries a plan's kernel depends on its terms, weights and which of its
+  // vectors are the same (SerialKernel), and the six configurations' plans differ only by a
+  // permutation of the vectors: one plan's kernel serves all six (choosing it once spares
+  // the setup of a short run five tests of the roles). Larger systems also test alignments.
   for (int i = 0; i < kNumPlans; ++i) {
-    sm->kernels[i] = fusable ? SerialKernel(sm->fused_plans[i], sm->len) : nullptr;
-    sm->kernels_xin[i] = sm->xin_ready ? SerialKernel(sm->fused_plans_xin[i], sm->len) : nullptr;
+    const bool first = i == 0 || sm->len >= kSmallSystem;
+    sm->kernels[i] = !fusable ? nullptr
+                     : first  ? SerialKernel(sm->fused_plans[i], sm->len)
+                              : sm->kernels[0];
+    sm->kernels_xin[i] = !sm->xin_ready ? nullptr
+                         : first        ? SerialKernel(sm->fused_plans_xin[i], sm->len)
+                                        : sm->kernels_xin[0];
   }
   // The half-step velocity reaches f in place of D_1(t - h): only where f does not read it.
   sm->leap = sm->xin_ready && VelocityUnread(ce);

@@ -699,21 +699,28 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceForEveryNam
     std::vector<std::vector<sunrealtype>> ref;  // the outputs: x(t + h), then level 1 .. d - 1
     ref.push_back(Entries(kVectors - 1));
     for (int k = 1; k < d; ++k) ref.push_back(Entries(NewSlot(d, k, false)));
-    for (int mode = 0; mode < 3; ++mode) {  // out of place, history in place, position too
+    // Out of place, history in place, position too; each plan run once (UpdateSerial) and by the
+    // kernel chosen for many runs (SerialKernel: at a few entries, each value read once).
+    for (int run = 0; run < 6; ++run) {
+      const int mode = run % 3;
       const bool in_place = mode > 0;
       const bool over = mode == 2;
       ceode::FusedPlan fp;
       ASSERT_TRUE(ceode::BuildFusedPlan(Plan(d, co, in_place, over), {}, &fp)) << set.name;
-      shaped += fp.shape > 0 ? 1 : 0;
+      shaped += fp.shape > 0 && run < 3 ? 1 : 0;
       Fill();
-      ceode::UpdateSerial(fp, GetParam());
+      if (run < 3) {
+        ceode::UpdateSerial(fp, GetParam());
+      } else {
+        ceode::SerialKernel(fp, GetParam())(fp, GetParam());
+      }
       long differing = 0;
       for (int k = 0; k < d; ++k) {
         const int slot = k == 0 ? (over ? 0 : kVectors - 1) : NewSlot(d, k, in_place);
         const std::vector<sunrealtype> got = Entries(slot);
         for (size_t i = 0; i < got.size(); ++i) differing += got[i] != ref[k][i] ? 1 : 0;
       }
-      EXPECT_EQ(differing, 0) << set.name << " mode " << mode;
+      EXPECT_EQ(differing, 0) << set.name << " mode " << mode << (run < 3 ? "" : ", many runs");
     }
   }
   EXPECT_GE(shaped, 3 * 9) << "plans with a kernel of their own";
@@ -802,8 +809,9 @@ TEST_P(StepPlanAgainstReference, GivesBitwiseTheOutputsOfTheReferenceWhenTheRole
 }
 
 INSTANTIATE_TEST_SUITE_P(EachSerialKernel, StepPlanAgainstReference,
-                         ::testing::Values(sunindextype{2}, sunindextype{5},
-                                           3 * ceode::kInPlaceMinLen + 5, kStreamed),
+                         ::testing::Values(sunindextype{1}, sunindextype{2}, sunindextype{3},
+                                           sunindextype{5}, 3 * ceode::kInPlaceMinLen + 5,
+                                           kStreamed),
                          [](const ::testing::TestParamInfo<sunindextype>& info) {
                            return "Size" + std::to_string(info.param);
                          });
