@@ -577,9 +577,6 @@ __attribute__((noinline)) int DirectOneStep(CEodeMemRec* ce, sunrealtype target,
 __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, N_Vector xout,
                                              N_Vector vout, sunrealtype* tret) {
   StepMem* sm = ce->step.get();
-  if (ce->nsteps_h < sm->direct_until && FastArguments(ce, tout, xout, vout, tret)) {
-    return DirectOneStep(ce, ce->tcur + ce->h, xout, vout, tret);  // TakeStep's span
-  }
   // Error control has no fast span (FastSpanEnd): its calls come here, and go on to its own path.
   if (AdaptOn(ce)) return AdaptCall(ce, tout, xout, vout, tret, CE_ONE_STEP);
   const long int span = FastSpanEnd(ce, *sm);
@@ -654,23 +651,23 @@ __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* 
   return !std::isnan(v - v);  // v - v is NaN exactly where v is not finite
 }
 
-}  // namespace
-
-// The whole call in one function on the fast path (StepMem::fast_until, opened by
-// OneStepChecked): the call of f, the update's kernel, the commit and the outputs' copy, as many
-// instructions as the lean loop's step and the copy, with the tests of the call's arguments
-// alone; every other case is OneStepChecked's, every failure the caller's module's (OneStepRest).
-int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
-                  sunrealtype* tret) {
+// A call's step on a fast span (StepMem::fast_until, direct_until: opened by OneStepChecked):
+// the solve (kLean: the call of f, LeanOneStep's step without its guard test, the span ending
+// before a step with a check), the update's kernel, the commit and the outputs' copy, with the
+// tests of the call's arguments alone; every failure the caller module's (OneStepRest).
+template <bool kLean>
+__attribute__((always_inline)) inline int FastStep(CEodeMemRec* ce, N_Vector xout, N_Vector vout,
+                                                   sunrealtype* tret) {
   static const char* func = "CEodeEvolve";
-  const bool fast =
-      ce->nsteps_h < ce->step->fast_until && FastArguments(ce, tout, xout, vout, tret);
-  if (!fast) return OneStepChecked(ce, tout, xout, vout, tret);
-  // LeanOneStep without its guard test (the span ends before a step with a check).
   const sunrealtype t = StepTime(ce, 1);
-  const int rv = CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
-  ++ce->nfe;
-  if (rv != 0) return FastRhsFailed(ce, rv, t, xout, vout, tret);
+  if constexpr (kLean) {
+    const int rv = CallRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2]);
+    ++ce->nfe;
+    if (rv != 0) return FastRhsFailed(ce, rv, t, xout, vout, tret);
+  } else {
+    const int flag = ce->step->solve(ce, t, StepTime(ce, 2), ce->xnext, ce->Dnew[2], func);
+    if (flag != CE_SUCCESS) return OneStepRest(ce, flag, ce->tcur, xout, vout, tret);
+  }
   const sunrealtype xl1 = FastUpdate(ce);
   // Not finite, or Exploded: TakeStep's test in one compare.
   if (!(xl1 <= ce->step->growth_limit)) {
@@ -686,6 +683,30 @@ int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vou
   }
   *tret = ce->tretlast = t;
   return CE_SUCCESS;
+}
+
+// The fast span's step of a configuration that solves for the acceleration (implicit,
+// constrained; StepMem::direct_until).
+__attribute__((noinline)) int SolvedFastStep(CEodeMemRec* ce, N_Vector xout, N_Vector vout,
+                                             sunrealtype* tret) {
+  return FastStep<false>(ce, xout, vout, tret);
+}
+
+}  // namespace
+
+// The whole call in one function on the lean configuration's fast span: as many instructions as
+// the lean loop's step and the copy. The other configurations' fast spans take SolvedFastStep,
+// every other case is OneStepChecked's.
+int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
+                  sunrealtype* tret) {
+  const StepMem* sm = ce->step.get();
+  if (ce->nsteps_h < sm->fast_until && FastArguments(ce, tout, xout, vout, tret)) {
+    return FastStep<true>(ce, xout, vout, tret);
+  }
+  if (ce->nsteps_h < sm->direct_until && FastArguments(ce, tout, xout, vout, tret)) {
+    return SolvedFastStep(ce, xout, vout, tret);
+  }
+  return OneStepChecked(ce, tout, xout, vout, tret);
 }
 
 // As OneStepEvolve, for CE_NORMAL: a call at most the lean loop's minimum of steps ahead (from
