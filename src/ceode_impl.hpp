@@ -637,6 +637,7 @@ int DetectVelocityDependence(CEodeMemRec* ce);
 bool VelocityUnread(const CEodeMemRec* ce);
 // How the dependence was decided, for the statistics: declared, none (declared), detected, none.
 const char* VelocityDependenceName(const CEodeMemRec* ce);
+const char* AccelSolveName(const CEodeMemRec* ce);  // PrintAllStats: the solve the start chose
 int SolveAuto(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vector x, N_Vector a,
               const char* func);  // CE_IMPLICIT_AUTO: PC or the nonlinear solver, refreshed
 // With CEodeSetVelJacDiagonal: a = f(t, x, V0) / (1 - kappa c), exact for f affine in x'.

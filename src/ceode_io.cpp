@@ -1,5 +1,7 @@
 // Optional inputs and outputs, statistics and flag names.
 #include <cmath>
+#include <cstddef>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -35,6 +37,37 @@ long int Nje(const CEodeMemRec& ce) { return ce.ls.nje + ce.con.nje; }
 template <typename T>
 int GetCounter(void* mem, const char* func, T* out, T CEodeMemRec::*field) {
   return GetValue(mem, func, out, [field](const CEodeMemRec& ce) { return ce.*field; });
+}
+
+// PrintAllStats' entries: the named choices first, then the figures.
+struct NamedStat {
+  const char* name;
+  const char* value;
+};
+struct Stat {
+  const char* name;
+  double value;
+  bool integer;
+};
+
+// One "name = value" line each (SUN_OUTPUTFORMAT_TABLE) or one line of name,value pairs (CSV).
+template <std::size_t N, std::size_t M>
+void WriteStats(FILE* out, bool csv, const NamedStat (&names)[N], const Stat (&stats)[M]) {
+  for (std::size_t i = 0; i < N; ++i) {
+    if (csv) {
+      std::fprintf(out, "%s%s,%s", i == 0 ? "" : ",", names[i].name, names[i].value);
+    } else {
+      std::fprintf(out, "%-28s = %s\n", names[i].name, names[i].value);
+    }
+  }
+  for (const Stat& r : stats) {
+    if (r.integer) {
+      std::fprintf(out, csv ? ",%s,%ld" : "%-28s = %ld\n", r.name, static_cast<long>(r.value));
+    } else {
+      std::fprintf(out, csv ? ",%s,%.16g" : "%-28s = %.16g\n", r.name, r.value);
+    }
+  }
+  if (csv) std::fprintf(out, "\n");
 }
 
 }  // namespace
@@ -318,12 +351,17 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
   int flag = Access(mem, __func__, &ce);
   if (flag != CE_SUCCESS) return flag;
   if (outfile == nullptr) return ProcessError(ce, CE_ILL_INPUT, __func__, "outfile = NULL.");
-  struct Row {
-    const char* name;
-    double value;
-    bool integer;
+  if (fmt != SUN_OUTPUTFORMAT_TABLE && fmt != SUN_OUTPUTFORMAT_CSV) {
+    return ProcessError(
+        ce, CE_ILL_INPUT, __func__,
+        "Unknown output format: use SUN_OUTPUTFORMAT_TABLE or SUN_OUTPUTFORMAT_CSV.");
+  }
+  const NamedStat names[] = {
+      {"Method", ce->method_name.c_str()},
+      {"Velocity dependence", ceode::VelocityDependenceName(ce)},
+      {"Acceleration solve", ceode::AccelSolveName(ce)},
   };
-  const Row rows[] = {
+  const Stat rows[] = {
       {"Current time", static_cast<double>(ce->tcur), false},
       {"Steps", static_cast<double>(ce->nst), true},
       {"Step size", static_cast<double>(ce->h), false},
@@ -346,32 +384,7 @@ int CEodePrintAllStats(void* mem, FILE* outfile, SUNOutputFormat fmt) {
       {"Steps limited by stability", static_cast<double>(ce->adapt ? ce->adapt->ncapped : 0), true},
       {"Root fn evals", static_cast<double>(ceode::RootNumGEvals(ce)), true},
   };
-  if (fmt == SUN_OUTPUTFORMAT_TABLE) {
-    std::fprintf(outfile, "%-28s = %s\n", "Method", ce->method_name.c_str());
-    std::fprintf(outfile, "%-28s = %s\n", "Velocity dependence", ceode::VelocityDependenceName(ce));
-    for (const Row& r : rows) {
-      if (r.integer) {
-        std::fprintf(outfile, "%-28s = %ld\n", r.name, static_cast<long>(r.value));
-      } else {
-        std::fprintf(outfile, "%-28s = %.16g\n", r.name, r.value);
-      }
-    }
-  } else if (fmt == SUN_OUTPUTFORMAT_CSV) {
-    std::fprintf(outfile, "Method,%s,Velocity dependence,%s", ce->method_name.c_str(),
-                 ceode::VelocityDependenceName(ce));
-    for (const Row& r : rows) {
-      if (r.integer) {
-        std::fprintf(outfile, ",%s,%ld", r.name, static_cast<long>(r.value));
-      } else {
-        std::fprintf(outfile, ",%s,%.16g", r.name, r.value);
-      }
-    }
-    std::fprintf(outfile, "\n");
-  } else {
-    return ProcessError(
-        ce, CE_ILL_INPUT, __func__,
-        "Unknown output format: use SUN_OUTPUTFORMAT_TABLE or SUN_OUTPUTFORMAT_CSV.");
-  }
+  WriteStats(outfile, fmt == SUN_OUTPUTFORMAT_CSV, names, rows);
   return CE_SUCCESS;
 }
 

@@ -617,6 +617,19 @@ const char* VelocityDependenceName(const CEodeMemRec* ce) {
   return ce->pc.vel_detected ? "detected" : "none";
 }
 
+// The step's solve for the acceleration, as ChooseImplicitSolve chose it at the last start (with
+// AUTO, the one it runs now).
+const char* AccelSolveName(const CEodeMemRec* ce) {
+  if (!ce->started) return "not started";
+  if (HasConstraints(ce)) return "constrained";
+  if (!ce->vel_dependent) return "explicit";
+  if (ce->pc.diag != nullptr) return "diagonal";
+  const int mode = ImplicitMode(ce);
+  if (mode == CE_IMPLICIT_PC) return "prediction-correction";
+  if (mode == CE_IMPLICIT_NEWTON) return "Newton";
+  return ce->pc.active ? "AUTO: prediction-correction" : "AUTO: Newton";
+}
+
 }  // namespace ceode
 
 extern "C" {

@@ -67,10 +67,12 @@ namespace {
 // keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p, and the stencil must reach the
 // derivative d - 3 (2R >= d - 3). p is a named set's order, else d (orders reach d, never d + 1):
 // R = 2 at degree 6, 3 at degrees 7 and 8.
+// An order never exceeds the degree, so R is at most kMaxHalfWidth.
+constexpr int kMaxHalfWidth = (kMaxDegree - 1) / 2;
 int HalfWidth(const CEodeMemRec* ce) {
   const int d = ce->degree;
   const MethodSet* m = NamedSetWithParams(d, ce->params);
-  const int p = m != nullptr ? m->order_x : d;
+  const int p = m != nullptr ? std::min(m->order_x, d) : d;
   return std::max((p - 1) / 2, (d - 2) / 2);
 }
 
@@ -120,9 +122,9 @@ int StartDerivativesHigh(
   sunrealtype wts[kMaxDegree][2 * kMaxDegree + 1];  // wts[q]: the q-th derivative
   for (int j = 0; j < npts; ++j) nodes[j] = (j - R) * h;
   FornbergTable(d - 3, npts, nodes, wts);
-  N_Vector sample[2 * kMaxDegree];
+  N_Vector sample[2 * kMaxHalfWidth];
   for (int i = 0; i < 2 * R; ++i) sample[i] = i + 1 < d ? ce->Dnew[i + 1] : as;
-  KernelPlan taylor[2 * kMaxDegree];
+  KernelPlan taylor[2 * kMaxHalfWidth];  // a plan is a few kilobytes: as many as the nodes
   KernelPlan stencil;
   stencil.plan.n = d - 3;
   for (int k = 3; k < d; ++k) {

@@ -1190,10 +1190,56 @@ TEST(PredictionCorrectionStatistics, CountStepsAndCorrectionsInTheGettersAndInPr
   EXPECT_TRUE(ceode_test::Contains(table, "PC steps                     = 100\n")) << table;
   EXPECT_TRUE(ceode_test::Contains(table, "PC corrections               = 200\n")) << table;
   EXPECT_TRUE(ceode_test::Contains(table, "Velocity dependence          = declared\n")) << table;
+  EXPECT_TRUE(ceode_test::Contains(table, "Acceleration solve           = prediction-correction\n"))
+      << table;
   EXPECT_TRUE(ceode_test::Contains(csv, ",PC steps,100,PC corrections,200,")) << csv;
   EXPECT_TRUE(ceode_test::Contains(csv, "Velocity dependence,declared,")) << csv;
+  EXPECT_TRUE(ceode_test::Contains(csv, ",Acceleration solve,prediction-correction,")) << csv;
   EXPECT_EQ(CEodeGetNumPCSteps(mem.get(), nullptr), CE_ILL_INPUT);
   EXPECT_EQ(CEodeGetNumPCCorrections(nullptr, &ncorr), CE_MEM_NULL);
+}
+
+// The table and the CSV line name the solve for the acceleration that the start chose.
+TEST(AccelerationSolveStatistics, NameTheSolveTheStartChose) {
+  struct Case {
+    int mode;       // CEodeSetImplicitMode, -1: none set
+    bool declared;  // CEodeSetVelocityDependence(SUNTRUE)
+    bool diagonal;  // CEodeSetVelJacDiagonal
+    const char* name;
+  };
+  const Case cases[] = {{-1, false, false, "not started"},
+                        {-1, false, false, "explicit"},
+                        {CE_IMPLICIT_NEWTON, true, false, "Newton"},
+                        {CE_IMPLICIT_PC, true, false, "prediction-correction"},
+                        {CE_IMPLICIT_AUTO, true, false, "AUTO: prediction-correction"},
+                        {-1, true, true, "diagonal"}};
+  for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
+    const Case& c = cases[i];
+    DampedForced prob;
+    Context ctx;
+    Vector x = SerialVector(1, ctx, prob.x0);
+    Vector v = SerialVector(1, ctx, prob.v0);
+    Vector diag = SerialVector(1, ctx, -2 * prob.zeta * prob.w);
+    Mem mem(CEodeCreate(ctx));
+    // The explicit case declares the damped oscillator's f independent of x' (its answer is then
+    // wrong, its solve explicit).
+    ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetFixedStep(mem.get(), 0.01), CE_SUCCESS);
+    ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), c.declared ? SUNTRUE : SUNFALSE), CE_SUCCESS);
+    if (c.mode >= 0) ASSERT_EQ(CEodeSetImplicitMode(mem.get(), c.mode), CE_SUCCESS);
+    if (c.diagonal) ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), diag.get()), CE_SUCCESS);
+    sunrealtype t = 0;
+    if (i > 0) ASSERT_EQ(CEodeEvolve(mem.get(), 0.1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    const std::string table = Stats(mem.get(), SUN_OUTPUTFORMAT_TABLE);
+    const std::string csv = Stats(mem.get(), SUN_OUTPUTFORMAT_CSV);
+    char row[96];
+    std::snprintf(row, sizeof(row), "%-28s = %s\n", "Acceleration solve", c.name);
+    EXPECT_TRUE(ceode_test::Contains(table, row)) << c.name << "\n" << table;
+    EXPECT_TRUE(ceode_test::Contains(csv, std::string(",Acceleration solve,") + c.name + ","))
+        << c.name << "\n"
+        << csv;
+  }
 }
 
 TEST(VelocityDependenceStatistics, ShowHowTheDependenceWasDecided) {

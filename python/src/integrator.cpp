@@ -255,6 +255,19 @@ void Integrator::SetImplicitMode(const std::string& mode) {
   Check(CEodeSetImplicitMode(mem(), m));
 }
 
+// f affine in x' with df/dx' = diag(c): the step's exact one-evaluation solve. None removes it.
+void Integrator::SetVelJacDiagonal(py::handle c) {
+  if (c.is_none()) {
+    Check(CEodeSetVelJacDiagonal(mem(), nullptr));
+    return;
+  }
+  RealArray a = AsVector(c, "c", cb_->n);
+  N_Vector cv = NewVector(a, ctx_);
+  const int flag = CEodeSetVelJacDiagonal(mem(), cv);
+  N_VDestroy(cv);
+  Check(flag);
+}
+
 void Integrator::SetZeroStart(bool on) { Check(CEodeSetZeroStart(mem(), on ? SUNTRUE : SUNFALSE)); }
 void Integrator::SetStopTime(double tstop) { Check(CEodeSetStopTime(mem(), tstop)); }
 void Integrator::SetMaxNumSteps(long mxsteps) { Check(CEodeSetMaxNumSteps(mem(), mxsteps)); }

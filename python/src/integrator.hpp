@@ -30,6 +30,7 @@ class Integrator {
   void SetConstraints(py::object phi, py::object G, long nc);
   void SetLinearSolver(const std::string& kind);
   void SetImplicitMode(const std::string& mode);
+  void SetVelJacDiagonal(py::handle c);
   void SetZeroStart(bool on);
   void SetStopTime(double tstop);
   void SetMaxNumSteps(long mxsteps);

@@ -40,6 +40,7 @@ void DefineOptions(py::class_<Integrator>& c) {
            py::arg("nc"))
       .def("set_linear_solver", &Integrator::SetLinearSolver, py::arg("kind") = "dense")
       .def("set_implicit_mode", &Integrator::SetImplicitMode, py::arg("mode"))
+      .def("set_vel_jac_diagonal", &Integrator::SetVelJacDiagonal, py::arg("c"))
       .def("set_zero_start", &Integrator::SetZeroStart, py::arg("flag"))
       .def("set_stop_time", &Integrator::SetStopTime, py::arg("tstop"))
       .def("set_max_num_steps", &Integrator::SetMaxNumSteps, py::arg("mxsteps"))

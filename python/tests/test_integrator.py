@@ -214,3 +214,34 @@ def test_newton_with_a_dense_linear_solver_takes_jacobians_and_the_same_solution
     assert abs(xn - exact) < 1e-6 and abs(xf - exact) < 1e-6
     with pytest.raises(ValueError):
         s.set_implicit_mode("sometimes")
+
+
+def test_the_diagonal_solve_takes_one_evaluation_a_step_and_newtons_solution():
+    # x'' = -x - 2 z x': f is affine in x' with df/dx' = -2 z, so the step's equation is solved
+    # exactly with one f a step; Newton at tight tolerances solves the same equation.
+    z = 0.1
+
+    def f(t, x, v, out):
+        out[0] = -x[0] - 2 * z * v[0]
+
+    runs = []
+    for diagonal in (True, False):
+        s = ceode.Integrator(f, 0.0, [1.0], [0.0], method="G4_A34")
+        s.set_fixed_step(1e-2)
+        s.set_velocity_dependence(True)
+        if diagonal:
+            s.set_vel_jac_diagonal([-2 * z])
+        else:
+            s.set_implicit_mode("newton")
+            s.set_linear_solver("dense")
+        t, x, _ = s.evolve(10.0)
+        runs.append((x[0], s.stats()))
+    (xd, diag), (xn, _) = runs
+    assert diag["rhs_evals"] - diag["start_rhs_evals"] == diag["steps"] == 1000
+    assert diag["nls_steps"] == 0 and diag["pc_steps"] == 0
+    assert abs(xd - xn) < 1e-9
+    with pytest.raises(ValueError):
+        s.set_vel_jac_diagonal([1.0, 2.0])  # one unknown
+    with pytest.raises(ceode.CEodeError):
+        s.set_vel_jac_diagonal([float("nan")])
+    s.set_vel_jac_diagonal(None)
