@@ -264,17 +264,30 @@ INSTANTIATE_TEST_SUITE_P(NamedSets, DiagonalSolve, ::testing::ValuesIn(kDiagonal
                            return std::string(info.param.label);
                          });
 
-// Error control changes kappa with h: the factors follow, and the run meets its tolerance with one
-// f a step.
-TEST(DiagonalSolve, FollowsTheStepUnderErrorControl) {
-  Context ctx;
+// A memory on the damped oscillator, its f and user data set (Init); c is its df/dx'.
+struct DampedMem {
   DampedForced prob;
+  Context ctx;
   Vector x = SerialVector(1, ctx, prob.x0);
   Vector v = SerialVector(1, ctx, prob.v0);
   Vector c = SerialVector(1, ctx, -2 * prob.zeta * prob.w);
-  Mem mem(CEodeCreate(ctx));
-  ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
-  ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
+  Mem mem{CEodeCreate(ctx)};
+  bool Init() {
+    return CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()) == CE_SUCCESS &&
+           CEodeSetUserData(mem.get(), &prob) == CE_SUCCESS;
+  }
+};
+
+// Error control changes kappa with h: the factors follow, and the run meets its tolerance with one
+// f a step.
+TEST(DiagonalSolve, FollowsTheStepUnderErrorControl) {
+  DampedMem dm;
+  ASSERT_TRUE(dm.Init());
+  DampedForced& prob = dm.prob;
+  Vector& x = dm.x;
+  Vector& v = dm.v;
+  Vector& c = dm.c;
+  Mem& mem = dm.mem;
   ASSERT_EQ(CEodeSetMethodByName(mem.get(), "G5_O4"), CE_SUCCESS);
   ASSERT_EQ(CEodeSStolerances(mem.get(), 1e-8, 1e-8), CE_SUCCESS);
   ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), c.get()), CE_SUCCESS);
@@ -1215,22 +1228,19 @@ TEST(AccelerationSolveStatistics, NameTheSolveTheStartChose) {
                         {-1, true, true, "diagonal"}};
   for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
     const Case& c = cases[i];
-    DampedForced prob;
-    Context ctx;
-    Vector x = SerialVector(1, ctx, prob.x0);
-    Vector v = SerialVector(1, ctx, prob.v0);
-    Vector diag = SerialVector(1, ctx, -2 * prob.zeta * prob.w);
-    Mem mem(CEodeCreate(ctx));
+    DampedMem dm;
+    ASSERT_TRUE(dm.Init());
+    Mem& mem = dm.mem;
     // The explicit case declares the damped oscillator's f independent of x' (its answer is then
     // wrong, its solve explicit).
-    ASSERT_EQ(CEodeInit(mem.get(), prob.Rhs(), 0, x.get(), v.get()), CE_SUCCESS);
-    ASSERT_EQ(CEodeSetUserData(mem.get(), &prob), CE_SUCCESS);
     ASSERT_EQ(CEodeSetFixedStep(mem.get(), 0.01), CE_SUCCESS);
     ASSERT_EQ(CEodeSetVelocityDependence(mem.get(), c.declared ? SUNTRUE : SUNFALSE), CE_SUCCESS);
     if (c.mode >= 0) ASSERT_EQ(CEodeSetImplicitMode(mem.get(), c.mode), CE_SUCCESS);
-    if (c.diagonal) ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), diag.get()), CE_SUCCESS);
+    if (c.diagonal) ASSERT_EQ(CEodeSetVelJacDiagonal(mem.get(), dm.c.get()), CE_SUCCESS);
     sunrealtype t = 0;
-    if (i > 0) ASSERT_EQ(CEodeEvolve(mem.get(), 0.1, x.get(), v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    if (i > 0) {
+      ASSERT_EQ(CEodeEvolve(mem.get(), 0.1, dm.x.get(), dm.v.get(), &t, CE_NORMAL), CE_SUCCESS);
+    }
     const std::string table = Stats(mem.get(), SUN_OUTPUTFORMAT_TABLE);
     const std::string csv = Stats(mem.get(), SUN_OUTPUTFORMAT_CSV);
     char row[96];
