@@ -62,13 +62,14 @@ void FreeVectors(CEodeMemRec* ce) {
 
 namespace {
 
+// The widest stencil's half width: an order never exceeds the degree (HalfWidth).
+constexpr int kMaxHalfWidth = (kMaxDegree - 1) / 2;
+
 // Half width R of the stencil: the q-th derivative of the acceleration on 2R + 1 nodes
 // spaced h errs by O(h^(2R+1-q)), so D_k = a^(k-2) errs by O(h^(2R+3-k)); an order-p set
 // keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p, and the stencil must reach the
 // derivative d - 3 (2R >= d - 3). p is a named set's order, else d (orders reach d, never d + 1):
 // R = 2 at degree 6, 3 at degrees 7 and 8.
-// An order never exceeds the degree, so R is at most kMaxHalfWidth.
-constexpr int kMaxHalfWidth = (kMaxDegree - 1) / 2;
 int HalfWidth(const CEodeMemRec* ce) {
   const int d = ce->degree;
   const MethodSet* m = NamedSetWithParams(d, ce->params);

@@ -558,8 +558,7 @@ __attribute__((always_inline)) inline bool FastArguments(const CEodeMemRec* ce, 
 }
 
 // One step of the configuration (StepMem::one; LeanOneStep not inlined here: OneStepEvolve's
-// alone) towards target = tcur + h, then the outputs, on a direct path's call (OneStepChecked's,
-// and the fast path's where the configuration is not the lean one).
+// alone) towards target = tcur + h, then the outputs, on OneStepChecked's direct path.
 __attribute__((noinline)) int DirectOneStep(CEodeMemRec* ce, sunrealtype target, N_Vector xout,
                                             N_Vector vout, sunrealtype* tret) {
   const int flag = ce->step->one(ce);

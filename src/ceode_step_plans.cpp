@@ -160,12 +160,12 @@ void BuildPlans(CEodeMemRec* ce, StepMem* sm) {
   // permutation of the vectors: one plan's kernel serves all six (choosing it once spares
   // the setup of a short run five tests of the roles). Larger systems also test alignments.
   for (int i = 0; i < kNumPlans; ++i) {
-    const bool first = i == 0 || sm->len >= kSmallSystem;
+    const bool own = i == 0 || sm->len >= kSmallSystem;
     sm->kernels[i] = !fusable ? nullptr
-                     : first  ? SerialKernel(sm->fused_plans[i], sm->len)
+                     : own    ? SerialKernel(sm->fused_plans[i], sm->len)
                               : sm->kernels[0];
     sm->kernels_xin[i] = !sm->xin_ready ? nullptr
-                         : first        ? SerialKernel(sm->fused_plans_xin[i], sm->len)
+                         : own          ? SerialKernel(sm->fused_plans_xin[i], sm->len)
                                         : sm->kernels_xin[0];
   }
   // The half-step velocity reaches f in place of D_1(t - h): only where f does not read it.
