@@ -494,6 +494,8 @@ void StepRestart(CEodeMemRec* ce);
 void StepOptionsChanged(CEodeMemRec* ce);
 // ceode_pc.cpp's choice of the implicit solve (kNewton, kPC or kAuto), read by ChooseStep.
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind);
+// The solve the last start chose (ChooseStep), on a started run.
+SolveKind ChosenSolve(const CEodeMemRec* ce);
 // f's failure (its return value rv at t) reported as CE_RHSFUNC_FAIL.
 int RhsFailed(CEodeMemRec* ce, int rv, sunrealtype t, const char* func);
 int EvalAccel(CEodeMemRec* ce, sunrealtype t, N_Vector x, N_Vector v, N_Vector a,

@@ -617,17 +617,25 @@ const char* VelocityDependenceName(const CEodeMemRec* ce) {
   return ce->pc.vel_detected ? "detected" : "none";
 }
 
-// The step's solve for the acceleration, as ChooseImplicitSolve chose it at the last start (with
-// AUTO, the one it runs now).
+// The step's solve for the acceleration that the last start chose (with AUTO, the one it runs
+// now).
 const char* AccelSolveName(const CEodeMemRec* ce) {
   if (!ce->started) return "not started";
-  if (HasConstraints(ce)) return "constrained";
-  if (!ce->vel_dependent) return "explicit";
-  if (ce->pc.diag != nullptr) return "diagonal";
-  const int mode = ImplicitMode(ce);
-  if (mode == CE_IMPLICIT_PC) return "prediction-correction";
-  if (mode == CE_IMPLICIT_NEWTON) return "Newton";
-  return ce->pc.active ? "AUTO: prediction-correction" : "AUTO: Newton";
+  switch (ChosenSolve(ce)) {
+    case SolveKind::kExplicit:
+      return "explicit";
+    case SolveKind::kNewton:
+      return "Newton";
+    case SolveKind::kPC:
+      return "prediction-correction";
+    case SolveKind::kAuto:
+      return ce->pc.active ? "AUTO: prediction-correction" : "AUTO: Newton";
+    case SolveKind::kConstrained:
+      return "constrained";
+    case SolveKind::kDiagonal:
+      return "diagonal";
+  }
+  return "unknown";
 }
 
 }  // namespace ceode

@@ -743,6 +743,8 @@ bool TakeDirectStep(CEodeMemRec* ce, int* flag) {
 
 void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = kind; }
 
+SolveKind ChosenSolve(const CEodeMemRec* ce) { return ce->step->solve_kind; }
+
 namespace {
 void CloseSpans(StepMem* sm) { sm->fast_until = sm->direct_until = 0; }
 }  // namespace
