@@ -730,6 +730,8 @@ sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, s
   return NextStepAnyRatio(ce, err, hbase, tfrom, limit_t, capped);
 }
 
+bool AdaptKeepsStep(CEodeMemRec* ce, sunrealtype err) { return KeepsStep(*ce->adapt, err); }
+
 void AdaptFree(CEodeMemRec* ce) {
   if (ce->adapt == nullptr) return;
   AdaptMem& am = *ce->adapt;

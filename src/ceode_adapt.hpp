@@ -205,6 +205,10 @@ int AdaptWeightsDefined(CEodeMemRec* ce, sunrealtype dmin, const char* func);
 // limit_t.
 sunrealtype AdaptNextStep(CEodeMemRec* ce, sunrealtype err, sunrealtype hbase, sunrealtype tfrom,
                           sunrealtype limit_t, bool* capped);
+// AdaptNextStep's verdict where the node has an estimate, no schedule decides and hbase lies
+// within the bounds of h: true when the controller keeps hbase (the record then follows the step,
+// as AdaptNextStep's); false leaves the record as it was.
+bool AdaptKeepsStep(CEodeMemRec* ce, sunrealtype err);
 // The step to retry with after a failed error test.
 sunrealtype AdaptRetryStep(const CEodeMemRec* ce, sunrealtype err);
 // The largest step the guard's estimate admits (SUN_BIG_REAL: none known).

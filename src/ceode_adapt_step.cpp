@@ -300,11 +300,10 @@ void AfterFShape(CEodeMemRec* ce, AdaptMem* am, int weights) {
 // divided differences, the local error estimate into est and its norm (scaled for tolerance
 // proportionality; 0 while none is estimated), yd over the step into yd_next and the weights of
 // the new position into ewt_next (their smallest denominator in *dmin); on the serial pass the
-// position of a next step of the same h (NextPositionTerms).
-sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
+// position of a next step of the same h (NextPositionTerms). AfterFOfShape: on the shape as
+// AfterFShape left it.
+sunrealtype AfterFOfShape(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   AdaptAfterF& w = am->after;
-  // The weights of the new position, unless they came with it (MoveTo).
-  AfterFShape(ce, am, am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind);
   EstimateNodeTerms(ce, am, t, &w);
   w.est = am->est;
   w.ewt = am->ewt;
@@ -325,6 +324,12 @@ sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
   const sunrealtype norm = am->kernels.AfterF(w, &dmin, &am->spec_l1);
   if (w.weights != AdaptAfterF::kWeightsNone) am->dmin_next = dmin;
   return w.est_kind == AdaptAfterF::kEstNone ? 0 : norm * am->err_scale;
+}
+
+sunrealtype AfterF(CEodeMemRec* ce, AdaptMem* am, sunrealtype t) {
+  // The weights of the new position, unless they came with it (MoveTo).
+  AfterFShape(ce, am, am->ewt_next_ready ? AdaptAfterF::kWeightsNone : am->wkind);
+  return AfterFOfShape(ce, am, t);
 }
 
 // x(t + hn; a) for the constrained solve at t = t_n + h: the derivative relations over h, the
@@ -414,15 +419,18 @@ int ErrFailure(CEodeMemRec* ce, const char* func, sunrealtype t, sunrealtype err
 }
 
 // The accepted step becomes the node: the history, the positions (x(t_n) stays as the dense
-// output's left end), the divided differences and the times.
-void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
-  const sunrealtype h = ce->h;
+// output's left end), the divided differences and the times. kSteady: from a steady node
+// (Steady), whose weights come from the tolerances, whose table is full and whose step, the
+// last step and the remap's stay h.
+template <bool kSteady>
+__attribute__((always_inline)) inline void CommitNodeOf(CEodeMemRec* ce, AdaptMem* am,
+                                                        sunrealtype t, sunrealtype err) {
   // yd of the new node (its z, un-remapped, less the node's z over the step) and the weights of
   // its position were formed with the estimate.
   std::swap(am->yd, am->yd_next);
-  if (am->tol_kind != 2) std::swap(am->ewt, am->ewt_next);
+  if (kSteady || am->tol_kind != 2) std::swap(am->ewt, am->ewt_next);
   am->ewt_next_ready = false;
-  std::swap(ce->D, ce->Dnew);
+  SwapHistorySlots(ce);
   N_Vector old = ce->xcur;
   ce->xcur = ce->xnext;
   ce->xnext = ce->xnew;
@@ -436,13 +444,19 @@ void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
   std::memcpy(moving, am->tnode, sizeof moving);
   std::memcpy(am->tnode + 1, moving, sizeof moving);
   am->tnode[0] = t;
-  am->ndata = std::min(am->ndata + 1, kMaxDegree);
-  am->hprev = am->hmap = am->hlast = h;
+  if constexpr (!kSteady) {
+    am->ndata = std::min(am->ndata + 1, kMaxDegree);
+    am->hprev = am->hmap = am->hlast = ce->h;
+    if (am->first) am->first = !AdaptEstimated(*am);  // until a step passes a test: on trial
+  }
   am->err = err;
-  if (am->first) am->first = !AdaptEstimated(*am);  // until a step passes a test: on trial
   ce->tcur = t;
   ++ce->nst;
   ++ce->nsteps_h;
+}
+
+void CommitNode(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, sunrealtype err) {
+  CommitNodeOf<false>(ce, am, t, err);
 }
 
 // The first step once the guard's estimate is known (it comes after the start chose h): within
@@ -514,6 +528,17 @@ __attribute__((noinline)) sunrealtype MoveToApart(CEodeMemRec* ce, AdaptMem* am,
   return MoveTo(ce, am, h);
 }
 
+// MoveTo's result for an unchanged step (no remap, the same weights), made with the step's pass
+// (spec_ready), and its growth check.
+int TakeNextPosition(CEodeMemRec* ce, AdaptMem* am, sunrealtype t, const char* func) {
+  std::swap(ce->xnext, am->xspec);
+  std::swap(am->ewt_next, am->ewt_spec);
+  am->ewt_next_ready = true;
+  am->dmin_next = 1;
+  am->spec_ready = false;
+  return CheckGrowth(ce, am->spec_l1, t, func);
+}
+
 // The accepted node's next step (with constraints the planned one, and the plan of the step after
 // it) and the position at its end.
 int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sunrealtype err,
@@ -531,16 +556,7 @@ int NextStep(CEodeMemRec* ce, AdaptMem* am, bool constrained, sunrealtype t, sun
   }
   if (capped) ++am->ncapped;
   am->capped_last = capped;
-  if (am->spec_ready && h == ce->h && !constrained) {
-    // MoveTo's result for an unchanged step (no remap, the same weights), made with the step's
-    // pass.
-    std::swap(ce->xnext, am->xspec);
-    std::swap(am->ewt_next, am->ewt_spec);
-    am->ewt_next_ready = true;
-    am->dmin_next = 1;
-    am->spec_ready = false;
-    return CheckGrowth(ce, am->spec_l1, t, func);
-  }
+  if (am->spec_ready && h == ce->h && !constrained) return TakeNextPosition(ce, am, t, func);
   return CheckGrowth(ce, MoveToApart(ce, am, h), t, func);
 }
 
@@ -637,6 +653,50 @@ int LeanStep(CEodeMemRec* ce, AdaptMem* am, sunrealtype tlimit, const char* func
   return flag;
 }
 
+// Whether the node is steady: its next step repeats its last one in everything that AfterF's
+// shape, the position and the bounds of h depend on. The last step kept h within its bounds (not
+// capped, ratio 1, the stop time not within two steps), its pass formed the next position and
+// the weights (TakeNextPosition), the start and the differences' table are behind. Then each
+// next step that keeps h keeps the node steady (SteadyStep): the stable step and the bounds are
+// those of this call, which no step in it changes.
+bool Steady(CEodeMemRec* ce, const AdaptMem& am, sunrealtype tlimit) {
+  const sunrealtype h = ce->h;
+  const sunrealtype rem = tlimit - ce->tcur;
+  return !am.first && !am.capped_last && am.eta_prev == 1 && am.ewt_next_ready &&
+         am.dmin_next == 1 && am.ndata == kMaxDegree && am.after.ndiff == am.set.order - 1 &&
+         am.after.weights == AdaptAfterF::kWeightsNone && am.spec_pass && am.shape_h == h &&
+         am.hprev == h && am.hmap == h && AdaptEstimated(am) && !(rem > 0 && rem < 2 * h) &&
+         h >= am.hmin && (am.hmax <= 0 || h <= am.hmax) && h <= AdaptStableStep(ce);
+}
+
+// LeanStep from a steady node (Steady): the same operations on the same values without the tests
+// that the steady state settles (AfterF's shape, the weights' source, the bounds of h, the stop
+// time behind the step's end); *steady false when the node it leaves may not be steady.
+// kDirect: the explicit solve without a mass matrix, f called directly (as SolveExplicit does).
+template <bool kDirect>
+__attribute__((always_inline)) inline int SteadyStep(CEodeMemRec* ce, AdaptMem* am,
+                                                     sunrealtype tlimit, const char* func,
+                                                     bool* steady) {
+  const sunrealtype h = ce->h;
+  const sunrealtype t = ce->tcur + h;  // StepEnd's: the step ends short of tlimit
+  const int flag = kDirect ? EvalRhs(ce, t, ce->xnext, ce->D[1], ce->Dnew[2], func)
+                           : ce->step->solve(ce, t, t + h, ce->xnext, ce->Dnew[2], func);
+  if (flag != CE_SUCCESS) return flag;
+  const sunrealtype err = AfterFOfShape(ce, am, t);
+  if (!(err <= 1)) {  // NaN fails the test
+    *steady = false;
+    return LeanRetry(ce, am, t, err, tlimit, func);
+  }
+  CommitNodeOf<true>(ce, am, t, err);
+  // AdaptNextStep's bounds keep h while the stop time is not within two steps.
+  const sunrealtype rem = tlimit - t;
+  if (!(rem > 0 && rem < 2 * h) && AdaptKeepsStep(ce, err)) {
+    return TakeNextPosition(ce, am, t, func);
+  }
+  *steady = false;
+  return NextStep(ce, am, false, t, err, 0, tlimit, func);
+}
+
 // x and x' at tcur + s, s in [-hlast, 0] (the history at tcur and x at its left end), and whether
 // both are finite: at tcur the method's own values, copied and tested in one pass.
 bool Output(CEodeMemRec* ce, sunrealtype s, N_Vector xout, N_Vector vout) {
@@ -716,19 +776,36 @@ bool LeanCall(const CEodeMemRec* ce, const AdaptMem* am) {
 }
 
 // StepUntil for such a call, done when tcur reaches tend or after max_steps steps: most steps are
-// LeanStep's, the start's first steps OneStep's.
-__attribute__((noinline, flatten)) int LeanUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout,
-                                                 sunrealtype tend, sunrealtype tlimit,
-                                                 long int max_steps, const char* func) {
+// SteadyStep's, the others LeanStep's, the start's first steps OneStep's.
+template <bool kDirect>
+__attribute__((flatten)) int LeanUntilOf(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout,
+                                         sunrealtype tend, sunrealtype tlimit, long int max_steps,
+                                         const char* func) {
   long int nsteps = 0;
+  bool steady = Steady(ce, *am, tlimit);
   while (nsteps < max_steps && !(ce->tcur >= tend)) {
     if (nsteps >= ce->mxstep) return TooMuchWork(ce, nsteps, tout, func);
-    const int step =
-        am->first ? OneStepApart(ce, am, tlimit, func) : LeanStep(ce, am, tlimit, func);
+    int step = CE_SUCCESS;
+    if (steady) {
+      step = SteadyStep<kDirect>(ce, am, tlimit, func, &steady);
+    } else {
+      step = am->first ? OneStepApart(ce, am, tlimit, func) : LeanStep(ce, am, tlimit, func);
+      steady = step == CE_SUCCESS && Steady(ce, *am, tlimit);
+    }
     const int flag = AfterStep(ce, am, step, &nsteps);
     if (flag != CE_SUCCESS) return flag;
   }
   return CE_SUCCESS;
+}
+
+// LeanUntilOf with the call of f chosen once for the call.
+__attribute__((noinline)) int LeanUntil(CEodeMemRec* ce, AdaptMem* am, sunrealtype tout,
+                                        sunrealtype tend, sunrealtype tlimit, long int max_steps,
+                                        const char* func) {
+  if (ChosenSolve(ce) == SolveKind::kExplicit && !HasMassMatrix(ce)) {
+    return LeanUntilOf<true>(ce, am, tout, tend, tlimit, max_steps, func);
+  }
+  return LeanUntilOf<false>(ce, am, tout, tend, tlimit, max_steps, func);
 }
 
 // Whether the call reached its stop time tlimit.

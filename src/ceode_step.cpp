@@ -9,9 +9,6 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace ceode {
 
@@ -151,39 +148,14 @@ int CheckState(CEodeMemRec* ce, sunrealtype t, UpdateResult r, const char* func,
                       static_cast<double>(ce->h), ce->method_name.c_str());
 }
 
-// a[0, M) and b[0, M) trade places, two pointers a move where SSE2 has them (a swap of the
-// arrays can compile to a loop, or through the stack).
-template <int M>
-inline void SwapSlots(N_Vector* a, N_Vector* b) {
-#if defined(__SSE2__)
-  static_assert(M % 2 == 0 && sizeof(N_Vector) == 8, "pairs of 64-bit pointers");
-  if constexpr (M > 0) {
-    auto* pa = reinterpret_cast<__m128i*>(a);
-    auto* pb = reinterpret_cast<__m128i*>(b);
-    const __m128i ta = _mm_loadu_si128(pa);
-    const __m128i tb = _mm_loadu_si128(pb);
-    _mm_storeu_si128(pa, tb);
-    _mm_storeu_si128(pb, ta);
-    SwapSlots<M - 2>(a + 2, b + 2);
-  }
-#else
-  for (int j = 0; j < M; ++j) std::swap(a[j], b[j]);
-#endif
-}
-
 // The new derivatives become the history; the three positions rotate.
-// Fixed lengths, not the degree's slots: the first four slots (degree <= 4) or the whole arrays
-// move as a few vector moves instead of a loop; the slots at and above the degree are spare
-// buffers and D[0] is unused.
 // Two rotations of the history and three of the positions are the identity.
 __attribute__((always_inline)) inline void RotateHistory(CEodeMemRec* ce, const StepMem& sm) {
   if (sm.in_place_active) {  // the other levels were written over their history
     std::swap(ce->D[2], ce->Dnew[2]);
     if (ce->degree > 3) std::swap(ce->D[ce->degree - 1], ce->Dnew[ce->degree - 1]);
-  } else if (ce->degree <= 4) {  // half the arrays: a few moves fewer per step
-    SwapSlots<4>(ce->D, ce->Dnew);
   } else {
-    SwapSlots<kMaxDegree>(ce->D, ce->Dnew);
+    SwapHistorySlots(ce);
   }
   if (ce->compensated) std::swap(ce->comp, ce->compnew);
 }

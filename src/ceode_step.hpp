@@ -1,11 +1,17 @@
 // The step module's record (CEodeMemRec::step), private to ceode_step.cpp and
 // ceode_step_plans.cpp, which alone write it: the update options, and what ChooseStep decides
 // once per start (the solve, the update plans and their kernel, the many-step loop), so that a
-// step tests no configuration flag.
+// step tests no configuration flag; and the history's swap, which the fixed and the adaptive
+// step share.
 #ifndef CEODE_SRC_CEODE_STEP_HPP_
 #define CEODE_SRC_CEODE_STEP_HPP_
 
 #include <array>
+#include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "ceode_kernels.hpp"
 
@@ -92,6 +98,37 @@ struct StepMem {
   // only the history's (+3).
   int plan_ix = 0;
 };
+
+// a[0, M) and b[0, M) trade places, two pointers a move where SSE2 has them (a swap of the
+// arrays can compile to a loop, or through the stack).
+template <int M>
+inline void SwapSlots(N_Vector* a, N_Vector* b) {
+#if defined(__SSE2__)
+  static_assert(M % 2 == 0 && sizeof(N_Vector) == 8, "pairs of 64-bit pointers");
+  if constexpr (M > 0) {
+    auto* pa = reinterpret_cast<__m128i*>(a);
+    auto* pb = reinterpret_cast<__m128i*>(b);
+    const __m128i ta = _mm_loadu_si128(pa);
+    const __m128i tb = _mm_loadu_si128(pb);
+    _mm_storeu_si128(pa, tb);
+    _mm_storeu_si128(pb, ta);
+    SwapSlots<M - 2>(a + 2, b + 2);
+  }
+#else
+  for (int j = 0; j < M; ++j) std::swap(a[j], b[j]);
+#endif
+}
+
+// D and Dnew trade places: fixed lengths, not the degree's slots, the first four (degree <= 4) or
+// the whole arrays, a few vector moves instead of a loop; the slots at and above the degree are
+// spare buffers and D[0] is unused.
+__attribute__((always_inline)) inline void SwapHistorySlots(CEodeMemRec* ce) {
+  if (ce->degree <= 4) {  // half the arrays: a few moves fewer per step
+    SwapSlots<4>(ce->D, ce->Dnew);
+  } else {
+    SwapSlots<kMaxDegree>(ce->D, ce->Dnew);
+  }
+}
 
 // ceode_step_plans.cpp: the six plans (and their kernels) from the current vectors, and which
 // backend runs them (in_place_active, serial, mpi, len, xin_ready). Reads sm->solve_kind.
