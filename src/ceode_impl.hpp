@@ -488,7 +488,7 @@ void ChooseStep(CEodeMemRec* ce, bool restart);
 // The step module's part of a restart (Restart): the direct paths close until the next start's
 // ChooseStep, so that direct_tmax alone says whether the run is started.
 void StepRestart(CEodeMemRec* ce);
-// Closes the one-step fast spans (StepMem::fast_until, direct_until) until the next checked call:
+// Closes the one-step fast span (StepMem::fast_until) until the next checked call:
 // called by whatever sets an option the path depends on (the stop time, root functions, error
 // control, the guard's mode, period or pending check).
 void StepOptionsChanged(CEodeMemRec* ce);

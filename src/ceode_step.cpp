@@ -551,8 +551,7 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
   // Error control has no fast span (FastSpanEnd): its calls come here, and go on to its own path.
   if (AdaptOn(ce)) return AdaptCall(ce, tout, xout, vout, tret, CE_ONE_STEP);
   const long int span = FastSpanEnd(ce, *sm);
-  sm->fast_until = sm->lean_one ? span : 0;
-  sm->direct_until = sm->lean_one ? 0 : span;
+  sm->fast_until = span;
   const sunrealtype target = ce->tcur + ce->h;
   const bool direct = FastArguments(ce, tout, xout, vout, tret) && ce->started &&
                       ce->step->one_call && DirectConfiguration(ce) && StepsRemain(ce, target);
@@ -563,22 +562,6 @@ __attribute__((noinline)) int OneStepChecked(CEodeMemRec* ce, sunrealtype tout, 
 }  // namespace
 
 namespace {
-
-// StepMem::fast_phases and swap from the current vectors: six commits' rotations (the
-// identity), each configuration's outputs read after its own. At degree 3 the fast commit swaps
-// the two derivatives alone: RotateHistory's other two slots are D_0 (unused) and a spare.
-void BuildFastPhases(CEodeMemRec* ce, StepMem* sm) {
-  const bool plain = !sm->in_place_active && !ce->compensated;
-  sm->swap = plain && ce->degree == 3 ? 2 : (plain && ce->degree == 4 ? 4 : 0);
-  if (!sm->one_call) return;  // serial vectors: their data directly
-  for (int j = 0; j < kNumPlans; ++j) {
-    const int ip = sm->plan_ix;
-    RotateVectors(ce, sm);
-    sm->fast_phases.x[ip] = NV_DATA_S(ce->xcur);
-    sm->fast_phases.v[ip] = NV_DATA_S(ce->D[1]);
-    sm->fast_phases.next[ip] = sm->plan_ix;
-  }
-}
 
 // f failed on the fast path: reported as LeanOneStep reports it, then the last good state
 // (OneStepRest). Out of line: the fast path keeps nothing of its own across the report.
@@ -598,14 +581,17 @@ __attribute__((always_inline)) inline sunrealtype FastUpdate(const CEodeMemRec* 
 // Commit on the fast path, then xout = x(tcur), vout = D_1 and whether they are finite. At one
 // unknown only the velocity is tested: x(tcur) was this step's x(t), the accumulated term of the
 // position it wrote (BuildUpdatePlan), so a NaN or Inf in it failed the growth check already.
+// kSwap: the history's swap where it is a fixed one (2: D_1 and D_2 at degree 3; 4:
+// RotateHistory's four slots at degree 4; 0: RotateHistory); kOne: one unknown.
+template <int kSwap, bool kOne>
 __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* sm, sunrealtype t,
                                                       N_Vector xout, N_Vector vout) {
   const StepMem::FastPhases& ph = sm->fast_phases;
   const auto ip = static_cast<unsigned>(sm->plan_ix);  // 0..5: its load is the index's widening
   const int next = ph.next[ip];
-  if (__builtin_expect(sm->swap == 2, 1)) {
+  if constexpr (kSwap == 2) {
     SwapSlots<2>(ce->D + 1, ce->Dnew + 1);
-  } else if (sm->swap == 4) {
+  } else if constexpr (kSwap == 4) {
     SwapSlots<4>(ce->D, ce->Dnew);
   } else {
     RotateHistory(ce, *sm);
@@ -615,20 +601,23 @@ __attribute__((always_inline)) inline bool FastCommit(CEodeMemRec* ce, StepMem* 
   ce->tcur = t;
   ++ce->nsteps_h;
   ++ce->nst;
-  if (ce->n != 1) return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
-  const sunrealtype v = ph.v[ip][0];
-  NV_DATA_S(xout)[0] = ph.x[ip][0];
-  NV_DATA_S(vout)[0] = v;
-  return !std::isnan(v - v);  // v - v is NaN exactly where v is not finite
+  if constexpr (!kOne) {
+    return CopyPairFiniteApart(ce->xcur, ce->D[1], xout, vout);
+  } else {
+    const sunrealtype v = ph.v[ip][0];
+    NV_DATA_S(xout)[0] = ph.x[ip][0];
+    NV_DATA_S(vout)[0] = v;
+    return !std::isnan(v - v);  // v - v is NaN exactly where v is not finite
+  }
 }
 
-// A call's step on a fast span (StepMem::fast_until, direct_until: opened by OneStepChecked):
-// the solve (kLean: the call of f, LeanOneStep's step without its guard test, the span ending
-// before a step with a check), the update's kernel, the commit and the outputs' copy, with the
-// tests of the call's arguments alone; every failure the caller module's (OneStepRest).
-template <bool kLean>
-__attribute__((always_inline)) inline int FastStep(CEodeMemRec* ce, N_Vector xout, N_Vector vout,
-                                                   sunrealtype* tret) {
+// A call's step on a fast span (StepMem::fast_until: opened by OneStepChecked): the solve
+// (kLean: the call of f, LeanOneStep's step without its guard test, the span ending before a
+// step with a check), the update's kernel, the commit (FastCommit's kSwap and kOne) and the
+// outputs' copy, with the tests of the call's arguments alone; every failure the caller
+// module's (OneStepRest).
+template <bool kLean, int kSwap, bool kOne>
+int FastStep(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret) {
   static const char* func = "CEodeEvolve";
   const sunrealtype t = StepTime(ce, 1);
   if constexpr (kLean) {
@@ -649,33 +638,51 @@ __attribute__((always_inline)) inline int FastStep(CEodeMemRec* ce, N_Vector xou
   StepMem* sm = ce->step.get();
   // Outputs that are not finite: reported as ReturnAtTarget reports them (the step ended on
   // tcur, the target, to round-off).
-  if (!FastCommit(ce, sm, t, xout, vout)) {
+  if (!FastCommit<kSwap, kOne>(ce, sm, t, xout, vout)) {
     return OneStepRest(ce, CE_SUCCESS, ce->tcur, xout, vout, tret);
   }
   *tret = ce->tretlast = t;
   return CE_SUCCESS;
 }
 
-// The fast span's step of a configuration that solves for the acceleration (implicit,
-// constrained; StepMem::direct_until).
-__attribute__((noinline)) int SolvedFastStep(CEodeMemRec* ce, N_Vector xout, N_Vector vout,
-                                             sunrealtype* tret) {
-  return FastStep<false>(ce, xout, vout, tret);
+// FastStep for the configuration: lean (the call of f) or solved, the swap 0, 2 or 4, one
+// unknown or more.
+template <bool kLean, int kSwap>
+constexpr std::array<FastStepFn, 2> kFastStepsOf = {&FastStep<kLean, kSwap, false>,
+                                                    &FastStep<kLean, kSwap, true>};
+template <bool kLean>
+constexpr std::array<std::array<FastStepFn, 2>, 3> kFastStepsBySwap = {
+    kFastStepsOf<kLean, 0>, kFastStepsOf<kLean, 2>, kFastStepsOf<kLean, 4>};
+constexpr std::array<std::array<std::array<FastStepFn, 2>, 3>, 2> kFastSteps = {
+    kFastStepsBySwap<false>, kFastStepsBySwap<true>};
+
+// StepMem::fast_step, and fast_phases from the current vectors: six commits' rotations (the
+// identity), each configuration's outputs read after its own. At degree 3 the fast commit swaps
+// the two derivatives alone: RotateHistory's other two slots are D_0 (unused) and a spare.
+void BuildFastPhases(CEodeMemRec* ce, StepMem* sm) {
+  const bool plain = !sm->in_place_active && !ce->compensated;
+  const int swap = plain && ce->degree == 3 ? 2 : (plain && ce->degree == 4 ? 4 : 0);
+  sm->fast_step = kFastSteps[sm->lean_one ? 1 : 0][swap / 2][ce->n == 1 ? 1 : 0];
+  if (!sm->one_call) return;  // serial vectors: their data directly
+  for (int j = 0; j < kNumPlans; ++j) {
+    const int ip = sm->plan_ix;
+    RotateVectors(ce, sm);
+    sm->fast_phases.x[ip] = NV_DATA_S(ce->xcur);
+    sm->fast_phases.v[ip] = NV_DATA_S(ce->D[1]);
+    sm->fast_phases.next[ip] = sm->plan_ix;
+  }
 }
 
 }  // namespace
 
-// The whole call in one function on the lean configuration's fast span: as many instructions as
-// the lean loop's step and the copy. The other configurations' fast spans take SolvedFastStep,
-// every other case is OneStepChecked's.
+// A call on the configuration's fast span takes the step chosen for it (StepMem::fast_step): the
+// lean configuration's as many instructions as the lean loop's step and the copy. Every other
+// case is OneStepChecked's.
 int OneStepEvolve(CEodeMemRec* ce, sunrealtype tout, N_Vector xout, N_Vector vout,
                   sunrealtype* tret) {
   const StepMem* sm = ce->step.get();
   if (ce->nsteps_h < sm->fast_until && FastArguments(ce, tout, xout, vout, tret)) {
-    return FastStep<true>(ce, xout, vout, tret);
-  }
-  if (ce->nsteps_h < sm->direct_until && FastArguments(ce, tout, xout, vout, tret)) {
-    return SolvedFastStep(ce, xout, vout, tret);
+    return sm->fast_step(ce, xout, vout, tret);
   }
   return OneStepChecked(ce, tout, xout, vout, tret);
 }
@@ -718,7 +725,7 @@ void SetImplicitSolve(CEodeMemRec* ce, SolveKind kind) { ce->step->implicit = ki
 SolveKind ChosenSolve(const CEodeMemRec* ce) { return ce->step->solve_kind; }
 
 namespace {
-void CloseSpans(StepMem* sm) { sm->fast_until = sm->direct_until = 0; }
+void CloseSpans(StepMem* sm) { sm->fast_until = 0; }
 }  // namespace
 
 void StepRestart(CEodeMemRec* ce) {

@@ -28,6 +28,7 @@ using SolveFn = int (*)(CEodeMemRec* ce, sunrealtype t, sunrealtype tnext, N_Vec
                         const char* func);
 using UpdateFn = UpdateResult (*)(CEodeMemRec* ce, const StepMem& sm);
 using StepsFn = int (*)(CEodeMemRec* ce, sunrealtype target, long int max_steps, long int* taken);
+using FastStepFn = int (*)(CEodeMemRec* ce, N_Vector xout, N_Vector vout, sunrealtype* tret);
 
 struct StepMem {
   // Options
@@ -53,21 +54,19 @@ struct StepMem {
   // DirectOptions tests are as they were when OneStepChecked found them so (FastSpanEnd), so
   // that the call tests nothing but its arguments. 0: closed (StepOptionsChanged).
   long int fast_until = 0;
-  // The same span for the other configurations (not lean_one), taken at the top of
-  // OneStepChecked, so that the fast path tests nothing more for the lean one.
-  long int direct_until = 0;
+  // The step of a call on that span (one_call runs), chosen with the configuration
+  // (BuildFastPhases): the lean configuration's call of f or the solve, the commit's swap of the
+  // history and the copy of one unknown or of more.
+  FastStepFn fast_step = nullptr;
   // The fast path's commit, per configuration (by plan_ix, one_call runs): the data of x(tcur)
   // and D_1 after its step, the outputs' sources, and the configuration that follows, in arrays
-  // of their own (each entry is then one indexed load); and the history's swap where it is a
-  // fixed one (swap: 2, D_1 and D_2 at degree 3; 4, RotateHistory's four slots at degree 4; 0,
-  // RotateHistory), one test for the configuration.
+  // of their own (each entry is then one indexed load).
   struct FastPhases {
     std::array<const sunrealtype*, kNumPlans> x{};
     std::array<const sunrealtype*, kNumPlans> v{};
     std::array<int, kNumPlans> next{};
   };
   FastPhases fast_phases;
-  int swap = 0;
   // The step's growth check in one test (LeanOneStep): ||x(t + h)||_1 passes while it is at or
   // below this, the lesser of GrowthBound and the absolute limit (NaN and Inf do not).
   sunrealtype growth_limit = 0;
