@@ -541,7 +541,7 @@ int StartMethod(CEodeMemRec* ce);  // consistent or zero start at tcur, then Cho
 // Higher derivatives D_3..D_{d-1} at t0 = tcur from x = xcur, D_1, D_2: central differences of
 // the acceleration accel(t, x, v, a) along the Taylor curve of the derivatives already known
 // (the symmetric stencil cancels the curve's own error); from kHighStartDegree on, Picard sweeps
-// of one wide stencil to the order of the high-degree sets. xs, vs, as: scratch vectors.
+// of central stencils to the order of the high-degree sets. xs, vs, as: scratch vectors.
 constexpr int kHighStartDegree = 6;
 int StartDerivatives(CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
                      const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel);

@@ -1,6 +1,6 @@
 // The start of the method (docs/theory.md section 6): the vectors of a run, the history at t0
 // (consistent: the higher derivatives by central differences of the acceleration, for high
-// degrees by Picard sweeps of one wide stencil; or the zero start), the first position step,
+// degrees by Picard sweeps of central stencils; or the zero start), the first position step,
 // and StartMethod, which ends by choosing the step (ChooseStep, ceode_step.cpp).
 #include <algorithm>
 
@@ -65,25 +65,43 @@ namespace {
 // The widest stencil's half width: an order never exceeds the degree (HalfWidth).
 constexpr int kMaxHalfWidth = (kMaxDegree - 1) / 2;
 
+// The order the start serves: a named set's order, else d (orders reach d, never d + 1).
+int StartOrder(const CEodeMemRec* ce) {
+  const int d = ce->degree;
+  const MethodSet* m = NamedSetWithParams(d, ce->params);
+  return m != nullptr ? std::min(m->order_x, d) : d;
+}
+
 // Half width R of the stencil: the q-th derivative of the acceleration on 2R + 1 nodes
 // spaced h errs by O(h^(2R+1-q)), so D_k = a^(k-2) errs by O(h^(2R+3-k)); an order-p set
 // keeps its order when that is O(h^(p+1-k)), i.e. 2R + 2 >= p, and the stencil must reach the
-// derivative d - 3 (2R >= d - 3). p is a named set's order, else d (orders reach d, never d + 1):
-// R = 2 at degree 6, 3 at degrees 7 and 8.
+// derivative d - 3 (2R >= d - 3): R = 2 at degree 6, 3 at degrees 7 and 8.
 int HalfWidth(const CEodeMemRec* ce) {
-  const int d = ce->degree;
-  const MethodSet* m = NamedSetWithParams(d, ce->params);
-  const int p = m != nullptr ? std::min(m->order_x, d) : d;
-  return std::max((p - 1) / 2, (d - 2) / 2);
+  return std::max((StartOrder(ce) - 1) / 2, (ce->degree - 2) / 2);
 }
 
-// Sweeps until only the stencil's truncation is left (see StartDerivativesHigh). From D_0..D_2
-// exact and D_3.. = 0 the polynomial is right to O(s^3). When f reads the velocity a sweep gains
-// one power (the samples lose one to the velocity): d - 3 sweeps. When it does not, the samples
-// are as accurate as the polynomial and a sweep gains two (x'' = a): the polynomial is right to
-// O(s^(3 + 2i)) after i sweeps, and O(s^d) (every D_k) takes ceil((d - 3) / 2) sweeps
+// The gain g of a sweep: an error e in D_k reaches the samples as the term e s^k / k! of the
+// position (f does not read the velocity) or e s^(k-1) / (k-1)! of the velocity (it does), which
+// the stencil differentiates exactly into D_(k+2) or D_(k+1) (times df/dx or df/dv): each sweep
+// moves every error g derivatives up, so the derivatives below 3 + g i are fixed after i sweeps.
+int SweepGain(bool vel_dependent) { return vel_dependent ? 1 : 2; }
+
+// Sweeps until D_3 .. D_(d-1) are fixed and only the stencil's truncation is left (see
+// StartDerivativesHigh): d - 3 when f reads the velocity, ceil((d - 3) / 2) when it does not
 // (docs/theory.md section 6.3).
 int Sweeps(int d, bool vel_dependent) { return vel_dependent ? d - 3 : (d - 2) / 2; }
+
+// The half width of sweep i (from 1) of S. The last one is R. Before it a narrower stencil
+// suffices: an error O(h^e) that sweep i leaves in D_k ends, moved g (S - i) derivatives up, in
+// D_(k + g(S-i)), which needs O(h^(p+1-k-g(S-i))). The stencil's truncation, O(h^(2r+3-k)), meets
+// that when 2r >= p - 2 - g(S - i); so does its aliasing, the terms of degree above 2r of an
+// error not fixed yet (O(1), in D_k' from k' = 3 + g(i - 1) on), which reach D_k as
+// O(h^(k'+g-k)). Hence r = max(1, ceil((p - 2 - g(S - i)) / 2)) (docs/theory.md section 6.3).
+int SweepHalfWidth(int i, int sweeps, int R, int p, bool vel_dependent) {
+  if (i == sweeps) return R;
+  const int twice = p - 2 - SweepGain(vel_dependent) * (sweeps - i);
+  return std::min(R, std::max(1, (twice + 1) / 2));
+}
 
 // The Taylor curve at s: xs = sum_{i<d} D_i s^i/i! (D_0 = x), vs its derivative (the same
 // weights, shifted).
@@ -103,56 +121,87 @@ void TaylorPlan(const CEodeMemRec* ce, sunrealtype s, N_Vector xs, N_Vector vs, 
   p.combos[1].out = vs;
 }
 
-// Each sweep evaluates the acceleration on the 2R nodes s = jh, j = -R..R, j != 0, along the
-// Taylor polynomial of all current derivatives, and replaces D_3..D_{d-1} by the stencil's
-// derivatives of those samples. If the polynomial is right to O(s^m), the samples are right to
-// O(s^(m-1)) (the velocity loses one power), and a stencil exact on polynomials of degree 2R
-// returns derivatives below m - 1 unchanged by that error: every sweep fixes at least one more
-// derivative, so d - 3 sweeps leave only the stencil's own O(h^(2R+1-q)) truncation.
-// The 2R samples of a sweep are kept (in Dnew[1..d-1] and as: 2R <= d vectors, all free
-// before the first step) and combined once at the sweep's end, term for term in the order of a
-// running sum, so the derivatives come out as if accumulated node by node.
+// The stencil of half width r: D_3 .. D_(min(d-1, 2r+2)) from a_0 (in D_2) and the samples at
+// s = jh, j = -r..r, j != 0 (sample[]: by their index on the widest stencil), term for term in the
+// order of a running sum, so the derivatives come out as if accumulated node by node.
+// The central stencils' weights at unit spacing, w[r - 1][q][j] for the q-th derivative (q <= 2r)
+// from the node j - r, computed once: a start scales them by h^-q instead of building its tables.
+using StencilWeights = sunrealtype[kMaxDegree][2 * kMaxDegree + 1];
+const StencilWeights& UnitStencil(int r) {
+  static const auto* const weights = [] {
+    static StencilWeights w[kMaxHalfWidth];
+    for (int hw = 1; hw <= kMaxHalfWidth; ++hw) {
+      sunrealtype nodes[2 * kMaxDegree + 1] = {};
+      for (int j = 0; j <= 2 * hw; ++j) nodes[j] = j - hw;
+      FornbergTable(std::min(2 * hw, kMaxDegree - 1), 2 * hw + 1, nodes, w[hw - 1]);
+    }
+    return w;
+  }();
+  return weights[r - 1];
+}
+
+void StencilPlan(const CEodeMemRec* ce, int R, int r, const N_Vector* sample, KernelPlan* sp) {
+  const int top = std::min(ce->degree - 1, 2 * r + 2);  // the highest derivative it reaches
+  const StencilWeights& w = UnitStencil(r);
+  UpdatePlan& p = sp->plan;
+  p.n = top - 2;
+  sunrealtype scale = 1;  // h^-q
+  for (int k = 3; k <= top; ++k) {
+    scale /= ce->h;
+    Combo& cb = p.combos[k - 3];
+    cb = Combo{};
+    cb.Add(w[k - 2][r] * scale, ce->D[2]);
+    for (int j = 0; j <= 2 * r; ++j) {
+      const int jR = j - r + R;  // the node's index on the widest stencil
+      if (j != r) cb.Add(w[k - 2][j] * scale, sample[jR < R ? jR : jR - 1]);
+    }
+    cb.out = ce->D[k];
+  }
+}
+
+// Each sweep evaluates the acceleration at its 2r nodes along the Taylor polynomial of all current
+// derivatives and replaces those its stencil reaches (SweepGain, SweepHalfWidth): d - 3 or
+// ceil((d - 3) / 2) sweeps leave only the last stencil's own O(h^(2R+1-q)) truncation. The samples
+// of a sweep are kept (in Dnew[1..d-1] and as: 2R <= d vectors, all free before the first step) and
+// combined once at the sweep's end.
 int StartDerivativesHigh(
     CEodeMemRec* ce, sunrealtype t0, N_Vector xs, N_Vector vs, N_Vector as,
     const std::function<int(sunrealtype, N_Vector, N_Vector, N_Vector)>& accel) {
   const int d = ce->degree;
   const sunrealtype h = ce->h;
   const int R = HalfWidth(ce);
-  const int npts = 2 * R + 1;
-  sunrealtype nodes[2 * kMaxDegree + 1] = {};
-  sunrealtype wts[kMaxDegree][2 * kMaxDegree + 1];  // wts[q]: the q-th derivative
-  for (int j = 0; j < npts; ++j) nodes[j] = (j - R) * h;
-  FornbergTable(d - 3, npts, nodes, wts);
+  sunrealtype nodes[2 * kMaxHalfWidth];  // s of sample i: -R h .. -h, h .. R h
+  for (int i = 0; i < 2 * R; ++i) nodes[i] = (i < R ? i - R : i - R + 1) * h;
   N_Vector sample[2 * kMaxHalfWidth];
   for (int i = 0; i < 2 * R; ++i) sample[i] = i + 1 < d ? ce->Dnew[i + 1] : as;
-  KernelPlan taylor[2 * kMaxHalfWidth];  // a plan is a few kilobytes: as many as the nodes
-  KernelPlan stencil;
-  stencil.plan.n = d - 3;
-  for (int k = 3; k < d; ++k) {
-    Combo& cb = stencil.plan.combos[k - 3];
-    cb = Combo{};
-    cb.Add(wts[k - 2][R], ce->D[2]);
-    for (int j = 0; j < npts; ++j) {
-      if (j != R) cb.Add(wts[k - 2][j], sample[j < R ? j : j - 1]);
-    }
-    cb.out = ce->D[k];
-  }
   // The start's combinations on the serial backend where the step's update would run on it.
   const bool serial = FusedKernelOn(ce) && N_VGetVectorID(ce->xcur) == SUNDIALS_NVEC_SERIAL;
-  PreparePlan(serial, &stencil);
-  for (int j = 0; j < 2 * R; ++j) {
-    TaylorPlan(ce, nodes[j < R ? j : j + 1], xs, vs, &taylor[j]);
-    PreparePlan(serial, &taylor[j]);
-  }
+  KernelPlan taylor[2 * kMaxHalfWidth];  // a plan is a few kilobytes: as many as the nodes
+  bool prepared[2 * kMaxHalfWidth] = {};
+  KernelPlan stencil;
+  int stencil_r = 0;
   for (int k = 3; k < d; ++k) N_VConst(0, ce->D[k]);
   int flag = CE_SUCCESS;
   const int sweeps = Sweeps(d, ce->vel_dependent);
-  for (int sweep = 0; sweep < sweeps && flag == CE_SUCCESS; ++sweep) {
-    for (int j = 0; j < 2 * R && flag == CE_SUCCESS; ++j) {
-      RunPlan(taylor[j], ce->n);
-      flag = accel(t0 + nodes[j < R ? j : j + 1], xs, vs, sample[j]);
+  const int p = StartOrder(ce);
+  for (int sweep = 1; sweep <= sweeps && flag == CE_SUCCESS; ++sweep) {
+    const int r = SweepHalfWidth(sweep, sweeps, R, p, ce->vel_dependent);
+    for (int i = R - r; i < R + r && flag == CE_SUCCESS; ++i) {
+      if (!prepared[i]) {
+        TaylorPlan(ce, nodes[i], xs, vs, &taylor[i]);
+        PreparePlan(serial, &taylor[i]);
+        prepared[i] = true;
+      }
+      RunPlan(taylor[i], ce->n);
+      flag = accel(t0 + nodes[i], xs, vs, sample[i]);
     }
-    if (flag == CE_SUCCESS) RunPlan(stencil, ce->n);
+    if (flag != CE_SUCCESS) break;
+    if (r != stencil_r) {
+      StencilPlan(ce, R, r, sample, &stencil);
+      PreparePlan(serial, &stencil);
+      stencil_r = r;
+    }
+    RunPlan(stencil, ce->n);
   }
   return flag;
 }
