@@ -121,9 +121,6 @@ void TaylorPlan(const CEodeMemRec* ce, sunrealtype s, N_Vector xs, N_Vector vs, 
   p.combos[1].out = vs;
 }
 
-// The stencil of half width r: D_3 .. D_(min(d-1, 2r+2)) from a_0 (in D_2) and the samples at
-// s = jh, j = -r..r, j != 0 (sample[]: by their index on the widest stencil), term for term in the
-// order of a running sum, so the derivatives come out as if accumulated node by node.
 // The central stencils' weights at unit spacing, w[r - 1][q][j] for the q-th derivative (q <= 2r)
 // from the node j - r, computed once: a start scales them by h^-q instead of building its tables.
 using StencilWeights = sunrealtype[kMaxDegree][2 * kMaxDegree + 1];
@@ -140,6 +137,9 @@ const StencilWeights& UnitStencil(int r) {
   return weights[r - 1];
 }
 
+// The stencil of half width r: D_3 .. D_(min(d-1, 2r+2)) from a_0 (in D_2) and the samples at
+// s = jh, j = -r..r, j != 0 (sample[]: by their index on the widest stencil), term for term in the
+// order of a running sum, so the derivatives come out as if accumulated node by node.
 void StencilPlan(const CEodeMemRec* ce, int R, int r, const N_Vector* sample, KernelPlan* sp) {
   const int top = std::min(ce->degree - 1, 2 * r + 2);  // the highest derivative it reaches
   const StencilWeights& w = UnitStencil(r);
